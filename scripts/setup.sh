@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Create .venv and install everything TreeSketch needs (idempotent).
+# Debian packages (libllvm19 for mitsuba's fast LLVM backend) are installed when missing
+# and we are root; without them the renderer falls back to mitsuba's scalar backend.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+PY="${PYTHON:-python3}"
+
+if ! ls /usr/lib/x86_64-linux-gnu/libLLVM-19.so* /usr/lib/*/libLLVM.so.19* >/dev/null 2>&1; then
+    if [ "$(id -u)" = "0" ] && command -v apt-get >/dev/null 2>&1; then
+        echo "setup: installing Debian package libllvm19 (mitsuba's LLVM backend)"
+        (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libllvm19) \
+            || echo "setup: WARNING: could not install libllvm19; rendering will use scalar_rgb"
+    else
+        echo "setup: libllvm19 missing and not root; rendering will use scalar_rgb"
+    fi
+fi
+
+if [ ! -x .venv/bin/python ]; then
+    "$PY" -m venv .venv
+fi
+.venv/bin/python -m pip install -q --upgrade pip
+# torch first, pinned: pip takes the CPU build of torch 2.13.0 that lies on this disk.
+.venv/bin/python -m pip install -q "torch==2.13.0"
+.venv/bin/python -m pip install -q -e ".[dev]"
+touch .venv/.installed
+echo "setup: done ($(.venv/bin/python --version))"

@@ -1,0 +1,189 @@
+"""The five species: fixed values from the published ground truth, unfixed values drawn.
+
+``species_data.json`` is derived from the 15 published TreeSketchNet ground-truth files by
+``scripts/make_species_data.py``: a key (or one level of a per-level key) is *fixed* when
+it is equal in a species' three files; otherwise it is *unfixed* and drawn by the rule of
+TreeSketchNet's ``set_variation`` with an amplitude covering every observed value.
+
+``sample(species, seed)`` draws a dictionary with a numpy ``Generator``;
+``unfixed(species)`` lists exactly what varies (what the refinement searches).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from functools import cache
+from importlib import resources
+from typing import Any
+
+import numpy as np
+
+from .params import SPECS, ParamError, TreeParams
+
+#: Species names, in the project's order.
+SPECIES: tuple[str, ...] = ("maple", "pine", "bonsai", "palm", "cherry")
+
+#: Name of each species in the TreeSketchNet files.
+PAPER_NAMES: dict[str, str] = {
+    "maple": "acer_2",
+    "pine": "pine",
+    "bonsai": "bonsai",
+    "palm": "palm_3",
+    "cherry": "cherry_blossom_3",
+}
+
+_ALIASES: dict[str, str] = {v: k for k, v in PAPER_NAMES.items()} | {
+    "acer": "maple",
+    "cherry_blossom": "cherry",
+}
+
+
+@dataclass(frozen=True)
+class Unfixed:
+    """One unfixed value: a key (and level ``index`` for per-level keys) and its range.
+
+    ``rule`` is how ``sample`` draws it: ``uniform`` (lo..hi), ``sign`` (-1/1),
+    ``randint`` (lo..hi inclusive), ``mirror`` (minus another key's value: not free),
+    ``split_height`` (0.6 when the trunk splits at its base, else a fixed value).
+    """
+
+    key: str
+    index: int | None
+    lo: float
+    hi: float
+    rule: str
+
+    @property
+    def discrete(self) -> bool:
+        return self.rule in ("sign", "randint") or SPECS[self.key].discrete
+
+    @property
+    def free(self) -> bool:
+        """Whether a search may move this value independently."""
+        return self.rule not in ("mirror", "split_height")
+
+    @property
+    def label(self) -> str:
+        return self.key if self.index is None else f"{self.key}[{self.index}]"
+
+
+def canonical(name: str) -> str:
+    """The species' canonical name (accepts the paper's names); raises for unknown ones."""
+    key = str(name).strip().lower()
+    key = _ALIASES.get(key, key)
+    if key not in SPECIES:
+        raise ParamError(f"unknown species {name!r}; choose one of {', '.join(SPECIES)}")
+    return key
+
+
+@cache
+def _data() -> dict[str, Any]:
+    text = resources.files("weberpenn").joinpath("species_data.json").read_text("utf-8")
+    return json.loads(text)["species"]
+
+
+def reference_files(name: str) -> tuple[str, ...]:
+    """File names of the species' three published ground-truth dictionaries."""
+    return tuple(_data()[canonical(name)]["reference_files"])
+
+
+def base(name: str) -> TreeParams:
+    """The species' base dictionary (its first published ground truth, seed 0)."""
+    return TreeParams(_data()[canonical(name)]["base"])
+
+
+def _to_unfixed(row: dict[str, Any]) -> Unfixed:
+    rule = row["rule"]
+    if rule in ("uniform", "randint"):
+        lo, hi = float(row["lo"]), float(row["hi"])
+    elif rule == "uniform_sym":
+        lo, hi, rule = -float(row["amp"]), float(row["amp"]), "uniform"
+    elif rule == "uniform_around_one":
+        lo, hi, rule = 1.0 - float(row["amp"]), 1.0 + float(row["amp"]), "uniform"
+    elif rule == "sign":
+        lo, hi = -1.0, 1.0
+    elif rule == "split_height":
+        lo, hi = float(row["without"]), float(row["with_splits"])
+    elif rule == "mirror":
+        lo, hi = -360.0, 360.0
+    else:  # pragma: no cover - guarded by the data generator
+        raise ValueError(f"unknown rule {rule!r}")
+    return Unfixed(row["key"], row["index"], lo, hi, rule)
+
+
+@cache
+def unfixed(name: str) -> tuple[Unfixed, ...]:
+    """Every unfixed value of the species, with its range and draw rule."""
+    return tuple(_to_unfixed(r) for r in _data()[canonical(name)]["unfixed"])
+
+
+def unfixed_keys(name: str) -> tuple[str, ...]:
+    """Names of the keys with at least one unfixed value."""
+    return tuple(dict.fromkeys(u.key for u in unfixed(name)))
+
+
+def _set(values: dict[str, Any], key: str, index: int | None, value: Any) -> None:
+    if index is None:
+        values[key] = value
+    else:
+        vec = list(values[key])
+        vec[index] = value
+        values[key] = vec
+
+
+def _get(values: dict[str, Any], key: str, index: int | None) -> Any:
+    return values[key] if index is None else values[key][index]
+
+
+def sample(name: str, seed: int = 0) -> TreeParams:
+    """Draw one tree of the species: base values plus freshly drawn unfixed values."""
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ParamError(f"seed must be a non-negative integer, got {seed!r}")
+    rng = np.random.default_rng(int(seed))
+    values = base(name).to_dict()
+    rows = unfixed(name)
+    for u in rows:
+        spec = SPECS[u.key]
+        if u.rule == "uniform":
+            v: Any = float(rng.uniform(u.lo, u.hi))
+            if spec.kind == "int":
+                v = round(v)
+        elif u.rule == "sign":
+            v = int(rng.choice([-1, 1]))
+        elif u.rule == "randint":
+            v = int(rng.integers(int(u.lo), int(u.hi) + 1))
+        else:
+            continue  # derived below
+        _set(values, u.key, u.index, v)
+    for u in rows:
+        if u.rule == "mirror":
+            _set(values, u.key, u.index, -float(_get(values, "curve", u.index)))
+        elif u.rule == "split_height":
+            values[u.key] = u.hi if values["baseSplits"] > 0 else u.lo
+    values["seed"] = int(seed)
+    return TreeParams(values)
+
+
+def project(name: str, params: TreeParams) -> TreeParams:
+    """Force a dictionary onto a species: its fixed values, keeping the unfixed ones.
+
+    Unfixed values are clipped into the species' ranges; derived values (mirrors, the
+    split height) are recomputed.  Used after prediction so a tree is a valid member.
+    """
+    values = base(name).to_dict()
+    src = params.to_dict()
+    for u in unfixed(name):
+        v = _get(src, u.key, u.index)
+        if u.rule in ("uniform", "randint"):
+            v = float(np.clip(v, u.lo, u.hi))
+            if SPECS[u.key].kind == "int":
+                v = round(v)
+        _set(values, u.key, u.index, v)
+    for u in unfixed(name):
+        if u.rule == "mirror":
+            _set(values, u.key, u.index, -float(_get(values, "curve", u.index)))
+        elif u.rule == "split_height":
+            values[u.key] = u.hi if values["baseSplits"] > 0 else u.lo
+    values["seed"] = params["seed"]
+    return TreeParams(values)
