@@ -611,6 +611,45 @@ def _trunk(cfg: _Cfg) -> _Families:
     )
 
 
+# --------------------------------------------------------------------------- pruning
+def _prune_scales(cfg: _Cfg, n: int, fam: _Families, seed: int, pseed: int) -> np.ndarray:
+    """Sapling's pruning: bisect each family's length scale until its spline ends fit
+    inside the envelope (regrowing with the same draws), then blend by ``pruneRatio``."""
+    f = len(fam.pos)
+    res = cfg.curve_res[min(n, 3)]
+    cmax, cmin, cs, old = np.ones(f), np.zeros(f), np.ones(f), np.ones(f)
+    used = np.ones(f)
+    active = np.ones(f, dtype=bool)
+    sv = cfg.scale_val
+    for _ in range(64):
+        if not active.any():
+            break
+        near = active & ((cmax - cmin) < 0.01)
+        cs = np.where(near, (cs - 1.0) * cfg.prune_ratio + 1.0, cs)
+        used = np.where(active, cs, used)
+        spl = _grow_level(cfg, n, fam, used, _rng_for(seed, pseed, n, 0))
+        end = spl.pts[:, res]
+        ratio = (sv - end[:, 2]) / (sv * max(1.0 - cfg.prune_base, 1e-6))
+        env = cfg.prune_width * shape_ratio(
+            9, ratio, peak=cfg.prune_peak, power_high=cfg.prune_high, power_low=cfg.prune_low
+        )
+        inside = np.hypot(end[:, 0], end[:, 1]) / sv < env
+        if n == 0:
+            inside |= end[:, 2] < cfg.prune_base * sv
+        fam_in = np.bincount(spl.fam, weights=(~inside).astype(np.float64), minlength=f) == 0
+        out = active & ~fam_in
+        old = np.where(out, cmax, old)
+        cmax = np.where(out, cs, cmax)
+        cs = np.where(out, 0.5 * (cmax + cmin), cs)
+        inn = active & fam_in & (cs != 1.0)
+        cmin = np.where(inn, cs, cmin)
+        cmax = np.where(inn, old, cmax)
+        cs = np.where(inn, 0.5 * (cmax + cmin), cs)
+        cmin = np.where(active & fam_in & ((cmax - cmin) == 1.0), 1.0, cmin)
+        active = active & ~near & ((cmax - cmin) > 0.005)
+    return used
+
+
 # --------------------------------------------------------------------------- public API
 def grow(params: TreeParams | Mapping[str, Any], seed: int = 0) -> Skeleton:
     """Grow the skeleton of the tree described by ``params`` (pure and deterministic).
@@ -639,9 +678,8 @@ def grow(params: TreeParams | Mapping[str, Any], seed: int = 0) -> Skeleton:
             base *= cfg.base_size_s
         if n == cfg.levels - 1:
             base = 0.0
-        rng = _rng_for(seed, pseed, n, 0)
-        f = len(fam.pos)
-        spl = _grow_level(cfg, n, fam, np.ones(f), rng)
+        scale = _prune_scales(cfg, n, fam, seed, pseed) if cfg.prune else np.ones(len(fam.pos))
+        spl = _grow_level(cfg, n, fam, scale, _rng_for(seed, pseed, n, 0))
         order = _order(spl)
         gid = np.empty(len(order), dtype=np.int64)
         gid[order] = next_gid + np.arange(len(order))
