@@ -61,17 +61,18 @@ def evaluate(
     t: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Position and (unnormalised) tangent on segment ``slot -> slot+1`` at parameter ``t``."""
-    p1 = pts[spline, slot]
-    h1 = hr[spline, slot]
-    h2 = hl[spline, slot + 1]
-    p2 = pts[spline, slot + 1]
-    u = (1.0 - t)[:, None]
-    tt = t[:, None]
-    pos = u**3 * p1 + 3.0 * tt * u**2 * h1 + 3.0 * tt**2 * u * h2 + tt**3 * p2
-    tan = (
-        (-3.0 * u**2) * p1
-        + (-6.0 * tt * u + 3.0 * u**2) * h1
-        + (-3.0 * tt**2 + 6.0 * tt * u) * h2
-        + (3.0 * tt**2) * p2
-    )
+    s1 = pts.shape[1]
+    flat = spline * s1 + slot
+    p1 = np.take(pts.reshape(-1, 3), flat, axis=0)
+    h1 = np.take(hr.reshape(-1, 3), flat, axis=0)
+    h2 = np.take(hl.reshape(-1, 3), flat + 1, axis=0)
+    p2 = np.take(pts.reshape(-1, 3), flat + 1, axis=0)
+    u = 1.0 - t
+    b0, b1, b2, b3 = u * u * u, 3.0 * t * u * u, 3.0 * t * t * u, t * t * t
+    pos = b0[:, None] * p1 + b1[:, None] * h1 + b2[:, None] * h2 + b3[:, None] * p2
+    d0 = -3.0 * u * u
+    d1 = -6.0 * t * u + 3.0 * u * u
+    d2 = -3.0 * t * t + 6.0 * t * u
+    d3 = 3.0 * t * t
+    tan = d0[:, None] * p1 + d1[:, None] * h1 + d2[:, None] * h2 + d3[:, None] * p2
     return pos, tan

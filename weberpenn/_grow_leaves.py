@@ -13,7 +13,37 @@ from typing import Any
 
 import numpy as np
 
-from ._grow_math import mat_x, mat_y, mat_z
+from ._grow_math import mat_x, mat_z
+
+# Per-leaf matrices are built in "structure of arrays" form, (3, 3, L): much faster than
+# numpy's batched matmul on tiny 3x3 matrices.
+
+
+def _rz(a: np.ndarray) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    z, o = np.zeros_like(c), np.ones_like(c)
+    return np.array([[c, -s, z], [s, c, z], [z, z, o]])
+
+
+def _rx(a: np.ndarray) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    z, o = np.zeros_like(c), np.ones_like(c)
+    return np.array([[o, z, z], [z, c, -s], [z, s, c]])
+
+
+def _ry(a: np.ndarray) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    z, o = np.zeros_like(c), np.ones_like(c)
+    return np.array([[c, z, s], [z, o, z], [-s, z, c]])
+
+
+def _mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Product of two stacks of 3x3 matrices in (3, 3, L) layout (``b`` may be (3, 3))."""
+    out = np.empty((3, 3) + np.broadcast_shapes(a.shape[2:], b.shape[2:]))
+    for i in range(3):
+        for k in range(3):
+            out[i, k] = a[i, 0] * b[0, k] + a[i, 1] * b[1, k] + a[i, 2] * b[2, k]
+    return out
 
 
 def _alternate(first: float, step: float, count: int) -> np.ndarray:
@@ -56,10 +86,8 @@ def leaf_transforms(p: Mapping[str, Any], cp: Any) -> tuple[np.ndarray, np.ndarr
         else:
             old_before = np.arange(c) * step
             old_after = old_before + step
-        rot_mat = mat_z(old_before)
         offset = cp.offset
         dv = -down_v * offset if down_v > 0.0 else np.full(c, down_v)
-        down_mat = mat_x(down + dv)
         f = offset
     else:
         nl = -leaves
@@ -73,11 +101,11 @@ def leaf_transforms(p: Mapping[str, Any], cp: Any) -> tuple[np.ndarray, np.ndarr
         else:
             ob = -rotate / 2.0 + np.arange(nl) * (rotate / (nl - 1))
             oa = ob + rotate / (nl - 1)
+        if nl == 1 and rotate >= 0.0:
+            ob = np.zeros(1)  # Sapling: a single leaf is not turned
         old_before = np.tile(ob, c)
         old_after = np.tile(oa, c)
-        rot_mat = mat_y(np.zeros_like(old_before) if (nl == 1 and rotate >= 0.0) else old_before)
         offset = cp.offset[src]
-        down_mat = None
         if nl > 1 and rotate != 0.0:
             f = 1.0 - np.abs((old_after - rotate / (nl - 1)) / (rotate / 2.0))
         else:
@@ -86,21 +114,27 @@ def leaf_transforms(p: Mapping[str, Any], cp: Any) -> tuple[np.ndarray, np.ndarr
     s = scale * (1.0 - (1.0 - f) * -scale_t) if scale_t < 0.0 else scale * (1.0 - f * scale_t)
     s = s * scale_v
     n = len(src)
-    sm = np.zeros((n, 3, 3))
-    sm[:, 0, 0] = scale_x * s
-    sm[:, 1, 1] = s
-    sm[:, 2, 2] = s
-    # template of the Skeleton contract (XY plane) -> Sapling's (XZ plane)
-    m = sm @ mat_x(np.full(n, math.pi / 2.0))
-    m = mat_z(np.full(n, math.pi)) @ m
-    m = mat_x(np.full(n, -leafangle)) @ m
+    # constant right-hand part: contract template (XY) -> Sapling's (XZ plane), width,
+    # half a turn about Z, then the leafangle tilt
+    k = np.diag([scale_x, 1.0, 1.0]) @ mat_x(math.pi / 2.0)
+    k = mat_x(-leafangle) @ mat_z(math.pi) @ k
+    # one more turn about Z per leaf: Sapling's flip for rotate < 0, or the horizontal fix
     if rotate < 0.0:
-        m = mat_z(np.full(n, math.pi / 2.0)) @ m
-        m = np.where((old_after < 0.0)[:, None, None], mat_z(np.full(n, math.pi)) @ m, m)
-    if leaves > 0 and rotate > 0.0 and horz:
-        m = mat_z(-old_after + rotate) @ m
-    if down_mat is not None:
-        m = down_mat @ m
-    m = rot_mat @ m
-    m = cp.frame[src] @ m
-    return np.ascontiguousarray(cp.co[src], dtype=np.float64), np.ascontiguousarray(m)
+        cz = math.pi / 2.0 + np.where(old_after < 0.0, math.pi, 0.0)
+    elif leaves > 0 and rotate > 0.0 and horz:
+        cz = rotate - old_after
+    else:
+        cz = np.zeros(n)
+    m = _mul(_rz(cz), k)
+    if leaves > 0:
+        m = _mul(_rx(down + dv), m)
+        m = _mul(_rz(old_before), m)
+    else:
+        m = _mul(_ry(old_before), m)
+    frames = np.moveaxis(cp.frame, 0, -1)
+    if leaves < 0:
+        frames = frames[:, :, src]
+    m = _mul(frames, m) * s
+    return np.ascontiguousarray(cp.co[src], dtype=np.float64), np.ascontiguousarray(
+        np.moveaxis(m, -1, 0)
+    )

@@ -105,6 +105,34 @@ def quat_to_mat(w: np.ndarray, x: np.ndarray, y: np.ndarray, z: np.ndarray) -> n
 def track_frames(d: np.ndarray) -> np.ndarray:
     """Frames of ``Vector.to_track_quat('Z', 'Y')`` for each row of ``d``.
 
+    Away from the vertical Blender's result is the frame whose Z is ``d`` and whose Y is
+    world up made perpendicular to ``d``; that closed form is used there, and Blender's
+    quaternion construction (:func:`_track_frames_exact`) near the vertical.
+    """
+    d = np.asarray(d, dtype=np.float64)
+    x, y, z = d[:, 0], d[:, 1], d[:, 2]
+    special = (np.abs(x) + np.abs(y)) < 1e-4
+    ln = np.sqrt(x * x + y * y + z * z)
+    ln = np.where(special, 1.0, ln)
+    zx, zy, zz = x / ln, y / ln, z / ln
+    yx, yy, yz = -zz * zx, -zz * zy, 1.0 - zz * zz
+    yl = np.sqrt(yx * yx + yy * yy + yz * yz)
+    yl = np.where(special, 1.0, yl)
+    yx, yy, yz = yx / yl, yy / yl, yz / yl
+    m = np.empty((len(d), 3, 3))
+    m[:, 0, 0] = yy * zz - yz * zy
+    m[:, 1, 0] = yz * zx - yx * zz
+    m[:, 2, 0] = yx * zy - yy * zx
+    m[:, 0, 1], m[:, 1, 1], m[:, 2, 1] = yx, yy, yz
+    m[:, 0, 2], m[:, 1, 2], m[:, 2, 2] = zx, zy, zz
+    if special.any():
+        m[special] = _track_frames_exact(d[special])
+    return m
+
+
+def _track_frames_exact(d: np.ndarray) -> np.ndarray:
+    """Frames of ``Vector.to_track_quat('Z', 'Y')``, step by step as Blender computes them.
+
     Follows Blender's ``vec_to_quat`` step by step: the shortest rotation taking +Z to
     ``d`` (about a horizontal axis; +X when ``d`` is near vertical), then a twist about
     ``d`` that brings the local Y axis towards world up.  A zero vector gives the

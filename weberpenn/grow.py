@@ -450,11 +450,17 @@ def _child_points(
     # tips: one per spline
     tip_co = spl.pts[s_ord, res]
     tip_tan = hr[s_ord, res] - tip_co
+    # pairs are already in Sapling order (spline rank, then t): put each tip after its
+    # spline's points
     rank = np.empty(len(order), dtype=np.int64)
     rank[order] = np.arange(len(order))
-    key_s = np.concatenate([rank[ps], rank[s_ord]])
-    key_t = np.concatenate([pt, np.full(len(s_ord), 2.0)])
-    srt = np.lexsort((key_t, key_s))
+    per_rank = np.bincount(rank[ps], minlength=len(order))
+    tip_at = np.cumsum(per_rank) + np.arange(len(order))
+    srt = np.empty(len(ps) + len(order), dtype=np.int64)
+    is_tip = np.zeros(len(srt), dtype=bool)
+    is_tip[tip_at] = True
+    srt[~is_tip] = np.arange(len(ps))
+    srt[tip_at] = len(ps) + np.arange(len(order))
     src = np.concatenate([ps, s_ord])[srt]
     cp = _ChildPoints(
         co=np.concatenate([co, tip_co])[srt],
