@@ -56,6 +56,10 @@ def _sizes(sk) -> tuple[np.ndarray, np.ndarray]:
     return hi - lo, leaf
 
 
+def _ints(a: np.ndarray) -> str:
+    return "[" + " ".join(f"{x:.0f}" for x in a) + "]"
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--ref", type=Path, default=DEFAULT_REF, help="the shared reference folder")
@@ -93,8 +97,8 @@ def main(argv: list[str] | None = None) -> int:
         rows.append((name, rb, rl, ospl / sspl, np.mean(nleaf) / sleaf, np.median(times)))
         print(
             f"{name:<22} {np.array2string(ob, precision=2):>20} {np.array2string(rb, precision=2):>17} "
-            f"{np.array2string(rl, precision=2):>17}  {np.array2string(ospl, precision=0):<26} "
-            f"{np.array2string(sspl, precision=0):<26} {np.mean(nleaf):6.0f}/{sleaf:<6.0f} "
+            f"{np.array2string(rl, precision=2):>17}  {_ints(ospl):<26} "
+            f"{_ints(sspl):<26} {np.mean(nleaf):6.0f}/{sleaf:<6.0f} "
             f"{1000 * np.median(times):5.0f}"
         )
     print("\nper species (mean ratio ours/Sapling over files and seeds)")

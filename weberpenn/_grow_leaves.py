@@ -37,6 +37,18 @@ def _ry(a: np.ndarray) -> np.ndarray:
     return np.array([[c, z, s], [z, o, z], [-s, z, c]])
 
 
+def _zxz(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Rz(a) @ Rx(b) @ Rz(c) in closed form."""
+    ca, sa, cb, sb, cc, sc = np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(c), np.sin(c)
+    return np.array(
+        [
+            [ca * cc - sa * cb * sc, -ca * sc - sa * cb * cc, sa * sb],
+            [sa * cc + ca * cb * sc, -sa * sc + ca * cb * cc, -ca * sb],
+            [sb * sc, sb * cc, cb],
+        ]
+    )
+
+
 def _mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Product of two stacks of 3x3 matrices in (3, 3, L) layout (``b`` may be (3, 3))."""
     out = np.empty((3, 3) + np.broadcast_shapes(a.shape[2:], b.shape[2:]))
@@ -125,12 +137,12 @@ def leaf_transforms(p: Mapping[str, Any], cp: Any) -> tuple[np.ndarray, np.ndarr
         cz = rotate - old_after
     else:
         cz = np.zeros(n)
-    m = _mul(_rz(cz), k)
     if leaves > 0:
-        m = _mul(_rx(down + dv), m)
-        m = _mul(_rz(old_before), m)
+        m = _mul(_zxz(old_before, down + dv, cz), k)
+    elif rotate < 0.0:
+        m = _mul(_ry(old_before), _mul(_rz(cz), k))
     else:
-        m = _mul(_ry(old_before), m)
+        m = _mul(_ry(old_before), k)
     frames = np.moveaxis(cp.frame, 0, -1)
     if leaves < 0:
         frames = frames[:, :, src]
