@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import random
 import sys
 import time
 from pathlib import Path
@@ -54,6 +55,48 @@ def _sizes(sk) -> tuple[np.ndarray, np.ndarray]:
     leaves = _leaf_corners(sk)
     leaf = leaves.max(axis=0) - leaves.min(axis=0) if len(leaves) else np.zeros(3)
     return hi - lo, leaf
+
+
+def replay_trunk_splines(p, seed: int) -> int:
+    """Number of trunk splines Sapling makes for ``seed``, replaying its Python ``random``
+    call sequence for the trunk (the dictionaries as mapped in the statistics file:
+    scaleV, scaleV0, lengthV and rotateV[0] are zero but still consume draws).  This checks
+    the split rule :func:`weberpenn.grow.grow` implements, draw for draw."""
+    rnd = random.Random(seed)
+    res, sh = p["curveRes"][0], p["splitHeight"]
+    rnd.uniform(0.0, 0.0)  # scaleVal
+    rnd.uniform(1.0, 1.0)  # trunk start radius
+    rnd.uniform(1.0, 1.0)  # lengthV of the first stem
+    splines = [{"last": 0, "roll": False}]
+    for k in range(res):
+        kp = k / (res - 1) if res > 1 else 1.0
+        sv = max(((2 * p["splitBias"]) * (kp - 0.5) + 1) * p["segSplits"][0], 0.0)
+        for st in list(splines):
+            sval = sv * 1.33 if st["last"] == 0 else sv * sv
+            if k == 0 or (k < (res - 1) * sh and k != 1):
+                ns = 0
+            elif k == 1:
+                ns = p["baseSplits"]
+            elif k == int((res - 1) * sh) + 1 and sval > 0:
+                ns = 1
+            else:
+                ns = 1 if rnd.random() < sval else 0
+            rnd.uniform(0, 1)  # curve variation about X
+            rnd.uniform(0, 1)  # curve variation about Y
+            if ns > 0:
+                rnd.choice([-1, 1])
+                rnd.uniform(-1, 1)  # split angle
+                rnd.choice([-1, 1])
+                rnd.uniform(-1, 1)  # spread angle
+                if not st["roll"]:
+                    rnd.uniform(0, 360)
+                    st["roll"] = True
+                rnd.uniform(0.0, 0.0)  # rotateV[0]
+                for _ in range(ns):
+                    rnd.uniform(1.0, 1.0)  # clone lengthV
+                    splines.append({"last": 1, "roll": True})
+            st["last"] = 1 if ns > 0 else 0
+    return len(splines)
 
 
 def _ints(a: np.ndarray) -> str:
@@ -113,6 +156,15 @@ def main(argv: list[str] | None = None) -> int:
             f"{np.array2string(rl, precision=2)}  stems/level {np.array2string(rs, precision=2)}  "
             f"leaves {rv:.2f}"
         )
+    print("\ntrunk splines: Sapling's statistics vs. a replay of its random draws with our rule")
+    agree = 0
+    for name in sorted(stats, key=lambda s: int(s.split("_")[0])):
+        p = load_params(args.ref / "treesketchnet_test_params" / f"{name}.json")
+        sap = [t["splines_per_level"][0] for t in stats[name]]
+        rep = [replay_trunk_splines(p, int(t["seed"])) for t in stats[name]]
+        agree += sap == rep
+        print(f"  {name:<22} sapling {sap}  replay {rep}")
+    print(f"  {agree}/{len(stats)} files agree exactly")
     worst = max(float(np.max(np.abs(np.log(r[1])))) for r in rows)
     print(f"\nworst branch-bbox axis ratio off by a factor {np.exp(worst):.3f}")
     return 0
