@@ -13,6 +13,13 @@ What stays random in Sapling and has no realised key (whether a segment splits,
 it stays uniform (Sapling's statistics) while ``rSplits2`` still changes the tree.  So
 ``grow`` is a pure function: the same input gives byte-identical arrays.
 
+Deliberate differences from Sapling: a stem's end radius is capped at its start radius
+(Sapling's ``(startRad * (1 - taper)) ** ratioPower`` exceeds the start radius when the
+start radius is above 1, so radii would grow towards the tip); operator options that the
+TreeSketchNet dictionary does not store take Sapling's defaults (rMode 'rotate',
+autoTaper on, closeTip off, splitByLen off).  The trunk-split rule is checked draw for
+draw against Sapling's own statistics by ``benchmarks/compare_sapling.py``.
+
 The implementation is vectorised: all stems of a level grow together, one Bezier
 segment at a time, with local frames as rotation matrices (Sapling's quaternions from
 ``to_track_quat('Z', 'Y')``, replicated in :mod:`weberpenn._grow_math`).
@@ -310,7 +317,7 @@ def _grow_level(
                 rad_s=rad_s[par] * bscale,
                 rad_e=rad_e[par] * bscale,
                 curv=curv[par],
-                sign=-np.ones(ncl),  # fresh stem: +1 used for its first segment (at k + 1)
+                sign=np.ones(ncl),  # a new stem: its first bend (at k + 1) is positive
                 split_last=np.ones(ncl, dtype=bool),
                 r_last=branch_rot[par] + np.pi,
                 dirv=v,
@@ -318,7 +325,6 @@ def _grow_level(
                 parent=par,
                 seg_len=stem_l,
             )
-            new["sign"] = np.ones(ncl)
 
         a = np.where(sp, -angle + cang, cang)
         v = np.stack([np.zeros(nsp), -np.sin(a), np.cos(a)], axis=1)
@@ -692,16 +698,15 @@ def grow(params: TreeParams | Mapping[str, Any], seed: int = 0) -> Skeleton:
         # output: stems of this level in Sapling order
         res = cfg.curve_res[m]
         slots = np.arange(res + 1)
-        for_out = order
-        mask = slots[None, :] >= spl.start[for_out][:, None]
-        all_pts.append(spl.pts[for_out][mask])
-        all_rad.append(spl.rad[for_out][mask])
+        mask = slots[None, :] >= spl.start[order][:, None]
+        all_pts.append(spl.pts[order][mask])
+        all_rad.append(spl.rad[order][mask])
         counts.append(mask.sum(axis=1))
         levels_out.append(np.full(len(order), n, dtype=np.int64))
         par = np.where(
-            spl.parent[for_out] >= 0,
-            gid[np.maximum(spl.parent[for_out], 0)],
-            fam.parent[spl.fam[for_out]],
+            spl.parent[order] >= 0,
+            gid[np.maximum(spl.parent[order], 0)],
+            fam.parent[spl.fam[order]],
         )
         parents_out.append(par)
         cp = _child_points(cfg, n, spl, order, gid, fam.children, base, _rng_for(seed, pseed, n, 1))
