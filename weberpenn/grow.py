@@ -417,7 +417,6 @@ def _child_points(
     rng: np.random.Generator,
 ) -> _ChildPoints:
     res = cfg.curve_res[min(n, 3)]
-    hl, hr = handles(spl.pts, spl.start)
     nseg = res - spl.start
     seg_total = spl.seg_len * nseg
     max_off = np.zeros(len(children))
@@ -450,12 +449,17 @@ def _child_points(
     idx = np.where(over, nseg[ps] - 1, idx)
     tt = np.where(over, 1.0, tt)
     slot = spl.start[ps] + idx
-    co, tan = evaluate(spl.pts, hl, hr, ps, slot, tt)
+    if len(ps):
+        hl, hr = handles(spl.pts, spl.start)
+        co, tan = evaluate(spl.pts, hl, hr, ps, slot, tt)
+    else:
+        co, tan = np.zeros((0, 3)), np.zeros((0, 3))
     radius = (1.0 - tt) * spl.rad[ps, slot] + tt * spl.rad[ps, slot + 1]
 
     # tips: one per spline
     tip_co = spl.pts[s_ord, res]
-    tip_tan = hr[s_ord, res] - tip_co
+    # the last point's AUTO handle mirrors the last segment: handle - point = 2/5.1228 * segment
+    tip_tan = (tip_co - spl.pts[s_ord, res - 1]) * (2.0 / 5.1228)
     # pairs are already in Sapling order (spline rank, then t): put each tip after its
     # spline's points
     rank = np.empty(len(order), dtype=np.int64)
