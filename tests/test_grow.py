@@ -218,3 +218,34 @@ def test_reference_files_grow(path):
     assert sk.n_leaves > 0
     assert len(sk.stems_per_level()) == p["levels"]
     assert sk.res_u == p["resU"] and sk.bevel_res == p["bevelRes"]
+
+
+def test_down_angle_between_child_and_trunk():
+    for down in (30.0, 60.0, 90.0):
+        p = _plain(
+            levels=2,
+            branches=(0, 12, 0, 0),
+            leaves=0,
+            downAngle=(0.0, down, 45.0, 45.0),
+            downAngleV=(0.0, 0.0, 0.0, 0.0),
+        )
+        sk = grow(p)
+        trunk_top = sk.stem(0)[0][-1]
+        for i in range(1, sk.n_stems):
+            pts, _ = sk.stem(i)
+            if np.allclose(pts[0], trunk_top):
+                continue  # the stem continuing from the trunk tip
+            d = pts[1] - pts[0]
+            ang = np.degrees(np.arccos(d[2] / np.linalg.norm(d)))
+            assert ang == pytest.approx(down, abs=1e-6)
+
+
+def test_length_ratio_of_children():
+    # shape 3 (cylindrical) gives every first-level child length[1] * trunk length
+    p = _plain(levels=2, branches=(0, 10, 0, 0), leaves=0, shape="3", length=(1.0, 0.4, 0.6, 0.45))
+    sk = grow(p)
+    trunk_len = np.linalg.norm(np.diff(sk.stem(0)[0], axis=0), axis=1).sum()
+    for i in range(1, sk.n_stems):
+        pts, _ = sk.stem(i)
+        ln = np.linalg.norm(np.diff(pts, axis=0), axis=1).sum()
+        assert ln == pytest.approx(0.4 * trunk_len, rel=1e-9)
