@@ -118,7 +118,7 @@ def leaf_transforms(p: Mapping[str, Any], cp: Any) -> tuple[np.ndarray, np.ndarr
         old_before = np.tile(ob, c)
         old_after = np.tile(oa, c)
         offset = cp.offset[src]
-        if nl > 1 and rotate != 0.0:
+        if nl > 1 and abs(rotate) > 1e-9:  # (Sapling: rotate != 0; tiny values overflow)
             f = 1.0 - np.abs((old_after - rotate / (nl - 1)) / (rotate / 2.0))
         else:
             f = offset
