@@ -15,40 +15,82 @@ from ._grow_stems import Cfg, ChildPoints, Families, Splines
 
 
 # --------------------------------------------------------------------------- child points
-def t_values(
-    cfg: Cfg, n: int, spl: Splines, children: np.ndarray, base: float, rng: np.random.Generator
+def _trunk_t(cfg: Cfg, children: float, base: float, rng: np.random.Generator) -> np.ndarray:
+    """Sapling's list of child positions on the trunk (evenly spaced, whorls, distribution)."""
+    c = int(children) if children > 0 else 0
+    t = [(a + 1) / c for a in range(c)] if c > 0 else []
+    t = t[int(base * (len(t) + 1)) :]
+    if cfg.nrings > 0:
+        ring = cfg.nrings
+        t = [(math.floor(x * ring) / ring) * float(rng.uniform(0.995, 1.005)) for x in t[:-1]]
+        t.append(1.0)
+        t = [x for x in t if x > base]
+    tv = np.array(t, dtype=np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tv = (tv - base) / (1.0 - base)
+        if cfg.branch_dist < 1.0:
+            tv = np.abs(tv) ** (1.0 / cfg.branch_dist) * np.sign(tv)
+        else:
+            tv = 1.0 - np.abs(1.0 - tv) ** cfg.branch_dist * np.sign(1.0 - tv)
+        tv = tv * (1.0 - base) + base
+    return np.nan_to_num(tv, nan=1.0)
+
+
+def _limit(cnt: np.ndarray, limit: int) -> np.ndarray:
+    """Counts cut so that their running total stays within ``limit``."""
+    before = np.cumsum(cnt) - cnt
+    return np.clip(limit - before, 0, cnt)
+
+
+def _pairs(
+    cfg: Cfg,
+    n: int,
+    spl: Splines,
+    s_ord: np.ndarray,
+    cb: np.ndarray,
+    ct: np.ndarray,
+    children: np.ndarray,
+    base: float,
+    rng: np.random.Generator,
+    limit: int,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(family, t) of every candidate child position, families ascending, t ascending."""
+    """(spline, t) of every child position inside a spline's share of its family, in
+    Sapling's order (splines in ``s_ord`` order, t in list order).  Only the t values near
+    each spline's range are generated, at most about ``limit`` of them."""
     res = cfg.curve_res[min(n, 3)]
-    nfam = len(children)
+    cbo, cto = cb[s_ord], ct[s_ord]
     if n == 0:
-        c = int(children[0]) if children[0] > 0 else 0
-        t = [(a + 1) / c for a in range(c)] if c > 0 else []
-        t = t[int(base * (len(t) + 1)) :]
-        if cfg.nrings > 0:
-            ring = cfg.nrings
-            t = [(math.floor(x * ring) / ring) * float(rng.uniform(0.995, 1.005)) for x in t[:-1]]
-            t.append(1.0)
-            t = [x for x in t if x > base]
-        tv = np.array(t, dtype=np.float64)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            tv = (tv - base) / (1.0 - base)
-            if cfg.branch_dist < 1.0:
-                tv = np.abs(tv) ** (1.0 / cfg.branch_dist) * np.sign(tv)
-            else:
-                tv = 1.0 - np.abs(1.0 - tv) ** cfg.branch_dist * np.sign(1.0 - tv)
-            tv = tv * (1.0 - base) + base
-        tv = np.nan_to_num(tv, nan=1.0)
-        return np.zeros(len(tv), dtype=np.int64), tv
+        tv = _trunk_t(cfg, float(children[0]), base, rng)
+        srt = np.argsort(tv, kind="stable")
+        ts = tv[srt]
+        lo = np.searchsorted(ts, cbo, side="left")
+        hi = np.searchsorted(ts, cto, side="right")
+        cnt = _limit(np.maximum(hi - lo, 0), limit)
+        rep = np.repeat(np.arange(len(s_ord)), cnt)
+        local = np.arange(len(rep)) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+        orig = srt[lo[rep] + local]
+        back = np.lexsort((orig, rep))  # Sapling walks the list in its own order
+        ps, pt = s_ord[rep[back]], tv[orig[back]]
+        return ps[pt < 1.0], pt[pt < 1.0]
+    nfam = len(children)
     nseg = np.bincount(spl.fam, weights=(res - spl.start).astype(np.float64), minlength=nfam)
     num = np.where(children > 0, np.round(children / np.maximum(nseg, 1) * res), 0).astype(np.int64)
     trim = (base * (num + 1)).astype(np.int64)
-    cnt = np.maximum(num - trim, 0)
-    fam_t = np.repeat(np.arange(nfam), cnt)
-    first = np.concatenate([[0], np.cumsum(cnt)[:-1]])
-    a = np.arange(len(fam_t)) - np.repeat(first, cnt) + np.repeat(trim, cnt)
-    t = (a + 1) / np.repeat(num, cnt).astype(np.float64)
-    return fam_t, t
+    f = spl.fam[s_ord]
+    numf = num[f].astype(np.float64)
+    ok = np.isfinite(cbo) & np.isfinite(cto) & (numf > 0)
+    with np.errstate(invalid="ignore"):
+        a_lo = np.where(ok, np.floor(np.where(ok, cbo, 0.0) * numf) - 2, 0).astype(np.int64)
+        a_hi = np.where(ok, np.ceil(np.where(ok, cto, 0.0) * numf) + 1, -1).astype(np.int64)
+    a_lo = np.maximum(a_lo, trim[f])
+    a_hi = np.minimum(a_hi, num[f] - 1)
+    cnt = _limit(np.maximum(a_hi - a_lo + 1, 0), limit)
+    rep = np.repeat(np.arange(len(s_ord)), cnt)
+    local = np.arange(len(rep)) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    a = a_lo[rep] + local
+    pt = (a + 1) / numf[rep]
+    keep = (pt >= cbo[rep]) & (pt <= cto[rep]) & (pt < 1.0)
+    return s_ord[rep[keep]], pt[keep]
 
 
 def child_points(
@@ -60,29 +102,40 @@ def child_points(
     children: np.ndarray,
     base: float,
     rng: np.random.Generator,
-) -> ChildPoints:
+    cap: int,
+) -> tuple[ChildPoints, bool]:
+    """Where the grown level sprouts: Sapling's child points in Sapling's order, at most
+    ``cap`` of them (the second value says whether the cap cut any)."""
     res = cfg.curve_res[min(n, 3)]
     nseg = res - spl.start
     seg_total = spl.seg_len * nseg
     max_off = np.zeros(len(children))
     np.maximum.at(max_off, spl.fam, spl.offset_len + seg_total)
-    fam_t, tv = t_values(cfg, n, spl, children, base, rng)
-
-    # pair every spline (in Sapling order) with its family's t values
-    tcount = np.bincount(fam_t, minlength=len(children))
-    tfirst = np.concatenate([[0], np.cumsum(tcount)[:-1]])
-    s_ord = order
-    per = tcount[spl.fam[s_ord]]
-    ps = np.repeat(s_ord, per)
-    base_idx = np.repeat(tfirst[spl.fam[s_ord]], per)
-    local = np.arange(len(ps)) - np.repeat(np.concatenate([[0], np.cumsum(per)[:-1]]), per)
-    pt = tv[base_idx + local]
-    mo = max_off[spl.fam[ps]]
+    mo = max_off[spl.fam]
     with np.errstate(divide="ignore", invalid="ignore"):
-        cb = spl.offset_len[ps] / mo
-        ct = cb + seg_total[ps] / mo
-        keep = (pt >= cb) & (pt <= ct) & (pt < 1.0)
-        ps, pt, cb, ct = ps[keep], pt[keep], cb[keep], ct[keep]
+        cb_s = spl.offset_len / mo
+        ct_s = cb_s + seg_total / mo
+    s_ord = order
+    ps, pt = _pairs(cfg, n, spl, s_ord, cb_s, ct_s, children, base, rng, cap + 5 * len(s_ord) + 1)
+
+    # Sapling order: each spline's points, then its tip; cut at ``cap``
+    rank = np.empty(len(order), dtype=np.int64)
+    rank[order] = np.arange(len(order))
+    per_rank = np.bincount(rank[ps], minlength=len(order))
+    tip_at = np.cumsum(per_rank) + np.arange(len(order))
+    srt = np.empty(len(ps) + len(order), dtype=np.int64)
+    is_tip = np.zeros(len(srt), dtype=bool)
+    is_tip[tip_at] = True
+    srt[~is_tip] = np.arange(len(ps))
+    srt[tip_at] = len(ps) + np.arange(len(order))
+    cut = len(srt) > cap
+    srt = srt[:cap]
+    is_pair = srt < len(ps)
+    tip_sel = srt[~is_pair] - len(ps)
+    ps, pt = ps[srt[is_pair]], pt[srt[is_pair]]
+
+    cb, ct = cb_s[ps], ct_s[ps]
+    with np.errstate(divide="ignore", invalid="ignore"):
         scaled = (pt - cb) / (ct - cb)
         ofst = ((pt - base) / (ct - base)) * (1.0 - base) + base
     scaled = np.nan_to_num(scaled, nan=0.0)
@@ -102,32 +155,31 @@ def child_points(
     radius = (1.0 - tt) * spl.rad[ps, slot] + tt * spl.rad[ps, slot + 1]
 
     # tips: one per spline
-    tip_co = spl.pts[s_ord, res]
+    ts = s_ord[tip_sel]
+    tip_co = spl.pts[ts, res]
     # the last point's AUTO handle mirrors the last segment: handle - point = 2/5.1228 * segment
-    tip_tan = (tip_co - spl.pts[s_ord, res - 1]) * (2.0 / 5.1228)
-    # pairs are already in Sapling order (spline rank, then t): put each tip after its
-    # spline's points
-    rank = np.empty(len(order), dtype=np.int64)
-    rank[order] = np.arange(len(order))
-    per_rank = np.bincount(rank[ps], minlength=len(order))
-    tip_at = np.cumsum(per_rank) + np.arange(len(order))
-    srt = np.empty(len(ps) + len(order), dtype=np.int64)
-    is_tip = np.zeros(len(srt), dtype=bool)
-    is_tip[tip_at] = True
-    srt[~is_tip] = np.arange(len(ps))
-    srt[tip_at] = len(ps) + np.arange(len(order))
-    src = np.concatenate([ps, s_ord])[srt]
+    tip_tan = (tip_co - spl.pts[ts, res - 1]) * (2.0 / 5.1228)
+    # both were selected in order: interleave them back
+    m = len(srt)
+    src = np.empty(m, dtype=np.int64)
+    src[is_pair], src[~is_pair] = ps, ts
+
+    def comb(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        out = np.empty((m,) + a.shape[1:])
+        out[is_pair], out[~is_pair] = a, b
+        return out
+
     cp = ChildPoints(
-        co=np.concatenate([co, tip_co])[srt],
-        frame=track_frames(np.concatenate([tan, tip_tan])[srt]),
+        co=comb(co, tip_co),
+        frame=track_frames(comb(tan, tip_tan)),
         rad_par0=spl.rad_s[src],
-        rad_par1=np.concatenate([radius, spl.rad[s_ord, res]])[srt],
-        offset=np.concatenate([pt, np.ones(len(s_ord))])[srt],
-        stem_offset=np.concatenate([ofst, np.ones(len(s_ord))])[srt],
+        rad_par1=comb(radius, spl.rad[ts, res]),
+        offset=comb(pt, np.ones(len(ts))),
+        stem_offset=comb(ofst, np.ones(len(ts))),
         len_par=res * spl.seg_len[src],
         src=gid[src],
     )
-    return cp
+    return cp, cut
 
 
 # --------------------------------------------------------------------------- fabricate

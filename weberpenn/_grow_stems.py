@@ -54,6 +54,7 @@ class Splines:
     rad_s: np.ndarray  # (N,)
     offset_len: np.ndarray  # (N,)
     parent: np.ndarray  # (N,) local index of the spline a clone split from, -1 = root
+    capped: bool = False  # splitting stopped at the stem limit
 
 
 @dataclass
@@ -160,9 +161,17 @@ def _attract_up(v: np.ndarray, att: float, res: int) -> np.ndarray:
 
 
 def grow_level(
-    cfg: Cfg, n: int, fam: Families, scale: np.ndarray, rng: np.random.Generator
+    cfg: Cfg,
+    n: int,
+    fam: Families,
+    scale: np.ndarray,
+    rng: np.random.Generator,
+    max_splines: int,
 ) -> Splines:
-    """Grow every family of level ``n`` (param index ``m = min(n, 3)``) segment by segment."""
+    """Grow every family of level ``n`` (param index ``m = min(n, 3)``) segment by segment.
+
+    Splits stop once the level holds ``max_splines`` splines (``Splines.capped`` says so).
+    """
     m = min(n, 3)
     res = cfg.curve_res[m]
     trunk = n == 0
@@ -188,6 +197,7 @@ def grow_level(
     parent = np.full(f, -1, dtype=np.int64)
 
     seg_splits = cfg.seg_splits[m]
+    capped = False
     cv1, cv2 = cfg.curve_v1[m], cfg.curve_v2[m]
     att_up = cfg.attract_up[m]
     att_out = cfg.attract_out[m]
@@ -215,6 +225,9 @@ def grow_level(
             nsplit = (sval > 0.0).astype(np.int64)
         else:
             nsplit = (u < sval).astype(np.int64)
+        if nsplit.sum() > max_splines - nsp:
+            nsplit = np.where(np.cumsum(nsplit) <= max(max_splines - nsp, 0), nsplit, 0)
+            capped = True
         if k == k_back and cfg.curve_back[m] != 0.0:
             curv = curv + 2.0 * cfg.curve_back[m] / res
 
@@ -328,7 +341,7 @@ def grow_level(
             parent = np.concatenate([parent, new["parent"]])
             seg_len = np.concatenate([seg_len, new["seg_len"]])
 
-    return Splines(pts, rad, start, famid, seg_len, rad_s, offset_len, parent)
+    return Splines(pts, rad, start, famid, seg_len, rad_s, offset_len, parent, capped)
 
 
 # --------------------------------------------------------------------------- ordering
@@ -338,7 +351,9 @@ def spline_order(spl: Splines) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- pruning
-def prune_scales(cfg: Cfg, n: int, fam: Families, seed: int, pseed: int) -> np.ndarray:
+def prune_scales(
+    cfg: Cfg, n: int, fam: Families, seed: int, pseed: int, max_splines: int
+) -> np.ndarray:
     """Sapling's pruning: bisect each family's length scale until its spline ends fit
     inside the envelope (regrowing with the same draws), then blend by ``pruneRatio``."""
     f = len(fam.pos)
@@ -353,7 +368,7 @@ def prune_scales(cfg: Cfg, n: int, fam: Families, seed: int, pseed: int) -> np.n
         near = active & ((cmax - cmin) < 0.01)
         cs = np.where(near, (cs - 1.0) * cfg.prune_ratio + 1.0, cs)
         used = np.where(active, cs, used)
-        spl = grow_level(cfg, n, fam, used, rng_for(seed, pseed, n, 0))
+        spl = grow_level(cfg, n, fam, used, rng_for(seed, pseed, n, 0), max_splines)
         end = spl.pts[:, res]
         ratio = (sv - end[:, 2]) / (sv * max(1.0 - cfg.prune_base, 1e-6))
         env = cfg.prune_width * shape_ratio(

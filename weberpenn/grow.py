@@ -25,6 +25,7 @@ segment at a time, with local frames as rotation matrices (Sapling's quaternions
 ``to_track_quat('Z', 'Y')``, replicated in :mod:`weberpenn._grow_math`).
 """
 
+import warnings
 from collections.abc import Mapping
 from typing import Any
 
@@ -33,10 +34,15 @@ import numpy as np
 from ._grow_children import child_points, fabricate, trunk
 from ._grow_leaves import leaf_transforms
 from ._grow_stems import Cfg, ChildPoints, grow_level, prune_scales, rng_for, spline_order
-from .params import TreeParams, validate
+from .params import MAX_LEAVES, MAX_STEMS, TreeParams, validate
 from .skeleton import Skeleton
 
 __all__ = ["Skeleton", "grow"]
+
+
+def _no_child_points() -> ChildPoints:
+    z = np.zeros(0)
+    return ChildPoints(np.zeros((0, 3)), np.zeros((0, 3, 3)), z, z, z, z, z, z.astype(np.int64))
 
 
 # --------------------------------------------------------------------------- public API
@@ -57,18 +63,25 @@ def grow(params: TreeParams | Mapping[str, Any], seed: int = 0) -> Skeleton:
     next_gid = 0
     base = cfg.base_size
     fam = trunk(cfg)
-    cp: ChildPoints | None = None
+    cp = _no_child_points()
+    budget = MAX_STEMS  # stems left before the hard limit (only absurd inputs reach it)
+    truncated = False
     for n in range(cfg.levels):
         m = min(n, 3)
         if n > 0:
-            assert cp is not None
             fam = fabricate(cfg, n, cp, base)
+            if len(fam.pos) == 0:
+                break
         if m > 0:
             base *= cfg.base_size_s
         if n == cfg.levels - 1:
             base = 0.0
-        scale = prune_scales(cfg, n, fam, seed, pseed) if cfg.prune else np.ones(len(fam.pos))
-        spl = grow_level(cfg, n, fam, scale, rng_for(seed, pseed, n, 0))
+        if cfg.prune:
+            scale = prune_scales(cfg, n, fam, seed, pseed, budget)
+        else:
+            scale = np.ones(len(fam.pos))
+        spl = grow_level(cfg, n, fam, scale, rng_for(seed, pseed, n, 0), budget)
+        truncated |= spl.capped
         order = spline_order(spl)
         gid = np.empty(len(order), dtype=np.int64)
         gid[order] = next_gid + np.arange(len(order))
@@ -86,10 +99,25 @@ def grow(params: TreeParams | Mapping[str, Any], seed: int = 0) -> Skeleton:
             fam.parent[spl.fam[order]],
         )
         parents_out.append(par)
-        cp = child_points(cfg, n, spl, order, gid, fam.children, base, rng_for(seed, pseed, n, 1))
         next_gid += len(order)
+        budget -= len(order)
+        last = n == cfg.levels - 1
+        if last and cfg.leaves == 0:
+            cp = _no_child_points()
+            break
+        cap = MAX_LEAVES // max(1, -cfg.leaves) if last else budget
+        cp, cut = child_points(
+            cfg, n, spl, order, gid, fam.children, base, rng_for(seed, pseed, n, 1), cap
+        )
+        truncated |= cut
 
-    assert cp is not None
+    if truncated:
+        warnings.warn(
+            f"the tree was cut at the generator's limits ({MAX_STEMS} stems, {MAX_LEAVES} "
+            "leaves): its parameters make it explode (segSplits, curveRes or branches)",
+            RuntimeWarning,
+            stacklevel=2,
+        )
     leaf_pos, leaf_mat = leaf_transforms(p, cp)
     points = np.concatenate(all_pts).astype(np.float64)
     radii = np.concatenate(all_rad).astype(np.float64)
