@@ -10,20 +10,27 @@ roll, ``scaleV``/``scaleV0``/``leafScaleV`` realised offsets and multipliers, an
 What stays random in Sapling and has no realised key (whether a segment splits,
 ``lengthV`` and the whorl jitter of ``nrings``) comes from a numpy ``Generator`` seeded by
 ``seed`` and ``params['seed']``; each split draw is shifted by ``rSplits2`` (modulo 1), so
-it stays uniform (Sapling's statistics) while ``rSplits2`` still changes the tree.  So
-``grow`` is a pure function: the same input gives byte-identical arrays.
+it stays uniform (Sapling's statistics) while ``rSplits2`` still changes the tree.  (The
+third-party Render Tree code compares *every* split draw with ``rSplits2``, so a level
+splits at every segment or never; that loses Sapling's stem counts, which the project
+compares against.)  So ``grow`` is a pure function: the same input gives byte-identical
+arrays.
 
 Deliberate differences from Sapling: a stem's end radius is capped at its start radius
 (Sapling's ``(startRad * (1 - taper)) ** ratioPower`` exceeds the start radius when the
 start radius is above 1, so radii would grow towards the tip); operator options that the
 TreeSketchNet dictionary does not store take Sapling's defaults (rMode 'rotate',
-autoTaper on, closeTip off, splitByLen off).  The trunk-split rule is checked draw for
+autoTaper on, closeTip off, splitByLen off); a tree that would exceed the parameter
+table's stem or leaf limits (``MAX_STEMS``, ``MAX_LEAVES``) stops splitting or sprouting
+there, with a ``RuntimeWarning``.  The trunk-split rule is checked draw for
 draw against Sapling's own statistics by ``benchmarks/compare_sapling.py``.
 
 The implementation is vectorised: all stems of a level grow together, one Bezier
 segment at a time, with local frames as rotation matrices (Sapling's quaternions from
 ``to_track_quat('Z', 'Y')``, replicated in :mod:`weberpenn._grow_math`).
 """
+
+from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping
