@@ -72,8 +72,9 @@ def _build_scene(mi: Any, name: str, arrays: tuple[np.ndarray, np.ndarray]) -> A
     v, f = arrays
     mesh = mi.Mesh(name, len(v) // 3, len(f) // 3, has_vertex_normals=False)
     params = mi.traverse(mesh)
-    params["vertex_positions"] = mi.Float(v)
-    params["faces"] = mi.UInt(f)
+    # the buffers' own types: mi.Float/mi.UInt (LLVM) or dr.scalar.ArrayXf/ArrayXu (scalar)
+    params["vertex_positions"] = type(params["vertex_positions"])(v)
+    params["faces"] = type(params["faces"])(f)
     params.update()
     return mi.load_dict({"type": "scene", name: mesh})
 
@@ -214,7 +215,7 @@ class TreeScene:
             mi.render(
                 scene,
                 sensor=_sensor(mi, cam, n, 1),
-                integrator={"type": "aov", "aovs": "dd.y:depth,nn:geo_normal"},
+                integrator=mi.load_dict({"type": "aov", "aovs": "dd.y:depth,nn:geo_normal"}),
             )
         ).reshape(n * n, -1)
         depth = img[:, 0].astype(np.float64)

@@ -1,10 +1,78 @@
-"""`treesketch dataset` commands (being written; see the issue tracker)."""
+"""`treesketch dataset ...`: build the synthetic sketch dataset (see render/dataset.py)."""
 
 from __future__ import annotations
 
+import logging
+from pathlib import Path
+
 import typer
+
+dataset_app = typer.Typer(
+    name="dataset",
+    help="Synthetic sketch datasets (species x trees x views).",
+    no_args_is_help=True,
+)
+
+
+def _csv(text: str, what: str) -> tuple[str, ...]:
+    items = tuple(x.strip().lower() for x in text.split(",") if x.strip())
+    if not items:
+        raise typer.BadParameter(f"give at least one {what} (comma-separated)")
+    return items
+
+
+@dataset_app.command("build")
+def build(
+    out: Path = typer.Option(..., "--out", help="Output folder (created; resumed if it exists)."),
+    trees_per_species: int = typer.Option(
+        250, "--trees-per-species", min=1, max=100_000, help="Trees per species."
+    ),
+    views: str = typer.Option(
+        "front,back,left,right", "--views", help="Comma-separated views: front,back,left,right."
+    ),
+    species: str = typer.Option(
+        "maple,pine,bonsai,palm,cherry", "--species", help="Comma-separated species."
+    ),
+    size: int = typer.Option(256, "--size", min=32, max=2048, help="Sketch size in pixels."),
+    workers: int = typer.Option(1, "--workers", min=1, max=64, help="Worker processes."),
+    seed: int = typer.Option(0, "--seed", min=0, help="Dataset seed (same seed, same dataset)."),
+    val_fraction: float = typer.Option(0.1, "--val-fraction", min=0.0, max=0.9),
+    test_fraction: float = typer.Option(0.1, "--test-fraction", min=0.0, max=0.9),
+    progress: bool | None = typer.Option(
+        None, "--progress/--no-progress", help="Progress bar (default: on a terminal)."
+    ),
+    verbose: bool = typer.Option(False, "--verbose", "-v", help="Log more."),
+) -> None:
+    """Sample, grow, mesh and render every tree; write sketches, parameters, renders and a
+    manifest with a train/val/test split by tree.  Re-running resumes."""
+    from render.dataset import DatasetConfig, DatasetError, build_dataset
+
+    logging.basicConfig(
+        level=logging.INFO if verbose else logging.WARNING,
+        format="%(asctime)s %(levelname)s %(name)s: %(message)s",
+    )
+    try:
+        cfg = DatasetConfig(
+            out=str(out),
+            trees_per_species=trees_per_species,
+            species=_csv(species, "species"),
+            views=_csv(views, "view"),
+            size=size,
+            seed=seed,
+            val_fraction=val_fraction,
+            test_fraction=test_fraction,
+            workers=workers,
+        )
+    except DatasetError as exc:
+        raise typer.BadParameter(str(exc)) from None
+    try:
+        summary = build_dataset(cfg, progress=progress)
+    except DatasetError as exc:
+        typer.echo(f"Error: {exc}", err=True)
+        raise typer.Exit(2) from None
+    typer.echo(summary.text())
 
 
 def register(app: typer.Typer) -> None:
-    """Add this module's commands to the main app."""
-    del app
+    """Add ``treesketch dataset`` to the main app."""
+    app.add_typer(dataset_app, name="dataset")
