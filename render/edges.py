@@ -39,7 +39,7 @@ class EdgeConfig:
     supersample: int = 2  # branch silhouette samples per pixel side (sub-pixel thinning)
     leaf_supersample: int = 1  # leaf silhouette samples per pixel side (it gets blurred anyway)
     # branches
-    branch_thin_px: float = 0.25  # thinning: erode the branch silhouette by this (px)
+    branch_thin_px: float = 0.25  # thinning: the silhouette loses 2x this width (px)
     branch_threshold: float = 0.5  # paper: remove the background at 0.5
     branch_denoise_px: float = 3.0  # drop isolated specks smaller than this area (px^2)
     branch_ramp: float = 0.9  # paper: ramp below 0.9 -> 0, else 1
@@ -89,13 +89,17 @@ def _disk(radius: float) -> np.ndarray | None:
 
 
 def thin_mask(mask_hr: np.ndarray, ss: int, thin_px: float) -> np.ndarray:
-    """Thin a supersampled binary silhouette by ``thin_px`` pixels on each side and
-    return the per-pixel coverage (size x size) — thin branches vanish."""
-    r = thin_px * ss
-    fp = _disk(r)
+    """Thin a supersampled binary silhouette and return per-pixel coverage (size x size).
+
+    The silhouette loses ``2 * thin_px`` pixels of width in total (``thin_px`` per side on
+    average, rounded to whole sub-pixels: a square erosion footprint of ``k + 1``
+    sub-pixels removes ``k`` of them across every branch), so branches thinner than that
+    vanish and the rest get slightly thinner.
+    """
+    k = int(round(2.0 * thin_px * ss))
     m = mask_hr
-    if fp is not None:
-        m = ndimage.binary_erosion(mask_hr, structure=fp, border_value=0)
+    if k > 0:
+        m = ndimage.binary_erosion(mask_hr, structure=np.ones((k + 1, k + 1), bool), border_value=0)
     n = m.shape[0] // ss
     return m.reshape(n, ss, n, ss).mean(axis=(1, 3)).astype(np.float32)
 
@@ -105,7 +109,7 @@ def branch_sketch(silhouette: np.ndarray, cfg: EdgeConfig | None = None) -> np.n
     cfg = cfg or EdgeConfig()
     img = np.asarray(silhouette, dtype=np.float32)
     size = img.shape[0]
-    mask = img < cfg.branch_threshold  # (a) remove the background
+    mask = img <= cfg.branch_threshold  # (a) remove the background (half-covered counts)
     min_area = cfg.branch_denoise_px * (size / cfg.reference_size) ** 2  # an area scales as size^2
     if min_area >= 1.5 and mask.any():  # (b) denoise: drop specks
         mask = morphology.remove_small_objects(mask, max_size=int(round(min_area)) - 1)
