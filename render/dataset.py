@@ -306,10 +306,20 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
         return record
 
 
-def _worker_init() -> None:
-    """Each worker process starts mitsuba itself, one Dr.Jit thread per worker."""
+def _worker_init(parent_pid: int) -> None:
+    """Each worker process starts mitsuba itself, one Dr.Jit thread per worker, and
+    exits on its own if the builder is killed (so no orphan keeps writing files)."""
+    import threading
+
     from .backend import init_mitsuba
 
+    def watch() -> None:
+        while True:
+            if os.getppid() != parent_pid:
+                os._exit(3)
+            time.sleep(0.2)
+
+    threading.Thread(target=watch, daemon=True).start()
     logging.basicConfig(level=logging.WARNING)
     init_mitsuba(threads=1)
 
@@ -454,7 +464,10 @@ def _run_jobs(
 
     ctx = mp.get_context("spawn")  # a fresh interpreter: mitsuba/Dr.Jit start cleanly
     with ProcessPoolExecutor(
-        max_workers=int(cfg.workers), mp_context=ctx, initializer=_worker_init
+        max_workers=int(cfg.workers),
+        mp_context=ctx,
+        initializer=_worker_init,
+        initargs=(os.getpid(),),
     ) as pool:
         pending: set[Future[dict[str, Any]]] = set()
         it = iter(jobs)
