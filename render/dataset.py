@@ -275,7 +275,7 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
                     **p,
                 }
             )
-        colour = renderer.colour("front", int(settings["render_size"]))
+        colour = renderer.colour("front", int(settings["render_size"]), supersample=1)
         p = paths_for(job, settings["views"][0])
         atomic_write_bytes(root / p["render"], png_bytes(colour))
         atomic_write_bytes(root / p["params"], _json_bytes(params.to_dict()))

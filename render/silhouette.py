@@ -176,7 +176,7 @@ class TreeScene:
         ss = int(supersample)
         n = int(size) * ss
         origins, direction = cam.rays(size, ss)
-        rgb = np.ones((n * n, 3), dtype=np.float64)
+        rgb = np.ones((n * n, 3), dtype=np.float32)
         if not self.is_empty:
             bark, leaf = species_colours(self.species)
             hits = []
@@ -192,7 +192,7 @@ class TreeScene:
             sun = SUN / np.linalg.norm(SUN)
             for k, (_, normal, col) in enumerate(hits):
                 sel = hit & (which == k)
-                lam = np.abs(normal[sel] @ sun)  # two-sided (leaves are single sheets)
+                lam = np.abs(normal[sel] @ sun.astype(np.float32))  # two-sided leaves
                 shade = AMBIENT + (1.0 - AMBIENT) * lam
                 rgb[sel] = np.clip(col[None, :] * shade[:, None] * 1.25, 0.0, 1.0)
         img = _downsample(rgb.reshape(n, n, 3), ss)
@@ -206,8 +206,8 @@ class TreeScene:
             d = [float(c) for c in direction]
             ray = mi.Ray3f(mi.Point3f(origins[0], origins[1], origins[2]), mi.Vector3f(*d))
             si = scene.ray_intersect(ray)
-            t = si.t.numpy().astype(np.float64).reshape(-1)
-            normal = si.n.numpy().astype(np.float64).reshape(3, -1).T
+            t = si.t.numpy().astype(np.float32).reshape(-1)
+            normal = si.n.numpy().astype(np.float32).reshape(3, -1).T
             t[~np.isfinite(t)] = np.inf
             return t, normal
         # scalar fallback: per-pixel depth and normal via the AOV integrator
@@ -218,8 +218,8 @@ class TreeScene:
                 integrator=mi.load_dict({"type": "aov", "aovs": "dd.y:depth,nn:geo_normal"}),
             )
         ).reshape(n * n, -1)
-        depth = img[:, 0].astype(np.float64)
-        normal = img[:, 1:4].astype(np.float64)
+        depth = img[:, 0].astype(np.float32)
+        normal = img[:, 1:4].astype(np.float32)
         t = np.where(depth > 0, depth, np.inf)
         return t, normal
 
@@ -228,7 +228,8 @@ def _downsample(img: np.ndarray, ss: int) -> np.ndarray:
     if ss == 1:
         return img
     n = img.shape[0] // ss
-    return img.reshape(n, ss, n, ss, *img.shape[2:]).mean(axis=(1, 3)).astype(img.dtype)
+    out = img.reshape(n, ss, n, ss, *img.shape[2:]).sum(axis=(1, 3), dtype=np.float32)
+    return out * np.float32(1.0 / (ss * ss))
 
 
 def _integrator(mi: Any, kind: str) -> Any:

@@ -84,10 +84,20 @@ class SketchRenderer:
         """(size, size) uint8 sketch, 255 = white background, dark lines."""
         return self.parts(yaw, size, pitch).sketch
 
-    def colour(self, yaw: float | str = 0.0, size: int = 256, pitch: float = 0.0) -> np.ndarray:
-        """(size, size, 3) uint8 shaded picture with the species' bark and leaf colours."""
+    def colour(
+        self,
+        yaw: float | str = 0.0,
+        size: int = 256,
+        pitch: float = 0.0,
+        supersample: int | None = None,
+    ) -> np.ndarray:
+        """(size, size, 3) uint8 shaded picture with the species' bark and leaf colours
+        (``supersample``^2 rays per pixel; default ``config.supersample``)."""
         size = _check_size(size)
-        return self.scene.colour(resolve_yaw(yaw), size, int(self.config.supersample), pitch)
+        ss = int(self.config.supersample if supersample is None else supersample)
+        if not 1 <= ss <= 8:
+            raise ValueError(f"supersample must be in 1..8, got {supersample!r}")
+        return self.scene.colour(resolve_yaw(yaw), size, ss, pitch)
 
 
 def sketch(
