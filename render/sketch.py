@@ -63,22 +63,34 @@ class SketchRenderer:
         return self.scene.backend.variant
 
     def parts(self, yaw: float | str = 0.0, size: int = 256, pitch: float = 0.0) -> SketchParts:
+        """The sketch and its intermediate images.
+
+        Sketches smaller than ``config.reference_size`` are drawn at the reference size
+        and area-averaged down (the intermediate images stay at the reference size), so a
+        128-pixel sketch is exactly a downsized 256-pixel one; larger ones are drawn at
+        their own size with the pixel constants scaled up.
+        """
         size = _check_size(size)
         cfg = self.config
+        work = max(size, int(cfg.reference_size))
         ss = int(cfg.supersample)
-        cov = self.scene.coverage(
-            resolve_yaw(yaw), size, ss, pitch, keep_hr=True, leaf_supersample=cfg.leaf_supersample
-        )
-        thin = cfg.px(cfg.branch_thin_px, size)
-        assert cov.branches_hr is not None
-        branch_sil = 1.0 - thin_mask(cov.branches_hr, ss, thin)
-        leaf_sil = 1.0 - cov.leaves
+        yaw_deg = resolve_yaw(yaw)
         if self.scene.is_empty:
-            white = np.ones((size, size), dtype=np.float32)
+            self.scene.coverage(yaw_deg, size, ss, pitch)  # validates the arguments
+            white = np.ones((work, work), dtype=np.float32)
             return SketchParts(np.full((size, size), 255, np.uint8), white, white, white, white)
+        cov = self.scene.coverage(
+            yaw_deg, work, ss, pitch, keep_hr=True, leaf_supersample=cfg.leaf_supersample
+        )
+        assert cov.branches_hr is not None
+        branch_sil = 1.0 - thin_mask(cov.branches_hr, ss, cfg.px(cfg.branch_thin_px, work))
+        leaf_sil = 1.0 - cov.leaves
         b = branch_sketch(branch_sil, cfg)
         f = foliage_sketch(leaf_sil, cfg)
-        return SketchParts(combine(b, f), branch_sil, leaf_sil, b, f)
+        out = b * f
+        if work != size:
+            out = _area_resize(out, size)
+        return SketchParts(combine(out, np.float32(1.0)), branch_sil, leaf_sil, b, f)
 
     def sketch(self, yaw: float | str = 0.0, size: int = 256, pitch: float = 0.0) -> np.ndarray:
         """(size, size) uint8 sketch, 255 = white background, dark lines."""
@@ -98,6 +110,18 @@ class SketchRenderer:
         if not 1 <= ss <= 8:
             raise ValueError(f"supersample must be in 1..8, got {supersample!r}")
         return self.scene.colour(resolve_yaw(yaw), size, ss, pitch)
+
+
+def _area_resize(img: np.ndarray, size: int) -> np.ndarray:
+    """Area-average (box filter) resize of a float image to ``size`` x ``size``."""
+    n = img.shape[0]
+    if n % size == 0:
+        k = n // size
+        return img.reshape(size, k, size, k).mean(axis=(1, 3), dtype=np.float32)
+    from PIL import Image
+
+    im = Image.fromarray(np.ascontiguousarray(img, dtype=np.float32), mode="F")
+    return np.asarray(im.resize((size, size), Image.Resampling.BOX), dtype=np.float32)
 
 
 def sketch(

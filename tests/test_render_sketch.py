@@ -165,3 +165,12 @@ def test_scalar_fallback_matches_llvm_roughly(tmp_path):
     scalar = np.load(tmp_path / "s.npy")
     llvm = SketchRenderer(simple_tree()).sketch(0, 64)
     assert (scalar != llvm).mean() < 0.1
+
+
+def test_small_sketch_is_a_downsized_reference_sketch(renderer):
+    big = renderer.sketch(0, 256).astype(np.float32)
+    small = renderer.sketch(0, 128).astype(np.float32)
+    down = big.reshape(128, 2, 128, 2).mean(axis=(1, 3))
+    assert np.abs(small - down).max() <= 1.0
+    odd = renderer.sketch(0, 100)
+    assert odd.shape == (100, 100) and (odd < 128).any()
