@@ -255,7 +255,7 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
         params = wp_species.sample(job.species, seed=job.tree_seed)
         tree = build_mesh(grow(params))
         t_mesh = time.perf_counter()
-        renderer = SketchRenderer(tree)
+        renderer = SketchRenderer(tree, species=job.species)
         size = int(settings["size"])
         rows = []
         for view in settings["views"]:

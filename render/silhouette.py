@@ -95,12 +95,14 @@ class Coverage:
 class TreeScene:
     """A tree's mitsuba scenes, built once; render any yaw/pitch/size afterwards."""
 
-    def __init__(self, tree_mesh: Any, framing: Framing | None = None) -> None:
+    def __init__(
+        self, tree_mesh: Any, framing: Framing | None = None, species: str | None = None
+    ) -> None:
         self.backend: Backend = init_mitsuba()
         import mitsuba as mi
 
         self._mi = mi
-        self.species = getattr(tree_mesh, "species", None)
+        self.species = species or getattr(tree_mesh, "species", None)
         b = _mesh_arrays(tree_mesh.branches)
         lv = _mesh_arrays(tree_mesh.leaves)
         verts = [a[0].reshape(-1, 3) for a in (b, lv) if a is not None]

@@ -44,7 +44,10 @@ class SketchRenderer:
         tree_mesh: Any,
         config: EdgeConfig | None = None,
         framing: Framing | None = None,
+        species: str | None = None,
     ) -> None:
+        """``framing`` overrides the tree's own framing; ``species`` (for the colour
+        render's bark and leaf colours) overrides ``tree_mesh.species``."""
         from .silhouette import TreeScene  # mitsuba is imported only when rendering
 
         if not (hasattr(tree_mesh, "branches") and hasattr(tree_mesh, "leaves")):
@@ -52,7 +55,7 @@ class SketchRenderer:
                 f"expected a TreeMesh (with .branches and .leaves), got {type(tree_mesh).__name__}"
             )
         self.config = config or EdgeConfig()
-        self.scene = TreeScene(tree_mesh, framing)
+        self.scene = TreeScene(tree_mesh, framing, species)
 
     @property
     def framing(self) -> Framing:
