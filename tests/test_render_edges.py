@@ -77,3 +77,12 @@ def test_bad_config_values():
         EdgeConfig(reference_size=2)
     with pytest.raises(ValueError, match="leaf_supersample"):
         EdgeConfig(leaf_supersample=1.5)
+
+
+def test_thinning_is_a_square_erosion():
+    rng = np.random.default_rng(0)
+    m = rng.random((64, 64)) > 0.3
+    for k in (1, 2, 3):
+        fp = np.ones((k + 1, k + 1), bool)
+        ref = ndimage.binary_erosion(m, structure=fp, border_value=0, origin=-((k + 1) // 2))
+        assert np.array_equal(thin_mask(m, 2, k / 4), ref.reshape(32, 2, 32, 2).mean(axis=(1, 3)))
