@@ -443,12 +443,15 @@ def write_manifest(root: Path, jobs: Sequence[TreeJob]) -> int:
     return len(rows)
 
 
-def read_manifest(out: str | os.PathLike[str]) -> list[dict[str, Any]]:
-    """The rows of ``OUT/manifest.jsonl``."""
+def read_manifest(out: str | os.PathLike[str], split: str | None = None) -> list[dict[str, Any]]:
+    """The rows of ``OUT/manifest.jsonl`` (only those of ``split`` when given)."""
+    if split is not None and split not in SPLITS:
+        raise DatasetError(f"unknown split {split!r}: use one of {', '.join(SPLITS)}")
     f = Path(out) / "manifest.jsonl"
     if not f.is_file():
         raise DatasetError(f"{f}: no manifest (has the dataset been built?)")
-    return [json.loads(line) for line in f.read_text(encoding="utf-8").splitlines() if line]
+    rows = [json.loads(line) for line in f.read_text(encoding="utf-8").splitlines() if line]
+    return rows if split is None else [r for r in rows if r["split"] == split]
 
 
 def _run_jobs(
