@@ -174,3 +174,10 @@ def test_small_sketch_is_a_downsized_reference_sketch(renderer):
     assert np.abs(small - down).max() <= 1.0
     odd = renderer.sketch(0, 100)
     assert odd.shape == (100, 100) and (odd < 128).any()
+
+
+def test_pitch_changes_the_view_a_little(renderer):
+    flat = renderer.sketch(0, SIZE)
+    raised = renderer.sketch(0, SIZE, pitch=10.0)
+    assert not np.array_equal(flat, raised)
+    assert abs(_height_fraction(flat) - _height_fraction(raised)) < 0.1
