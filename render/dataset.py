@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import functools
 import io
 import json
 import logging
@@ -240,6 +241,20 @@ def paths_for(job: TreeJob, view: str) -> dict[str, str]:
 
 
 # --------------------------------------------------------------------------- one tree
+@functools.lru_cache(maxsize=1)
+def mesher_in_use() -> tuple[Callable[[Any], Any], str]:
+    """``weberpenn.build_mesh``, or (while it does not exist yet) the stand-in in
+    :mod:`render._fallback_mesh`; with the name recorded in every tree's marker."""
+    try:
+        from weberpenn import build_mesh
+    except ImportError:
+        from ._fallback_mesh import build_mesh as fallback
+
+        log.warning("weberpenn.build_mesh is not available; using render._fallback_mesh")
+        return fallback, "render._fallback_mesh"
+    return build_mesh, "weberpenn.build_mesh"
+
+
 def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, Any]:
     """Make one tree's files and its marker; return the marker (or a failure record)."""
     from weberpenn import species as wp_species
@@ -248,10 +263,11 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
     t0 = time.perf_counter()
     params = None
     try:
-        from weberpenn import build_mesh, grow
+        from weberpenn import grow
 
         from .sketch import SketchRenderer
 
+        build_mesh, mesher = mesher_in_use()
         params = wp_species.sample(job.species, seed=job.tree_seed)
         tree = build_mesh(grow(params))
         t_mesh = time.perf_counter()
@@ -282,6 +298,7 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
         marker = {
             "tree_id": job.tree_id,
             "status": "done",
+            "mesher": mesher,
             "faces": int(len(tree.branches.faces) + len(tree.leaves.faces)),
             "seconds_mesh": round(t_mesh - t0, 4),
             "seconds_total": round(time.perf_counter() - t0, 4),
@@ -443,6 +460,17 @@ def write_manifest(root: Path, jobs: Sequence[TreeJob]) -> int:
     return len(rows)
 
 
+def _meshers(root: Path, jobs: Sequence[TreeJob]) -> dict[str, int]:
+    """How many finished trees each mesher made."""
+    out: dict[str, int] = {}
+    for job in jobs:
+        m = _load_marker(root / "done" / f"{job.tree_id}.json")
+        if m is not None:
+            name = str(m.get("mesher", "?"))
+            out[name] = out.get(name, 0) + 1
+    return out
+
+
 def read_manifest(out: str | os.PathLike[str], split: str | None = None) -> list[dict[str, Any]]:
     """The rows of ``OUT/manifest.jsonl`` (only those of ``split`` when given)."""
     if split is not None and split not in SPLITS:
@@ -558,6 +586,7 @@ def build_dataset(
             "sketches": n_rows,
             "failed": failed,
             "seconds_last_run": round(summary.seconds, 2),
+            "meshers": _meshers(root, jobs),
         }
         atomic_write_bytes(root / "DONE", _json_bytes(done))
     return summary
