@@ -30,9 +30,12 @@ from render.camera import VIEWS  # noqa: E402
 
 
 def bench_sketch(size: int, repeats: int, seed: int) -> list[dict]:
+    from render.dataset import mesher_in_use
     from render.edges import branch_sketch, foliage_sketch, thin_mask
     from render.sketch import SketchRenderer
-    from weberpenn import build_mesh, grow, species
+    from weberpenn import grow, species
+
+    build_mesh, _ = mesher_in_use()
 
     rows = []
     for sp in species.SPECIES:

@@ -34,8 +34,8 @@ class Framing:
     z_top: float
     radius: float  # max distance of any vertex from the trunk (Z) axis
     margin_bottom: float = 0.04
-    margin_top: float = 0.05
-    margin_side: float = 0.05
+    margin_top: float = 0.07  # room for the foliage outline (drawn ~10 px outside the leaves)
+    margin_side: float = 0.07
 
     def __post_init__(self) -> None:
         for name in ("margin_bottom", "margin_top", "margin_side"):
