@@ -29,8 +29,10 @@ EXAMPLE_SEED = 100000
 
 
 def _tree(name: str, seed: int):  # noqa: ANN202 - a TreeMesh
-    from weberpenn import build_mesh, grow, species
+    from render.dataset import mesher_in_use
+    from weberpenn import grow, species
 
+    build_mesh, _ = mesher_in_use()
     tm = build_mesh(grow(species.sample(name, seed=seed)))
     if getattr(tm, "species", None) is None:
         tm.species = name
