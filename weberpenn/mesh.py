@@ -1,0 +1,251 @@
+"""Skeleton -> TreeMesh: Bezier tubes for the stems and quads/hexes for the leaves.
+
+The geometry is what Blender makes of Sapling's curve object (see the Skeleton docstring):
+every stem is a cubic Bezier through its control points with Blender's AUTO handles
+(VECTOR handles on the first point of every spline), sampled ``res_u`` times per segment
+plus the end point, radius interpolated linearly per segment, swept with a round
+cross-section of ``4 + 2*bevel_res`` sides along minimum-twist (parallel transport)
+frames, ends left open.  Leaves are the unit template (hex: 6 vertices / 2 quads,
+rect: 4 vertices / 1 quad, quads split into triangles) transformed by ``leaf_matrices``
+and moved to ``leaf_positions``, with UVs.
+
+Everything is vectorised across stems: stems are grouped by control-point count and each
+group is evaluated as one ``(G, n, 3)`` array; only the parallel-transport sweep loops,
+over ring index, for all stems of a group at once.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+from trimesh.visual import TextureVisuals
+
+from .skeleton import Skeleton
+from .treemesh import TreeMesh
+
+__all__ = ["HEX", "HEX_FACES", "RECT", "RECT_FACES", "TreeMesh", "build_mesh", "tube_counts"]
+
+# Leaf templates in the Skeleton contract's frame: XY plane, one unit tall along +Y.
+HEX = np.array(
+    [[0.0, 0.0], [0.5, 1 / 3], [0.5, 2 / 3], [0.0, 1.0], [-0.5, 2 / 3], [-0.5, 1 / 3]],
+    dtype=np.float64,
+)
+HEX_FACES = np.array([[0, 1, 4], [0, 4, 5], [1, 2, 3], [1, 3, 4]], dtype=np.int64)  # 2 quads
+RECT = np.array([[0.5, 0.0], [0.5, 1.0], [-0.5, 1.0], [-0.5, 0.0]], dtype=np.float64)
+RECT_FACES = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int64)  # 1 quad
+
+_AUTO = 2.5614  # Blender's auto-handle length divisor
+_EPS = 1e-12
+
+
+def _empty_mesh() -> trimesh.Trimesh:
+    return trimesh.Trimesh(
+        vertices=np.zeros((0, 3)), faces=np.zeros((0, 3), dtype=np.int64), process=False
+    )
+
+
+def tube_counts(n_points: int, res_u: int, bevel_res: int) -> tuple[int, int]:
+    """(vertices, triangles) of one stem's tube with ``n_points`` control points."""
+    sides = 4 + 2 * bevel_res
+    rings = (n_points - 1) * res_u + 1
+    return sides * rings, 2 * sides * (rings - 1)
+
+
+def _unit(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    n = np.linalg.norm(v, axis=-1)
+    return v / np.maximum(n, _EPS)[..., None], n
+
+
+def _handles(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Left and right Bezier handles of control points ``p`` (G, n, 3), Blender's AUTO rule."""
+    prev = np.empty_like(p)
+    nxt = np.empty_like(p)
+    prev[:, 1:] = p[:, :-1]
+    nxt[:, :-1] = p[:, 1:]
+    prev[:, 0] = 2.0 * p[:, 0] - p[:, 1]  # end points mirror their neighbour
+    nxt[:, -1] = 2.0 * p[:, -1] - p[:, -2]
+    da = p - prev
+    db = nxt - p
+    la = np.linalg.norm(da, axis=-1)
+    lb = np.linalg.norm(db, axis=-1)
+    la = np.where(la == 0.0, 1.0, la)
+    lb = np.where(lb == 0.0, 1.0, lb)
+    t = da / la[..., None] + db / lb[..., None]
+    tl = np.linalg.norm(t, axis=-1) * _AUTO
+    ok = tl > _EPS
+    tl = np.where(ok, tl, 1.0)
+    la = np.minimum(la, 5.0 * lb)  # each leg at most five times the other
+    lb = np.minimum(lb, 5.0 * la)
+    left = np.where(ok[..., None], p - t * (la / tl)[..., None], p)
+    right = np.where(ok[..., None], p + t * (lb / tl)[..., None], p)
+    # Sapling sets the first point of every spline to VECTOR handles
+    right[:, 0] = p[:, 0] + (p[:, 1] - p[:, 0]) / 3.0
+    left[:, 0] = p[:, 0] - (p[:, 1] - p[:, 0]) / 3.0
+    return left, right
+
+
+def _sample(p: np.ndarray, r: np.ndarray, res_u: int) -> tuple[np.ndarray, np.ndarray]:
+    """Evaluate the Bezier splines of a group: (G, R, 3) positions and (G, R) radii."""
+    g, n, _ = p.shape
+    left, right = _handles(p)
+    t = np.arange(res_u, dtype=np.float64) / res_u
+    b0 = (1 - t) ** 3
+    b1 = 3 * (1 - t) ** 2 * t
+    b2 = 3 * (1 - t) * t**2
+    b3 = t**3
+    p0, p1, p2, p3 = p[:, :-1], right[:, :-1], left[:, 1:], p[:, 1:]  # (G, n-1, 3)
+    x = (
+        p0[:, :, None] * b0[:, None]
+        + p1[:, :, None] * b1[:, None]
+        + p2[:, :, None] * b2[:, None]
+        + p3[:, :, None] * b3[:, None]
+    )  # (G, n-1, res_u, 3)
+    rad = r[:, :-1, None] * (1 - t) + r[:, 1:, None] * t  # (G, n-1, res_u)
+    x = np.concatenate([x.reshape(g, (n - 1) * res_u, 3), p[:, -1:]], axis=1)
+    rad = np.concatenate([rad.reshape(g, (n - 1) * res_u), r[:, -1:]], axis=1)
+    return x, rad
+
+
+def _tangents(x: np.ndarray) -> np.ndarray:
+    """Unit tangents of sampled paths (G, R, 3); degenerate spots inherit a neighbour's."""
+    d = np.empty_like(x)
+    d[:, 1:-1] = x[:, 2:] - x[:, :-2]
+    d[:, 0] = x[:, 1] - x[:, 0]
+    d[:, -1] = x[:, -1] - x[:, -2]
+    t, n = _unit(d)
+    bad = n <= _EPS
+    if bad.any():
+        for j in range(1, t.shape[1]):  # forward fill, then backward, then +Z
+            m = bad[:, j] & ~bad[:, j - 1]
+            t[m, j] = t[m, j - 1]
+            bad[m, j] = False
+        for j in range(t.shape[1] - 2, -1, -1):
+            m = bad[:, j] & ~bad[:, j + 1]
+            t[m, j] = t[m, j + 1]
+            bad[m, j] = False
+        t[bad] = (0.0, 0.0, 1.0)
+    return t
+
+
+def _frames(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Minimum-twist normals and binormals along unit tangents (G, R, 3)."""
+    g, rr, _ = t.shape
+    t0 = t[:, 0]
+    axis = np.zeros((g, 3))
+    axis[np.arange(g), np.argmin(np.abs(t0), axis=1)] = 1.0
+    n0, _ = _unit(np.cross(t0, axis))
+    normals = np.empty_like(t)
+    normals[:, 0] = n0
+    nj = n0
+    for j in range(1, rr):  # parallel transport: project, renormalise (all stems at once)
+        tj = t[:, j]
+        v = nj - np.einsum("gi,gi->g", nj, tj)[:, None] * tj
+        v, ln = _unit(v)
+        bad = ln < 1e-6  # the tangent turned onto the normal: keep any perpendicular
+        if bad.any():
+            alt = np.cross(tj[bad], normals[bad, j - 1 if j > 1 else 0])
+            alt2 = np.cross(tj[bad], np.array([0.0, 0.0, 1.0]))
+            alt = np.where(np.linalg.norm(alt, axis=1)[:, None] > 1e-6, alt, alt2)
+            alt = np.where(np.linalg.norm(alt, axis=1)[:, None] > 1e-6, alt, (1.0, 0.0, 0.0))
+            v[bad] = _unit(alt)[0]
+        normals[:, j] = v
+        nj = v
+    return normals, np.cross(t, normals)
+
+
+def _ring_faces(rings: int, sides: int) -> np.ndarray:
+    """Triangles of one tube, vertex index = ring * sides + side (outward winding)."""
+    j = np.arange(rings - 1)[:, None]
+    k = np.arange(sides)[None, :]
+    a = j * sides + k
+    b = j * sides + (k + 1) % sides
+    c = b + sides
+    d = a + sides
+    tri = np.stack([np.stack([a, b, c], -1), np.stack([a, c, d], -1)], axis=2)
+    return tri.reshape(-1, 3).astype(np.int64)
+
+
+def _branches(sk: Skeleton) -> tuple[trimesh.Trimesh, dict]:
+    s = sk.n_stems
+    if s == 0:
+        return _empty_mesh(), {"stems": 0}
+    sides = 4 + 2 * int(sk.bevel_res)
+    res_u = max(int(sk.res_u), 1)
+    offsets = np.asarray(sk.offsets, dtype=np.int64)
+    counts = np.diff(offsets)
+    pts = np.asarray(sk.points, dtype=np.float64)
+    rad = np.asarray(sk.radii, dtype=np.float64)
+    ang = 2.0 * np.pi * np.arange(sides) / sides
+    cos, sin = np.cos(ang), np.sin(ang)
+    # per-stem vertex offsets in stem order (so the mesh is independent of grouping)
+    nverts = sides * ((counts - 1) * res_u + 1)
+    vstart = np.concatenate([[0], np.cumsum(nverts)])
+    verts = np.empty((int(vstart[-1]), 3), dtype=np.float64)
+    faces_parts: list[tuple[np.ndarray, np.ndarray]] = []
+    for n in np.unique(counts):
+        n = int(n)
+        if n < 2:
+            continue
+        idx = np.nonzero(counts == n)[0]
+        sel = offsets[idx][:, None] + np.arange(n)[None, :]
+        x, rr = _sample(pts[sel], rad[sel], res_u)  # (G, R, 3), (G, R)
+        tan = _tangents(x)
+        nor, bin_ = _frames(tan)
+        ring = x[:, :, None, :] + rr[:, :, None, None] * (
+            cos[None, None, :, None] * nor[:, :, None] + sin[None, None, :, None] * bin_[:, :, None]
+        )  # (G, R, sides, 3)
+        rings = x.shape[1]
+        vi = vstart[idx][:, None] + np.arange(rings * sides)[None, :]
+        verts[vi.ravel()] = ring.reshape(-1, 3)
+        tmpl = _ring_faces(rings, sides)
+        faces_parts.append((idx, (vstart[idx][:, None, None] + tmpl[None]).reshape(-1, 3)))
+    # faces in stem order as well
+    order = np.concatenate([p[0] for p in faces_parts]) if faces_parts else np.zeros(0, int)
+    if faces_parts:
+        per = [np.full(len(p[0]), len(p[1]) // max(len(p[0]), 1)) for p in faces_parts]
+        fcount = np.zeros(s, dtype=np.int64)
+        fcount[order] = np.concatenate(per)
+        fstart = np.concatenate([[0], np.cumsum(fcount)])
+        faces = np.empty((int(fstart[-1]), 3), dtype=np.int64)
+        for (idx, f), c in zip(faces_parts, per, strict=True):
+            k = int(c[0]) if len(c) else 0
+            dst = (fstart[idx][:, None] + np.arange(k)[None, :]).ravel()
+            faces[dst] = f
+    else:
+        faces = np.zeros((0, 3), dtype=np.int64)
+    mesh = trimesh.Trimesh(vertices=verts, faces=faces, process=False)
+    return mesh, {"stems": s, "sides": sides, "res_u": res_u}
+
+
+def _leaves(sk: Skeleton) -> trimesh.Trimesh:
+    nl = sk.n_leaves
+    rect = str(sk.leaf_shape) == "rect"
+    tmpl2, tf = (RECT, RECT_FACES) if rect else (HEX, HEX_FACES)
+    if nl == 0:
+        m = _empty_mesh()
+        m.visual = TextureVisuals(uv=np.zeros((0, 2)))
+        return m
+    tmpl = np.column_stack([tmpl2, np.zeros(len(tmpl2))])  # (T, 3)
+    mats = np.asarray(sk.leaf_matrices, dtype=np.float64)
+    pos = np.asarray(sk.leaf_positions, dtype=np.float64)
+    v = np.einsum("lij,tj->lti", mats, tmpl) + pos[:, None, :]
+    nt = len(tmpl)
+    faces = (np.arange(nl)[:, None, None] * nt + tf[None]).reshape(-1, 3)
+    uv = np.tile(tmpl2 + np.array([0.5, 0.0]), (nl, 1))
+    mesh = trimesh.Trimesh(vertices=v.reshape(-1, 3), faces=faces, process=False)
+    mesh.visual = TextureVisuals(uv=uv)
+    return mesh
+
+
+def build_mesh(skeleton: Skeleton, species: str | None = None) -> TreeMesh:
+    """Mesh a grown skeleton: tubes for the stems, leaf quads/hexes with UVs.
+
+    ``species`` is recorded on the TreeMesh (it picks export/render colours).  An empty
+    skeleton gives two empty meshes.
+    """
+    if not isinstance(skeleton, Skeleton):
+        raise TypeError(f"build_mesh expects a weberpenn Skeleton, got {type(skeleton).__name__}")
+    branches, meta = _branches(skeleton)
+    leaves = _leaves(skeleton)
+    meta = {**meta, "leaves": skeleton.n_leaves, "leaf_shape": str(skeleton.leaf_shape)}
+    return TreeMesh(branches=branches, leaves=leaves, species=species, meta=meta)
