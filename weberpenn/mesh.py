@@ -176,12 +176,12 @@ def _branches(sk: Skeleton) -> tuple[trimesh.Trimesh, dict]:
     pts = np.asarray(sk.points, dtype=np.float64)
     rad = np.asarray(sk.radii, dtype=np.float64)
     ang = 2.0 * np.pi * np.arange(sides) / sides
-    cos, sin = np.cos(ang), np.sin(ang)
-    # per-stem vertex offsets in stem order (so the mesh is independent of grouping)
-    nverts = sides * ((counts - 1) * res_u + 1)
-    vstart = np.concatenate([[0], np.cumsum(nverts)])
-    verts = np.empty((int(vstart[-1]), 3), dtype=np.float64)
-    faces_parts: list[tuple[np.ndarray, np.ndarray]] = []
+    cos = np.cos(ang)[None, None, :, None]
+    sin = np.sin(ang)[None, None, :, None]
+    vparts: list[np.ndarray] = []
+    fparts: list[np.ndarray] = []
+    base = 0
+    # stems grouped by control-point count (ascending), stem order kept inside a group
     for n in np.unique(counts):
         n = int(n)
         if n < 2:
@@ -189,30 +189,22 @@ def _branches(sk: Skeleton) -> tuple[trimesh.Trimesh, dict]:
         idx = np.nonzero(counts == n)[0]
         sel = offsets[idx][:, None] + np.arange(n)[None, :]
         x, rr = _sample(pts[sel], rad[sel], res_u)  # (G, R, 3), (G, R)
-        tan = _tangents(x)
-        nor, bin_ = _frames(tan)
-        ring = x[:, :, None, :] + rr[:, :, None, None] * (
-            cos[None, None, :, None] * nor[:, :, None] + sin[None, None, :, None] * bin_[:, :, None]
-        )  # (G, R, sides, 3)
-        rings = x.shape[1]
-        vi = vstart[idx][:, None] + np.arange(rings * sides)[None, :]
-        verts[vi.ravel()] = ring.reshape(-1, 3)
+        nor, bin_ = _frames(_tangents(x))
+        nor *= rr[..., None]
+        bin_ *= rr[..., None]
+        ring = cos * nor[:, :, None]
+        ring += sin * bin_[:, :, None]
+        ring += x[:, :, None]  # (G, R, sides, 3)
+        g, rings = x.shape[:2]
+        nv = rings * sides
         tmpl = _ring_faces(rings, sides)
-        faces_parts.append((idx, (vstart[idx][:, None, None] + tmpl[None]).reshape(-1, 3)))
-    # faces in stem order as well
-    order = np.concatenate([p[0] for p in faces_parts]) if faces_parts else np.zeros(0, int)
-    if faces_parts:
-        per = [np.full(len(p[0]), len(p[1]) // max(len(p[0]), 1)) for p in faces_parts]
-        fcount = np.zeros(s, dtype=np.int64)
-        fcount[order] = np.concatenate(per)
-        fstart = np.concatenate([[0], np.cumsum(fcount)])
-        faces = np.empty((int(fstart[-1]), 3), dtype=np.int64)
-        for (idx, f), c in zip(faces_parts, per, strict=True):
-            k = int(c[0]) if len(c) else 0
-            dst = (fstart[idx][:, None] + np.arange(k)[None, :]).ravel()
-            faces[dst] = f
-    else:
-        faces = np.zeros((0, 3), dtype=np.int64)
+        fparts.append((base + nv * np.arange(g)[:, None, None] + tmpl[None]).reshape(-1, 3))
+        vparts.append(ring.reshape(-1, 3))
+        base += g * nv
+    if not vparts:
+        return _empty_mesh(), {"stems": s}
+    verts = np.concatenate(vparts)
+    faces = np.concatenate(fparts)
     mesh = trimesh.Trimesh(vertices=verts, faces=faces, process=False)
     return mesh, {"stems": s, "sides": sides, "res_u": res_u}
 
