@@ -1,10 +1,114 @@
-"""`treesketch grow` commands (being written; see the issue tracker)."""
+"""`treesketch grow` (grow and mesh one tree, write GLB/OBJ/JSON/preset) and
+`treesketch params` (the parameter table)."""
 
 from __future__ import annotations
+
+import time
+from pathlib import Path
 
 import typer
 
 
+def _fail(message: str) -> None:
+    typer.echo(f"error: {message}", err=True)
+    raise typer.Exit(code=2)
+
+
+def grow_command(
+    out: Path = typer.Option(
+        ...,
+        "--out",
+        "-o",
+        help="Mesh file to write: .glb (two named meshes 'branches' and 'leaves' with bark "
+        "and leaf materials) or .obj (with a .mtl beside it).",
+    ),
+    species_name: str | None = typer.Option(
+        None,
+        "--species",
+        "-s",
+        help="Draw a tree of this species: maple, pine, bonsai, palm or cherry "
+        "(its unfixed parameters are sampled from --seed).",
+    ),
+    params_path: Path | None = typer.Option(
+        None,
+        "--params",
+        "-p",
+        help="Grow from a parameter file instead: JSON with the 70 TreeSketchNet keys, or a "
+        "Blender Sapling preset (.py dict literal).",
+    ),
+    seed: int | None = typer.Option(
+        None,
+        "--seed",
+        min=0,
+        help="With --species: seed for sampling its parameters (default 0). With --params: "
+        "replaces the file's 'seed' key. The tree depends only on the parameters (their "
+        "'seed' included): same parameters, same tree.",
+    ),
+    save_params_path: Path | None = typer.Option(
+        None, "--save-params", help="Also write the parameters used, as JSON."
+    ),
+    preset_path: Path | None = typer.Option(
+        None,
+        "--preset",
+        help="Also write a Sapling preset (.py) that Blender's Sapling 'Import Preset' loads.",
+    ),
+) -> None:
+    """Grow one Weber-Penn tree and write its mesh.
+
+    Examples: `treesketch grow --species maple --seed 3 --out maple.glb`,
+    `treesketch grow --params tree.json --out tree.obj`.
+    """
+    from weberpenn import build_mesh, grow, load_params, species
+    from weberpenn.export import save_sapling_preset
+    from weberpenn.params import ParamError, save_params
+
+    if (species_name is None) == (params_path is None):
+        _fail("give exactly one of --species NAME or --params FILE")
+    suffix = out.suffix.lower()
+    if suffix not in (".glb", ".obj"):
+        _fail(f"--out {out}: unknown mesh format {suffix or '(none)'!r}; use .glb or .obj")
+    name: str | None = None
+    try:
+        if species_name is not None:
+            name = species_name.strip().lower()
+            if name not in species.SPECIES:
+                _fail(
+                    f"unknown species {species_name!r}; choose one of {', '.join(species.SPECIES)}"
+                )
+            params = species.sample(name, 0 if seed is None else seed)
+        else:
+            assert params_path is not None
+            params = load_params(params_path)
+            if seed is not None:
+                params = params.replace(seed=seed)
+        t0 = time.perf_counter()
+        tree = build_mesh(grow(params), species=name)
+        dt = time.perf_counter() - t0
+        if tree.is_empty:
+            _fail("these parameters grow an empty tree (no branches and no leaves)")
+        tree.export(out)
+        if save_params_path is not None:
+            save_params(params, save_params_path)
+        if preset_path is not None:
+            save_sapling_preset(params, preset_path)
+    except ParamError as exc:
+        _fail(str(exc))
+    except OSError as exc:
+        _fail(f"cannot write output: {exc}")
+    typer.echo(
+        f"{out}: {len(tree.branches.faces)} branch faces, {len(tree.leaves.faces)} leaf faces "
+        f"(grow+mesh {dt:.2f} s)"
+    )
+
+
+def params_command() -> None:
+    """Print every parameter: shape, type, head, allowed range and meaning."""
+    from weberpenn.params import describe
+
+    typer.echo(describe())
+
+
 def register(app: typer.Typer) -> None:
     """Add this module's commands to the main app."""
-    del app
+    app.command("grow")(grow_command)
+    app.command("params")(params_command)
