@@ -209,7 +209,7 @@ class ParamError(ValueError):
 
 
 def _bad(key: str, value: Any, why: str) -> ParamError:
-    spec = SPECS.get(key)
+    spec = SPECS.get(key.split("[", 1)[0])  # per-level values are named like 'taper[2]'
     allowed = f" (allowed: {spec.range_text()})" if spec else ""
     return ParamError(f"parameter {key!r}: {why}, got {value!r}{allowed}")
 

@@ -1,0 +1,242 @@
+"""Tests of weberpenn.params: the table, every validation error path, loading and saving."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from weberpenn import ParamError, TreeParams, default_params, load_params, save_params
+from weberpenn.params import (
+    HEAD_KEYS,
+    HEADS,
+    KEYS,
+    PARAMS,
+    PREDICTED_KEYS,
+    SPECS,
+    describe,
+    validate,
+)
+
+REF_DIR = Path(__file__).resolve().parents[1].parent / "shared" / "reference"
+PARAM_DIR = REF_DIR / "treesketchnet_test_params"
+REF_FILES = sorted(PARAM_DIR.glob("*.json")) if PARAM_DIR.is_dir() else []
+
+
+def _d(**changes) -> dict:
+    d = default_params().to_dict()
+    d.update(changes)
+    return d
+
+
+def _err(**changes) -> str:
+    with pytest.raises(ParamError) as info:
+        TreeParams(_d(**changes))
+    return str(info.value)
+
+
+def test_table_shape():
+    assert len(PARAMS) == 70 and len(KEYS) == 70
+    assert len(PREDICTED_KEYS) == 62
+    assert [len(HEAD_KEYS[h]) for h in HEADS] == [17, 4, 12, 12, 16, 1]
+    assert sum(SPECS[k].is_vector for k in PREDICTED_KEYS) == 22
+    assert set(KEYS) - set(PREDICTED_KEYS) == {
+        "prune", "pruneBase", "prunePowerHigh", "prunePowerLow", "pruneRatio",
+        "pruneWidth", "pruneWidthPeak", "seed",
+    }  # fmt: skip
+    for p in PARAMS:
+        if p.kind in ("float", "int"):
+            assert p.lo <= p.hi, p.name
+
+
+def test_defaults_valid_and_immutable():
+    p = default_params()
+    assert isinstance(p, TreeParams) and len(p) == 70
+    assert p.levels == p["levels"]
+    with pytest.raises(AttributeError):
+        p.levels = 2  # type: ignore[misc]
+    q = p.replace(levels=2)
+    assert q.levels == 2 and p.levels != 2 or p.levels == 2
+    assert validate(p) is p
+
+
+def test_unknown_key():
+    msg = _err(oakiness=1.0)
+    assert "oakiness" in msg and "unknown" in msg
+
+
+def test_missing_key():
+    d = _d()
+    del d["ratio"]
+    with pytest.raises(ParamError, match="missing.*'ratio'"):
+        TreeParams(d)
+
+
+def test_not_a_mapping():
+    with pytest.raises(ParamError, match="mapping"):
+        TreeParams([1, 2, 3])  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "fragment"),
+    [
+        ("scale", "big", "expected a number"),
+        ("scale", None, "expected a number"),
+        ("scale", True, "expected a number"),
+        ("levels", 2.5, "integer"),
+        ("levels", 0, "out of range"),
+        ("levels", 5, "out of range"),
+        ("ratio", -1.0, "out of range"),
+        ("scale", math.nan, "finite"),
+        ("scale", math.inf, "finite"),
+        ("baseSize", 1.5, "out of range"),
+        ("leafShape", "round", "allowed"),
+        ("leafShape", 3, "allowed"),
+        ("shape", "9", "allowed"),
+        ("shapeS", "8", "allowed"),
+        ("shape", True, "allowed"),
+        ("prune", "yes", "boolean"),
+        ("prune", 2, "boolean"),
+        ("choiceNegPos1", 0, "-1 or 1"),
+        ("choiceNegPos2", 0.5, "-1 or 1"),
+        ("curveRes", 3, "list of 4"),
+        ("curveRes", "3333", "list of 4"),
+        ("curveRes", [3, 3, 3], "4 values"),
+        ("curveRes", [3, 3, 3, 3, 3], "4 values"),
+        ("curveRes", [3, 3, 3, 100_000], "out of range"),
+        ("length", [1.0, math.nan, 0.5, 0.5], "finite"),
+        ("taper", [1.0, 1.0, 1.0, 2.0], "out of range"),
+    ],
+)
+def test_bad_values_name_key_value_and_range(key, value, fragment):
+    msg = _err(**{key: value})
+    assert key in msg and fragment in msg
+    if fragment == "out of range":
+        assert "allowed" in msg
+
+
+def test_enum_and_bool_coercion():
+    p = TreeParams(_d(shape=7, prune=1, leafShape="rect"))
+    assert p.shape == "7" and p.prune is True and p.leafShape == "rect"
+    assert TreeParams(_d(levels=3.0)).levels == 3
+
+
+def test_explosive_sizes_rejected():
+    with pytest.raises(ParamError, match="out of range"):
+        TreeParams(_d(branches=[0, 10**7, 10, 10]))
+    with pytest.raises(ParamError, match="stems"):
+        TreeParams(_d(levels=4, branches=[0, 400, 400, 400]))
+    with pytest.raises(ParamError, match="leaves"):
+        TreeParams(_d(levels=3, branches=[0, 100, 40, 10], leaves=2000))
+    with pytest.raises(ParamError, match="vertices"):
+        TreeParams(
+            _d(
+                levels=2,
+                branches=[0, 500, 10, 10],
+                curveRes=[64, 64, 3, 1],
+                resU=int(SPECS["resU"].hi),
+                bevelRes=int(SPECS["bevelRes"].hi),
+            )
+        )
+
+
+def test_scale_plus_scale_v_positive():
+    with pytest.raises(ParamError, match="scale \\+ scaleV"):
+        TreeParams(_d(scale=2.0, scaleV=-2.0))
+    assert TreeParams(_d(scale=2.0, scaleV=-1.5)).scaleV == -1.5
+
+
+def test_json_round_trip(tmp_path):
+    p = default_params().replace(levels=2, leafShape="rect", seed=12345678901234)
+    path = save_params(p, tmp_path / "sub" / "tree.json")
+    assert load_params(path) == p
+    assert list(tmp_path.joinpath("sub").iterdir()) == [path]  # no temp files left
+    assert json.loads(path.read_text())["leafShape"] == "rect"
+
+
+def test_load_errors(tmp_path):
+    with pytest.raises(ParamError, match="no such"):
+        load_params(tmp_path / "missing.json")
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    with pytest.raises(ParamError, match="JSON"):
+        load_params(bad)
+    bad.write_text("[1, 2]")
+    with pytest.raises(ParamError, match="object"):
+        load_params(bad)
+    d = _d(ratio=-3.0)
+    bad.write_text(json.dumps(d))
+    with pytest.raises(ParamError, match=r"bad\.json.*ratio"):
+        load_params(bad)
+    py = tmp_path / "bad.py"
+    py.write_text("import os; os.system('echo hacked')\n")
+    with pytest.raises(ParamError):
+        load_params(py)
+    py.write_text("# only a comment\n\n")
+    with pytest.raises(ParamError, match="no dictionary"):
+        load_params(py)
+    py.write_text("[1, 2, 3]\n")
+    with pytest.raises(ParamError, match="dict"):
+        load_params(py)
+
+
+def test_load_one_line_sapling_preset(tmp_path):
+    preset = {
+        "seed": 7,
+        "levels": 2,
+        "scale": 8.0,
+        "scaleV": 1.0,
+        "bevel": True,
+        "showLeaves": True,
+        "useArm": False,
+        "handleType": "0",
+        "rMode": "rotate",
+        "curveV": [20.0, 50.0, 75.0, 0.0],
+        "splitAngleV": [0.0, 0.0, 0.0, 0.0],
+        "attractUp": 0.5,
+        "leafShape": "rect",
+        "shape": "7",
+        "branches": [0, 30, 10, 10],
+        "downAngle": [90.0, 60.0, 45.0, 45.0],
+        "rotate": [137.5, 137.5, 120.0, 137.5],
+    }
+    path = tmp_path / "preset.py"
+    path.write_text("# a Sapling preset\n" + repr(preset) + "\n")
+    p = load_params(path)
+    assert p.levels == 2 and p.scale == 8.0 and p.seed == 7
+    assert p.scaleV == 0.0  # Sapling's variation amplitude is not a realised value
+    assert p.attractUp == (0.0, 0.0, 0.5, 0.5)  # scalar upgrade, as Sapling does
+    assert p.leafDownAngle == 45.0 and p.leafRotate == 120.0  # copied at min(levels, 3)
+    assert p.curveV1 == (0.0, 0.0, 0.0, 0.0)
+
+
+def test_load_multiline_preset(tmp_path):
+    d = default_params().to_dict()
+    path = tmp_path / "multi.py"
+    path.write_text("{\n" + ",\n".join(f"{k!r}: {v!r}" for k, v in d.items()) + "\n}\n")
+    assert load_params(path) == default_params()
+
+
+def test_sapling_preset_with_unknown_key(tmp_path):
+    path = tmp_path / "p.py"
+    path.write_text(repr({"levels": 2, "notASaplingKey": 1}) + "\n")
+    with pytest.raises(ParamError, match="notASaplingKey"):
+        load_params(path)
+
+
+@pytest.mark.skipif(not REF_FILES, reason="reference files not available")
+def test_all_reference_files_load():
+    assert len(REF_FILES) == 15
+    for f in REF_FILES:
+        p = load_params(f)
+        assert len(p) == 70, f.name
+
+
+def test_describe_lists_every_key():
+    text = describe()
+    lines = text.splitlines()
+    assert len(lines) == 71  # header + 70 keys
+    listed = {line.split()[0] for line in lines[1:]}
+    assert listed == set(KEYS)
