@@ -1,0 +1,119 @@
+"""Tests of weberpenn.species: sampling, fixed values, ranges, projection."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from weberpenn import ParamError, TreeParams, species
+from weberpenn.params import SPECS
+
+REF_DIR = Path(__file__).resolve().parents[1].parent / "shared" / "reference"
+PARAM_DIR = REF_DIR / "treesketchnet_test_params"
+
+
+def _value(p, key, index):
+    return p[key] if index is None else p[key][index]
+
+
+def _unfixed_slots(name):
+    return {(u.key, u.index) for u in species.unfixed(name)}
+
+
+@pytest.mark.parametrize("name", species.SPECIES)
+def test_sample_deterministic_and_seed_dependent(name):
+    a = species.sample(name, 5)
+    b = species.sample(name, 5)
+    c = species.sample(name, 6)
+    assert isinstance(a, TreeParams)
+    assert a == b
+    assert a != c
+    assert a.seed == 5
+
+
+@pytest.mark.parametrize("name", species.SPECIES)
+def test_unfixed_values_inside_ranges(name):
+    for seed in range(8):
+        p = species.sample(name, seed)
+        for u in species.unfixed(name):
+            v = _value(p, u.key, u.index)
+            if u.rule == "sign":
+                assert v in (-1, 1)
+            elif u.rule == "mirror":
+                assert v == pytest.approx(-_value(p, "curve", u.index))
+            elif u.rule == "split_height":
+                assert v in (pytest.approx(u.lo), pytest.approx(u.hi))
+            else:
+                assert u.lo - 1e-9 <= v <= u.hi + 1e-9, (u, v)
+            if SPECS[u.key].kind == "int":
+                assert float(v).is_integer()
+
+
+@pytest.mark.parametrize("name", species.SPECIES)
+def test_fixed_values_equal_base(name):
+    base = species.base(name)
+    slots = _unfixed_slots(name)
+    p = species.sample(name, 11)
+    for key in base:
+        if key == "seed":
+            continue
+        if SPECS[key].is_vector:
+            for i in range(4):
+                if (key, i) not in slots:
+                    assert p[key][i] == base[key][i], (key, i)
+        elif (key, None) not in slots:
+            assert p[key] == base[key], key
+
+
+@pytest.mark.skipif(not PARAM_DIR.is_dir(), reason="reference files not available")
+@pytest.mark.parametrize("name", species.SPECIES)
+def test_fixed_values_match_reference_files(name):
+    files = species.reference_files(name)
+    assert len(files) == 3
+    refs = [json.loads((PARAM_DIR / f).read_text()) for f in files]
+    slots = _unfixed_slots(name)
+    p = species.sample(name, 2)
+    for key in p:
+        if key == "seed":
+            continue
+        idxs = range(4) if SPECS[key].is_vector else [None]
+        for i in idxs:
+            vals = [r[key] if i is None else r[key][i] for r in refs]
+            if (key, i) in slots or any(v != vals[0] for v in vals):
+                continue  # unfixed (or varies across the references)
+            got = _value(p, key, i)
+            if isinstance(got, float):
+                assert got == pytest.approx(float(vals[0]), rel=1e-6, abs=1e-9), (key, i)
+            else:
+                assert str(got) == str(vals[0]) or got == vals[0], (key, i)
+
+
+@pytest.mark.parametrize("name", species.SPECIES)
+def test_project_round_trip(name):
+    p = species.sample(name, 3)
+    assert species.project(name, p) == p
+    # a dictionary of another species is forced onto this one's fixed values
+    other = species.sample("cherry" if name != "cherry" else "palm", 3)
+    q = species.project(name, other)
+    base = species.base(name)
+    for key in ("levels", "leafShape", "curveRes"):
+        if (key, None) not in _unfixed_slots(name):
+            assert q[key] == base[key]
+
+
+def test_unknown_species():
+    with pytest.raises(ParamError, match="unknown species"):
+        species.sample("oak", 0)
+    with pytest.raises(ParamError, match="unknown species"):
+        species.unfixed("oak")
+    with pytest.raises(ParamError, match="seed"):
+        species.sample("maple", -1)
+
+
+def test_unfixed_keys_listed():
+    for name in species.SPECIES:
+        keys = species.unfixed_keys(name)
+        assert keys and all(k in SPECS for k in keys)
+        assert "seed" not in keys
