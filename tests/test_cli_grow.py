@@ -1,0 +1,73 @@
+"""Tests of `treesketch grow` and `treesketch params` (typer CliRunner)."""
+
+from __future__ import annotations
+
+import json
+
+import trimesh
+from typer.testing import CliRunner
+
+from treesketch.cli import app
+from weberpenn import load_params, species
+
+runner = CliRunner()
+
+
+def test_grow_species_glb_params_and_preset(tmp_path):
+    out = tmp_path / "maple.glb"
+    res = runner.invoke(
+        app,
+        ["grow", "--species", "maple", "--seed", "3", "--out", str(out),
+         "--save-params", str(tmp_path / "p.json"), "--preset", str(tmp_path / "p.py")],
+    )  # fmt: skip
+    assert res.exit_code == 0, res.output
+    assert "branch faces" in res.output
+    assert set(trimesh.load(out).geometry) == {"branches", "leaves"}
+    assert load_params(tmp_path / "p.json") == species.sample("maple", 3)
+    assert (tmp_path / "p.py").read_text().count("\n") == 1
+
+
+def test_grow_from_params_same_tree(tmp_path):
+    pj = tmp_path / "p.json"
+    pj.write_text(json.dumps(species.sample("palm", 2).to_dict()))
+    a, b = tmp_path / "a.obj", tmp_path / "b.obj"
+    assert runner.invoke(app, ["grow", "--params", str(pj), "--out", str(a)]).exit_code == 0
+    assert (
+        runner.invoke(app, ["grow", "--species", "palm", "--seed", "2", "--out", str(b)]).exit_code
+        == 0
+    )
+    assert a.read_text().split("\n", 2)[2] == b.read_text().split("\n", 2)[2]
+
+
+def test_errors_exit_2_without_traceback(tmp_path):
+    cases = [
+        ["grow", "--species", "oak", "--out", str(tmp_path / "x.glb")],
+        ["grow", "--params", str(tmp_path / "missing.json"), "--out", str(tmp_path / "x.glb")],
+        ["grow", "--out", str(tmp_path / "x.glb")],
+        ["grow", "--species", "maple", "--params", "p.json", "--out", str(tmp_path / "x.glb")],
+        ["grow", "--species", "maple", "--out", str(tmp_path / "x.stl")],
+    ]
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({**species.sample("maple", 0).to_dict(), "ratio": -1.0}))
+    cases.append(["grow", "--params", str(bad), "--out", str(tmp_path / "x.glb")])
+    for args in cases:
+        res = runner.invoke(app, args)
+        assert res.exit_code == 2, (args, res.output)
+        assert "Traceback" not in res.output
+        assert "error" in res.output.lower()
+    res = runner.invoke(app, cases[-1])
+    assert "ratio" in res.output
+    assert not (tmp_path / "x.glb").exists()
+
+
+def test_help_explains_options():
+    res = runner.invoke(app, ["grow", "--help"])
+    assert res.exit_code == 0
+    for opt in ("--species", "--params", "--seed", "--out", "--save-params", "--preset"):
+        assert opt in res.output
+
+
+def test_params_command():
+    res = runner.invoke(app, ["params"])
+    assert res.exit_code == 0
+    assert "leafShape" in res.output and "curveRes" in res.output
