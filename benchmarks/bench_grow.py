@@ -1,0 +1,167 @@
+"""Benchmark grow + mesh per species and compare with Blender Sapling's recorded seconds.
+
+    .venv/bin/python benchmarks/bench_grow.py [--trees 20] [--markdown] [--write]
+
+For each species: ``species.sample(name, seed)`` for seeds 0..trees-1, then
+``build_mesh(grow(params))`` timed on one thread (BLAS/OpenMP pinned to 1 thread); the
+median seconds, median branch/leaf triangle counts and Sapling's mean seconds on the
+species' three reference dictionaries (``sapling_reference_stats.json``; Sapling's branch
+faces are quads, so its triangles are twice its faces) give the speed-up.  ``--write``
+replaces this benchmark's section of ``benchmarks/RESULTS.md``.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import datetime as dt  # noqa: E402
+import json  # noqa: E402
+import platform  # noqa: E402
+import statistics  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+from weberpenn import build_mesh, grow, species  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+STATS = ROOT.parent / "shared" / "reference" / "sapling_reference_stats.json"
+RESULTS = ROOT / "benchmarks" / "RESULTS.md"
+SECTION = "## Generator: grow + mesh"
+
+
+def _sapling(name: str) -> dict[str, float] | None:
+    if not STATS.is_file():
+        return None
+    trees = json.loads(STATS.read_text())["trees"]
+    rows = [r for f in species.reference_files(name) for r in trees.get(Path(f).stem, [])]
+    if not rows:
+        return None
+    return {
+        "seconds": statistics.mean(r["seconds_sapling"] for r in rows),
+        "branch_tris": statistics.mean(2 * r["branch_faces"] for r in rows),
+        "leaf_tris": statistics.mean(2 * r["leaf_faces"] for r in rows),
+    }
+
+
+def _cpu() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def run(trees: int) -> list[dict]:
+    rows = []
+    build_mesh(grow(species.sample("maple", 0)))  # warm-up (imports, caches)
+    for name in species.SPECIES:
+        secs, grow_s, bt, lt = [], [], [], []
+        for seed in range(trees):
+            p = species.sample(name, seed)
+            t0 = time.perf_counter()
+            sk = grow(p)
+            t1 = time.perf_counter()
+            tm = build_mesh(sk, species=name)
+            t2 = time.perf_counter()
+            secs.append(t2 - t0)
+            grow_s.append(t1 - t0)
+            bt.append(len(tm.branches.faces))
+            lt.append(len(tm.leaves.faces))
+        sap = _sapling(name)
+        med = statistics.median(secs)
+        rows.append(
+            {
+                "species": name,
+                "median_s": med,
+                "max_s": max(secs),
+                "grow_s": statistics.median(grow_s),
+                "branch_tris": int(statistics.median(bt)),
+                "leaf_tris": int(statistics.median(lt)),
+                "sapling_s": sap["seconds"] if sap else None,
+                "sapling_branch_tris": sap["branch_tris"] if sap else None,
+                "sapling_leaf_tris": sap["leaf_tris"] if sap else None,
+                "speedup": sap["seconds"] / med if sap else None,
+            }
+        )
+    return rows
+
+
+def markdown(rows: list[dict], trees: int) -> str:
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    now = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
+    lines = [
+        SECTION,
+        "",
+        f"`.venv/bin/python benchmarks/bench_grow.py --trees {trees} --write`",
+        "",
+        f"machine: {_cpu()}, nproc {os.cpu_count()}, one thread, load average {load:.2f} "
+        f"(shared with other jobs); {now}. Trees: `species.sample(name, seed)`, seeds "
+        f"0..{trees - 1}. Sapling: Blender 3.4 Sapling on the species' three reference "
+        "dictionaries (sapling_reference_stats.json, 2-core machine); its quads counted as 2 "
+        "triangles.",
+        "",
+        "| species | grow+mesh median s | max s | grow s | branch tris | leaf tris "
+        "| Sapling s | Sapling branch / leaf tris | speed-up |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for r in rows:
+        sap = "-" if r["sapling_s"] is None else f"{r['sapling_s']:.3f}"
+        sap_t = (
+            "-"
+            if r["sapling_s"] is None
+            else f"{r['sapling_branch_tris']:.0f} / {r['sapling_leaf_tris']:.0f}"
+        )
+        sp = "-" if r["speedup"] is None else f"{r['speedup']:.1f}x"
+        lines.append(
+            f"| {r['species']} | {r['median_s']:.3f} | {r['max_s']:.3f} | {r['grow_s']:.3f} "
+            f"| {r['branch_tris']} | {r['leaf_tris']} | {sap} | {sap_t} | {sp} |"
+        )
+    worst = max(r["median_s"] for r in rows)
+    speed = [r["speedup"] for r in rows if r["speedup"] is not None]
+    lines += [
+        "",
+        f"Slowest species median: {worst:.3f} s (target < 0.2 s); smallest speed-up over "
+        f"Sapling: {min(speed):.1f}x (target >= 10x)."
+        if speed
+        else f"Slowest species median: {worst:.3f} s (target < 0.2 s).",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def write_section(text: str) -> None:
+    old = RESULTS.read_text() if RESULTS.is_file() else "# Benchmark results\n\n"
+    if SECTION in old:
+        start = old.index(SECTION)
+        nxt = old.find("\n## ", start + len(SECTION))
+        new = old[:start] + text + ("" if nxt < 0 else old[nxt + 1 :])
+    else:
+        new = old.rstrip("\n") + "\n\n" + text
+    tmp = RESULTS.with_suffix(".md.tmp")
+    tmp.write_text(new)
+    os.replace(tmp, RESULTS)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--trees", type=int, default=20, help="trees per species (seeds 0..N-1)")
+    ap.add_argument("--markdown", action="store_true", help="print the Markdown section")
+    ap.add_argument("--write", action="store_true", help="update benchmarks/RESULTS.md")
+    args = ap.parse_args()
+    rows = run(args.trees)
+    text = markdown(rows, args.trees)
+    if args.markdown or not args.write:
+        print(text)
+    if args.write:
+        write_section(text)
+        print(f"updated {RESULTS}")
+
+
+if __name__ == "__main__":
+    main()
