@@ -176,35 +176,35 @@ def _branches(sk: Skeleton) -> tuple[trimesh.Trimesh, dict]:
     pts = np.asarray(sk.points, dtype=np.float64)
     rad = np.asarray(sk.radii, dtype=np.float64)
     ang = 2.0 * np.pi * np.arange(sides) / sides
-    cos = np.cos(ang)[None, None, :, None]
-    sin = np.sin(ang)[None, None, :, None]
-    vparts: list[np.ndarray] = []
-    fparts: list[np.ndarray] = []
-    base = 0
+    circle = np.stack([np.cos(ang), np.sin(ang)], axis=1)  # (sides, 2)
+    groups = [int(n) for n in np.unique(counts) if n >= 2]
+    if not groups:
+        return _empty_mesh(), {"stems": s}
+    rings_of = {n: (n - 1) * res_u + 1 for n in groups}
+    members = {n: np.nonzero(counts == n)[0] for n in groups}
+    nv_total = sum(len(members[n]) * rings_of[n] * sides for n in groups)
+    nf_total = sum(len(members[n]) * 2 * sides * (rings_of[n] - 1) for n in groups)
+    verts = np.empty((nv_total, 3), dtype=np.float64)
+    faces = np.empty((nf_total, 3), dtype=np.int64)
+    v0 = f0 = 0
     # stems grouped by control-point count (ascending), stem order kept inside a group
-    for n in np.unique(counts):
-        n = int(n)
-        if n < 2:
-            continue
-        idx = np.nonzero(counts == n)[0]
+    for n in groups:
+        idx = members[n]
+        g, rings = len(idx), rings_of[n]
         sel = offsets[idx][:, None] + np.arange(n)[None, :]
         x, rr = _sample(pts[sel], rad[sel], res_u)  # (G, R, 3), (G, R)
         nor, bin_ = _frames(_tangents(x))
-        nor *= rr[..., None]
-        bin_ *= rr[..., None]
-        ring = cos * nor[:, :, None]
-        ring += sin * bin_[:, :, None]
-        ring += x[:, :, None]  # (G, R, sides, 3)
-        g, rings = x.shape[:2]
-        nv = rings * sides
+        frame = np.stack([nor, bin_], axis=2)  # (G, R, 2, 3)
+        frame *= rr[:, :, None, None]
+        nv, nf = rings * sides, 2 * sides * (rings - 1)
+        out = verts[v0 : v0 + g * nv].reshape(g, rings, sides, 3)
+        np.matmul(circle, frame, out=out)
+        out += x[:, :, None]
         tmpl = _ring_faces(rings, sides)
-        fparts.append((base + nv * np.arange(g)[:, None, None] + tmpl[None]).reshape(-1, 3))
-        vparts.append(ring.reshape(-1, 3))
-        base += g * nv
-    if not vparts:
-        return _empty_mesh(), {"stems": s}
-    verts = np.concatenate(vparts)
-    faces = np.concatenate(fparts)
+        fout = faces[f0 : f0 + g * nf].reshape(g, nf, 3)
+        np.add(tmpl[None], (v0 + nv * np.arange(g, dtype=np.int64))[:, None, None], out=fout)
+        v0 += g * nv
+        f0 += g * nf
     mesh = trimesh.Trimesh(vertices=verts, faces=faces, process=False)
     return mesh, {"stems": s, "sides": sides, "res_u": res_u}
 
