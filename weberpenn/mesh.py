@@ -217,11 +217,13 @@ def _leaves(sk: Skeleton) -> trimesh.Trimesh:
         m = _empty_mesh()
         m.visual = TextureVisuals(uv=np.zeros((0, 2)))
         return m
-    tmpl = np.column_stack([tmpl2, np.zeros(len(tmpl2))])  # (T, 3)
     mats = np.asarray(sk.leaf_matrices, dtype=np.float64)
     pos = np.asarray(sk.leaf_positions, dtype=np.float64)
-    v = np.einsum("lij,tj->lti", mats, tmpl) + pos[:, None, :]
-    nt = len(tmpl)
+    # template z = 0: only the first two matrix columns matter; v = x*col0 + y*col1 + pos
+    v = tmpl2[None, :, 0, None] * mats[:, None, :, 0]
+    v += tmpl2[None, :, 1, None] * mats[:, None, :, 1]
+    v += pos[:, None, :]
+    nt = len(tmpl2)
     faces = (np.arange(nl)[:, None, None] * nt + tf[None]).reshape(-1, 3)
     uv = np.tile(tmpl2 + np.array([0.5, 0.0]), (nl, 1))
     mesh = trimesh.Trimesh(vertices=v.reshape(-1, 3), faces=faces, process=False)
