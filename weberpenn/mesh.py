@@ -127,30 +127,33 @@ def _tangents(x: np.ndarray) -> np.ndarray:
     return t
 
 
-def _frames(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Minimum-twist normals and binormals along unit tangents (G, R, 3)."""
-    g, rr, _ = t.shape
+def _frames(t: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """Minimum-twist normals along unit tangents ``t`` (S, Rmax, 3).
+
+    Row ``i`` holds ``lengths[i]`` valid rings; rows are sorted by length, longest first,
+    so each parallel-transport step works on a prefix of the rows (all stems at once).
+    """
+    s, rmax, _ = t.shape
     t0 = t[:, 0]
-    axis = np.zeros((g, 3))
-    axis[np.arange(g), np.argmin(np.abs(t0), axis=1)] = 1.0
+    axis = np.zeros((s, 3))
+    axis[np.arange(s), np.argmin(np.abs(t0), axis=1)] = 1.0
     n0, _ = _unit(np.cross(t0, axis))
     normals = np.empty_like(t)
     normals[:, 0] = n0
-    nj = n0
-    for j in range(1, rr):  # parallel transport: project, renormalise (all stems at once)
-        tj = t[:, j]
+    active = np.searchsorted(-lengths, -np.arange(rmax), side="left")  # rows with len > j
+    for j in range(1, rmax):  # parallel transport: project, renormalise
+        a = int(active[j])
+        nj = normals[:a, j - 1]
+        tj = t[:a, j]
         v = nj - np.einsum("gi,gi->g", nj, tj)[:, None] * tj
         v, ln = _unit(v)
-        bad = ln < 1e-6  # the tangent turned onto the normal: keep any perpendicular
+        bad = ln < 1e-6  # the tangent turned onto the normal: take any perpendicular
         if bad.any():
-            alt = np.cross(tj[bad], normals[bad, j - 1 if j > 1 else 0])
-            alt2 = np.cross(tj[bad], np.array([0.0, 0.0, 1.0]))
-            alt = np.where(np.linalg.norm(alt, axis=1)[:, None] > 1e-6, alt, alt2)
+            alt = np.cross(tj[bad], np.array([0.0, 0.0, 1.0]))
             alt = np.where(np.linalg.norm(alt, axis=1)[:, None] > 1e-6, alt, (1.0, 0.0, 0.0))
             v[bad] = _unit(alt)[0]
-        normals[:, j] = v
-        nj = v
-    return normals, np.cross(t, normals)
+        normals[:a, j] = v
+    return normals
 
 
 def _ring_faces(rings: int, sides: int) -> np.ndarray:
@@ -187,15 +190,33 @@ def _branches(sk: Skeleton) -> tuple[trimesh.Trimesh, dict]:
     verts = np.empty((nv_total, 3), dtype=np.float64)
     faces = np.empty((nf_total, 3), dtype=np.int64)
     v0 = f0 = 0
-    # stems grouped by control-point count (ascending), stem order kept inside a group
+    # stems grouped by control-point count, stem order kept inside a group
+    sampled = {}
     for n in groups:
-        idx = members[n]
-        g, rings = len(idx), rings_of[n]
-        sel = offsets[idx][:, None] + np.arange(n)[None, :]
+        sel = offsets[members[n]][:, None] + np.arange(n)[None, :]
         x, rr = _sample(pts[sel], rad[sel], res_u)  # (G, R, 3), (G, R)
-        nor, bin_ = _frames(_tangents(x))
-        frame = np.stack([nor, bin_], axis=2)  # (G, R, 2, 3)
-        frame *= rr[:, :, None, None]
+        sampled[n] = (x, rr, _tangents(x))
+    # one parallel-transport sweep over all stems, longest first (prefix slices)
+    desc = groups[::-1]
+    rmax = rings_of[desc[0]]
+    tan = np.empty((sum(len(members[n]) for n in groups), rmax, 3))
+    lengths = np.concatenate([np.full(len(members[n]), rings_of[n]) for n in desc])
+    row = {}
+    r0 = 0
+    for n in desc:
+        g = len(members[n])
+        tan[r0 : r0 + g, : rings_of[n]] = sampled[n][2]
+        row[n] = r0
+        r0 += g
+    nor_all = _frames(tan, lengths)
+    v0 = f0 = 0
+    for n in groups:
+        x, rr, tg = sampled[n]
+        g, rings = len(members[n]), rings_of[n]
+        r0 = row[n]
+        nor = nor_all[r0 : r0 + g, :rings]
+        frame = np.stack([nor, np.cross(tg, nor)], axis=2)
+        frame *= rr[:, :, None, None]  # (G, R, 2, 3)
         nv, nf = rings * sides, 2 * sides * (rings - 1)
         out = verts[v0 : v0 + g * nv].reshape(g, rings, sides, 3)
         np.matmul(circle, frame, out=out)
