@@ -1,0 +1,136 @@
+"""eval.hausdorff: zero on itself, d for a copy moved by d, symmetry, normalisation, empties."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import trimesh
+
+from eval.hausdorff import Distance, bbox_diagonal, hausdorff, summarise, tree_hausdorff
+
+
+def _plane(n: int = 8, size: float = 2.0) -> trimesh.Trimesh:
+    xs = np.linspace(0, size, n)
+    gx, gy = np.meshgrid(xs, xs, indexing="ij")
+    v = np.column_stack([gx.ravel(), gy.ravel(), np.zeros(n * n)])
+    idx = np.arange(n * n).reshape(n, n)
+    a, b, c, d = (
+        idx[:-1, :-1].ravel(),
+        idx[1:, :-1].ravel(),
+        idx[1:, 1:].ravel(),
+        idx[:-1, 1:].ravel(),
+    )
+    f = np.vstack([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
+    return trimesh.Trimesh(v, f, process=False)
+
+
+def test_self_distance_is_zero():
+    m = trimesh.creation.icosphere(subdivisions=2)
+    d = hausdorff(m, m, samples=5000)
+    assert d.status == "ok"
+    assert d.max == pytest.approx(0.0, abs=1e-6)
+    assert d.mean == pytest.approx(0.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("dist", [0.05, 0.3, 1.5])
+def test_plane_moved_along_normal_by_d(dist):
+    a = _plane()
+    b = a.copy()
+    b.apply_translation([0, 0, dist])
+    d = hausdorff(b, a, samples=5000)
+    assert d.max == pytest.approx(dist, rel=1e-4)
+    assert d.mean == pytest.approx(dist, rel=1e-4)  # every point is exactly d away
+
+
+def test_box_moved_by_d_max_is_d():
+    a = trimesh.creation.box(extents=(1, 1, 1))
+    b = a.copy()
+    b.apply_translation([0.2, 0, 0])
+    d = hausdorff(b, a, samples=10000)
+    assert d.max == pytest.approx(0.2, rel=1e-3)
+    assert 0 < d.mean < 0.2
+
+
+def test_symmetric():
+    a = trimesh.creation.icosphere(subdivisions=2)
+    b = trimesh.creation.box(extents=(0.5, 0.5, 3.0))
+    ab, ba = hausdorff(a, b, samples=20000), hausdorff(b, a, samples=20000)
+    assert ab.max == pytest.approx(ba.max, rel=0.02)
+    assert ab.mean == pytest.approx(ba.mean, rel=0.02)
+
+
+def test_one_sided_distance_caught_both_ways():
+    # a small sphere inside a big one: the big one's surface is far from the small one
+    small = trimesh.creation.icosphere(subdivisions=2, radius=0.5)
+    big = trimesh.creation.icosphere(subdivisions=2, radius=2.0)
+    assert hausdorff(small, big, samples=5000).max == pytest.approx(1.5, abs=0.05)
+    assert hausdorff(big, small, samples=5000).max == pytest.approx(1.5, abs=0.05)
+
+
+def test_normalised_by_ground_truth_diagonal():
+    a = _plane()
+    gt = a.copy()
+    gt.apply_translation([0, 0, 0.4])
+    d = hausdorff(a, gt, samples=4000)
+    diag = bbox_diagonal(gt.vertices)
+    assert diag == pytest.approx(math.sqrt(8))
+    assert d.diagonal == pytest.approx(diag)
+    assert d.max_norm == pytest.approx(d.max / diag)
+    assert d.mean_norm == pytest.approx(d.mean / diag)
+    # the prediction's size does not matter, only the ground truth's
+    big = a.copy()
+    big.apply_scale(3.0)
+    assert hausdorff(big, gt, samples=2000).diagonal == pytest.approx(diag)
+    assert hausdorff(a, gt, samples=2000, diagonal=2.0).max_norm == pytest.approx(
+        d.max / 2.0, rel=1e-3
+    )
+
+
+def test_arrays_accepted_and_bad_input_rejected():
+    m = trimesh.creation.box()
+    d = hausdorff((m.vertices, m.faces), (m.vertices, m.faces), samples=1000)
+    assert d.max == pytest.approx(0, abs=1e-6)
+    with pytest.raises(ValueError, match="samples"):
+        hausdorff(m, m, samples=0)
+    with pytest.raises(ValueError, match="face indices"):
+        hausdorff((m.vertices, m.faces + 100), m)
+    bad = m.vertices.copy()
+    bad[0, 0] = np.nan
+    with pytest.raises(ValueError, match="NaN"):
+        hausdorff((bad, m.faces), m)
+    with pytest.raises(TypeError, match="pred"):
+        hausdorff("mesh.obj", m)
+
+
+def test_empty_meshes():
+    m = trimesh.creation.box()
+    empty = trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64))
+    both = hausdorff(empty, empty)
+    assert both.status == "both empty" and both.max == 0.0
+    p = hausdorff(empty, m)
+    assert p.status == "pred empty" and math.isnan(p.max)
+    g = hausdorff(m, empty)
+    assert g.status == "gt empty" and math.isnan(g.mean)
+    s = summarise([p, hausdorff(m, m, samples=500)])
+    assert s["skipped"] == 1 and s["n"] == 2 and s["max"] == pytest.approx(0, abs=1e-6)
+
+
+def test_tree_parts_use_whole_tree_diagonal():
+    from weberpenn.treemesh import TreeMesh
+
+    trunk = trimesh.creation.box(extents=(0.2, 0.2, 4.0))
+    crown = trimesh.creation.icosphere(radius=1.0)
+    crown.apply_translation([0, 0, 2.5])
+    gt = TreeMesh(branches=trunk, leaves=crown)
+    moved = crown.copy()
+    moved.apply_translation([0, 0, 0.1])
+    pred = TreeMesh(branches=trunk.copy(), leaves=moved)
+    out = tree_hausdorff(pred, gt, samples=4000)
+    assert set(out) == {"branches", "leaves", "combined"}
+    diag = bbox_diagonal(gt.bounds())
+    assert all(isinstance(d, Distance) and d.diagonal == pytest.approx(diag) for d in out.values())
+    assert out["branches"].max == pytest.approx(0, abs=1e-6)
+    assert out["leaves"].max == pytest.approx(0.1, abs=0.01)
+    assert 0 < out["combined"].max <= out["leaves"].max + 1e-6
