@@ -1,0 +1,351 @@
+"""Sketch distance and the refinement objective.
+
+``sketch_distance(a, b)`` compares two sketches (uint8, 255 = white, dark lines) at two or
+three scales of an image pyramid.  At each scale it adds
+
+- a symmetric chamfer distance between the dark-line masks (mean distance from each line
+  pixel of one sketch to the nearest line pixel of the other, via Euclidean distance
+  transforms), as a fraction of the image side, times ``chamfer_weight``;
+- one minus the IoU of the filled silhouettes (the line mask closed and its holes filled:
+  the crown outline and trunk as solid shapes), times ``silhouette_weight``.
+
+It is zero for identical sketches, symmetric, deterministic, and grows smoothly as lines
+move apart (the chamfer term falls off linearly with distance, unlike pixel overlap).
+
+:class:`SearchSpace` maps the species' free continuous unfixed values (and the camera yaw)
+to the unit cube; :class:`SketchObjective` turns a point of that cube into a tree, renders
+its sketch at the input's framing and size and measures the distance to the input, caching
+results by (rounded) point and reusing the last tree's scene when only the yaw moved.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import ndimage
+
+from weberpenn import TreeParams, build_mesh, grow, species
+from weberpenn.params import SPECS
+
+__all__ = [
+    "DISCRETE_NEIGHBOUR_KEYS",
+    "SearchSpace",
+    "SketchObjective",
+    "SketchTarget",
+    "prepare_sketch",
+    "sketch_distance",
+]
+
+DISCRETE_NEIGHBOUR_KEYS = ("baseSplits", "nrings")
+_DARK = 0.5  # a pixel darker than this (fraction of white) is a line pixel
+_EMPTY_PENALTY = 1.0
+_FILL_DENSITY = 0.15
+
+
+def prepare_sketch(img: Any, size: int) -> np.ndarray:
+    """A sketch as a (size, size) float32 image in 0..1 (1 = white); area-resized.
+
+    Accepts uint8 (0..255) or float (0..1) greyscale or RGB(A) arrays.
+    """
+    a = np.asarray(img)
+    if a.ndim == 3:
+        if a.shape[2] == 4:
+            rgb = a[..., :3].astype(np.float32)
+            alpha = a[..., 3:4].astype(np.float32) / (255.0 if a.dtype == np.uint8 else 1.0)
+            white = 255.0 if a.dtype == np.uint8 else 1.0
+            a = rgb * alpha + white * (1.0 - alpha)
+        a = np.asarray(a, dtype=np.float32)[..., :3].mean(axis=2)
+        scale = 255.0 if np.asarray(img).dtype == np.uint8 else 1.0
+    elif a.ndim == 2:
+        scale = 255.0 if a.dtype == np.uint8 else 1.0
+    else:
+        raise ValueError(f"a sketch must be a 2-D (or RGB) image, got shape {a.shape}")
+    if min(a.shape[:2]) < 8:
+        raise ValueError(f"a sketch must be at least 8x8 pixels, got {a.shape[:2]}")
+    f = np.clip(np.asarray(a, dtype=np.float32) / scale, 0.0, 1.0)
+    if not np.all(np.isfinite(f)):
+        raise ValueError("the sketch holds non-finite values")
+    if f.shape != (size, size):
+        from PIL import Image
+
+        im = Image.fromarray(np.ascontiguousarray(f), mode="F")
+        f = np.asarray(im.resize((size, size), Image.Resampling.BOX), dtype=np.float32)
+    return f
+
+
+@dataclass(frozen=True)
+class _Level:
+    mask: np.ndarray  # bool, line pixels
+    dist: np.ndarray  # float32, distance to the nearest line pixel (inf-free)
+    filled: np.ndarray  # float32 0..1, soft filled silhouette
+    n: int  # number of line pixels
+
+
+def _fill(mask: np.ndarray) -> np.ndarray:
+    """Soft filled silhouette (float 0..1): local ink density, saturated.
+
+    A blur of the line mask (sigma = side / 32) divided by ``_FILL_DENSITY`` and clipped:
+    the inside of a crown drawn with many strokes, or closed by its outline after the hole
+    fill, reads as 1; open page as 0.  Smooth in the line positions, unlike a hard fill
+    whose result flips when one gap in an outline opens.
+    """
+    side = mask.shape[0]
+    soft = ndimage.gaussian_filter(mask.astype(np.float32), sigma=max(0.75, side / 32))
+    soft = np.clip(soft / _FILL_DENSITY, 0.0, 1.0)
+    hard = ndimage.binary_fill_holes(soft > 0.5)
+    return np.maximum(soft, hard.astype(np.float32) * 0.5 + soft * 0.5).astype(np.float32)
+
+
+def _levels(img: np.ndarray, scales: int) -> tuple[_Level, ...]:
+    out = []
+    dark = img < _DARK
+    for _ in range(scales):
+        n = int(dark.sum())
+        if n:
+            dist = ndimage.distance_transform_edt(~dark).astype(np.float32)
+        else:
+            dist = np.zeros(dark.shape, np.float32)
+        out.append(_Level(dark, dist, _fill(dark), n))
+        s = dark.shape[0] // 2
+        if s < 8:
+            break
+        dark = dark[: 2 * s, : 2 * s].reshape(s, 2, s, 2).any(axis=(1, 3))
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class SketchTarget:
+    """A sketch prepared for repeated comparison (pyramid, distance maps, silhouettes)."""
+
+    image: np.ndarray  # float32 0..1
+    levels: tuple[_Level, ...]
+
+    @classmethod
+    def from_image(cls, img: Any, size: int = 128, scales: int = 3) -> SketchTarget:
+        f = prepare_sketch(img, size)
+        return cls(f, _levels(f, scales))
+
+    @property
+    def size(self) -> int:
+        return int(self.image.shape[0])
+
+    @property
+    def ink(self) -> float:
+        """Fraction of line pixels at full resolution."""
+        return self.levels[0].n / self.levels[0].mask.size
+
+
+def _level_distance(a: _Level, b: _Level, chamfer_weight: float, silhouette_weight: float) -> float:
+    side = a.mask.shape[0]
+    if a.n == 0 and b.n == 0:
+        return 0.0
+    if a.n == 0 or b.n == 0:
+        return _EMPTY_PENALTY * (chamfer_weight + silhouette_weight)
+    ab = float(b.dist[a.mask].mean())
+    ba = float(a.dist[b.mask].mean())
+    chamfer = 0.5 * (ab + ba) / side
+    inter = float(np.minimum(a.filled, b.filled).sum())
+    union = float(np.maximum(a.filled, b.filled).sum())
+    iou = inter / union if union > 0 else 1.0
+    return chamfer_weight * chamfer + silhouette_weight * (1.0 - iou)
+
+
+def target_distance(
+    a: SketchTarget,
+    b: SketchTarget,
+    chamfer_weight: float = 10.0,
+    silhouette_weight: float = 1.0,
+) -> float:
+    """Distance between two prepared sketches (see the module text)."""
+    if a.image.shape != b.image.shape:
+        raise ValueError(f"sketch sizes differ: {a.image.shape} vs {b.image.shape}")
+    terms = [
+        _level_distance(x, y, chamfer_weight, silhouette_weight)
+        for x, y in zip(a.levels, b.levels, strict=False)
+    ]
+    return float(np.mean(terms))
+
+
+def sketch_distance(
+    a: Any,
+    b: Any,
+    size: int = 128,
+    scales: int = 3,
+    chamfer_weight: float = 10.0,
+    silhouette_weight: float = 1.0,
+) -> float:
+    """Distance between two sketch images (any size; both resized to ``size``)."""
+    return target_distance(
+        SketchTarget.from_image(a, size, scales),
+        SketchTarget.from_image(b, size, scales),
+        chamfer_weight,
+        silhouette_weight,
+    )
+
+
+# --------------------------------------------------------------------------- search space
+
+
+@dataclass(frozen=True)
+class SearchSpace:
+    """The free continuous unfixed values of a species (and the yaw), as a unit cube.
+
+    ``base`` supplies every value not searched (its discrete values, e.g. ``baseSplits``,
+    are held).  ``to_params(x)`` applies ``species.project`` (clipping, mirrored
+    ``curveBack``, the split height).
+    """
+
+    species: str
+    base: TreeParams
+    dims: tuple[species.Unfixed, ...]
+    search_yaw: bool = True
+    fixed_yaw: float = 0.0
+
+    @classmethod
+    def create(
+        cls,
+        name: str,
+        base: TreeParams,
+        keys: Sequence[str] | None = None,
+        search_yaw: bool = True,
+        yaw: float = 0.0,
+    ) -> SearchSpace:
+        name = species.canonical(name)
+        rows = [u for u in species.unfixed(name) if u.free and not u.discrete]
+        if keys is not None:
+            wanted = set(keys)
+            unknown = wanted - {u.key for u in rows} - {u.label for u in rows}
+            if unknown:
+                raise ValueError(
+                    f"not searchable for {name}: {', '.join(sorted(unknown))}; "
+                    f"choose from {', '.join(u.label for u in rows)}"
+                )
+            rows = [u for u in rows if u.key in wanted or u.label in wanted]
+        levels = int(base["levels"])
+        rows = [u for u in rows if u.hi > u.lo and (u.index is None or u.index < levels)]
+        return cls(name, species.project(name, base), tuple(rows), search_yaw, float(yaw) % 360.0)
+
+    @property
+    def n(self) -> int:
+        return len(self.dims) + (1 if self.search_yaw else 0)
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        return tuple(u.label for u in self.dims) + (("yaw",) if self.search_yaw else ())
+
+    def to_params(self, x: Sequence[float]) -> TreeParams:
+        x = np.clip(np.asarray(x, dtype=np.float64), 0.0, 1.0)
+        values = self.base.to_dict()
+        for u, t in zip(self.dims, x, strict=False):
+            v: Any = u.lo + float(t) * (u.hi - u.lo)
+            if SPECS[u.key].kind == "int":
+                v = round(v)
+            if u.index is None:
+                values[u.key] = v
+            else:
+                vec = list(values[u.key])
+                vec[u.index] = v
+                values[u.key] = vec
+        return species.project(self.species, TreeParams(values))
+
+    def yaw(self, x: Sequence[float]) -> float:
+        if not self.search_yaw:
+            return self.fixed_yaw
+        return float(np.clip(x[len(self.dims)], 0.0, 1.0) * 360.0) % 360.0
+
+    def from_params(self, params: TreeParams, yaw: float = 0.0) -> np.ndarray:
+        p = species.project(self.species, params).to_dict()
+        xs = []
+        for u in self.dims:
+            v = p[u.key] if u.index is None else p[u.key][u.index]
+            xs.append((float(v) - u.lo) / (u.hi - u.lo))
+        if self.search_yaw:
+            xs.append((float(yaw) % 360.0) / 360.0)
+        return np.clip(np.asarray(xs, dtype=np.float64), 0.0, 1.0)
+
+    def with_base(self, base: TreeParams) -> SearchSpace:
+        base = species.project(self.species, base)
+        return SearchSpace(self.species, base, self.dims, self.search_yaw, self.fixed_yaw)
+
+
+# --------------------------------------------------------------------------- objective
+
+
+@dataclass
+class SketchObjective:
+    """``objective(x)`` -> sketch distance of the tree at ``x`` to the target.
+
+    Counts evaluations (cache hits excluded), keeps the best point seen, and caches losses
+    by the point rounded to ``decimals``.  The last tree's renderer is kept so points that
+    differ only in yaw re-render without regrowing.
+    """
+
+    target: SketchTarget
+    space: SearchSpace
+    scales: int = 3
+    decimals: int = 6
+    chamfer_weight: float = 10.0
+    silhouette_weight: float = 1.0
+    evaluations: int = 0
+    best_loss: float = math.inf
+    best_x: np.ndarray | None = None
+    best_params: TreeParams | None = None
+    best_yaw: float = 0.0
+    best_space: SearchSpace | None = None
+    trace: list[tuple[int, float, float]] = field(default_factory=list)  # (eval, loss, best)
+    _cache: dict[tuple[float, ...], float] = field(default_factory=dict, repr=False)
+    _scene_key: tuple[float, ...] | None = field(default=None, repr=False)
+    _renderer: Any = field(default=None, repr=False)
+    render_seconds: float = 0.0
+
+    def key(self, x: Sequence[float]) -> tuple[float, ...]:
+        return tuple(round(float(v), self.decimals) for v in np.clip(x, 0.0, 1.0))
+
+    def sketch_at(self, x: Sequence[float]) -> np.ndarray:
+        """The uint8 sketch of the tree at ``x`` (at the target's size)."""
+        from render.sketch import SketchRenderer
+
+        k = self.key(x)
+        scene_key = k[: len(self.space.dims)]
+        if self._scene_key != scene_key or self._renderer is None:
+            params = self.space.to_params(x)
+            mesh = build_mesh(grow(params), species=self.space.species)
+            self._renderer = SketchRenderer(mesh)
+            self._scene_key = scene_key
+        return self._renderer.sketch(self.space.yaw(x), self.target.size)
+
+    def loss_of_sketch(self, img: np.ndarray) -> float:
+        cand = SketchTarget.from_image(img, self.target.size, self.scales)
+        return target_distance(self.target, cand, self.chamfer_weight, self.silhouette_weight)
+
+    def rebase(self, space: SearchSpace) -> None:
+        """Search another space (e.g. a different held discrete value): clears the cache,
+        keeps the counters and the best point seen."""
+        self.space = space
+        self._cache.clear()
+        self._scene_key = None
+        self._renderer = None
+
+    def __call__(self, x: Sequence[float]) -> float:
+        k = self.key(x)
+        hit = self._cache.get(k)
+        if hit is not None:
+            return hit
+        t0 = time.perf_counter()
+        loss = self.loss_of_sketch(self.sketch_at(k))
+        self.render_seconds += time.perf_counter() - t0
+        self._cache[k] = loss
+        self.evaluations += 1
+        if loss < self.best_loss:
+            self.best_loss = loss
+            self.best_x = np.asarray(k, dtype=np.float64)
+            self.best_params = self.space.to_params(k)
+            self.best_yaw = self.space.yaw(k)
+            self.best_space = self.space
+        self.trace.append((self.evaluations, loss, self.best_loss))
+        return loss
