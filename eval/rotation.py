@@ -1,0 +1,292 @@
+"""The rotation experiment (paper, Fig. "HDD distances for each degree of rotation").
+
+A ground-truth tree is turned about its trunk axis in ``step``-degree increments; at each
+yaw its synthetic sketch is rendered (one ``render.SketchRenderer``, scenes built once), a
+parameter dictionary is predicted from that sketch (and optionally refined), the predicted
+tree is grown with the same seed, and its symmetric Hausdorff distance to the ground truth
+is measured (``eval.hausdorff``, combined branch+leaf mesh, normalised by the ground-truth
+bounding-box diagonal).
+
+``predict`` is any ``sketch (H, W uint8) -> TreeParams`` callable, so the sweep runs with a
+TSN checkpoint (:func:`tsn_predictor`) or with a stand-in in tests.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from weberpenn import TreeParams, build_mesh, grow
+
+from .hausdorff import DEFAULT_SAMPLES, hausdorff
+
+Predictor = Callable[[np.ndarray], Mapping[str, Any]]
+Progress = Callable[[int, int], None]
+
+CSV_FIELDS = (
+    "angle",
+    "hd_max",
+    "hd_mean",
+    "hd_max_norm",
+    "hd_mean_norm",
+    "status",
+    "refined",
+    "loss_before",
+    "loss_after",
+    "seconds",
+)
+
+
+@dataclass(frozen=True)
+class SweepRow:
+    angle: float
+    hd_max: float
+    hd_mean: float
+    hd_max_norm: float
+    hd_mean_norm: float
+    status: str
+    refined: bool
+    loss_before: float
+    loss_after: float
+    seconds: float
+
+
+@dataclass
+class SweepResult:
+    rows: list[SweepRow]
+    gt_params: TreeParams
+    predictions: list[TreeParams] = field(default_factory=list)
+    sketches: list[np.ndarray] = field(default_factory=list)
+    seed: int = 0
+    size: int = 256
+
+    def values(self, metric: str = "hd_max_norm") -> np.ndarray:
+        return np.array([getattr(r, metric) for r in self.rows], dtype=np.float64)
+
+    def cases(self, metric: str = "hd_max_norm") -> dict[str, int]:
+        """Row indices of the worst, median and best angle (NaN rows ignored)."""
+        v = self.values(metric)
+        ok = np.flatnonzero(np.isfinite(v))
+        if not len(ok):
+            return {}
+        order = ok[np.argsort(v[ok], kind="stable")]
+        return {
+            "worst": int(order[-1]),
+            "median": int(order[len(order) // 2]),
+            "best": int(order[0]),
+        }
+
+    def summary(self, metric: str = "hd_max_norm") -> dict[str, float]:
+        v = self.values(metric)
+        v = v[np.isfinite(v)]
+        if not len(v):
+            return {"n": 0, "failed": len(self.rows)}
+        return {
+            "n": len(v),
+            "failed": len(self.rows) - len(v),
+            "mean": float(v.mean()),
+            "min": float(v.min()),
+            "max": float(v.max()),
+            "std": float(v.std()),
+        }
+
+
+def yaw_angles(step: float) -> np.ndarray:
+    """0, step, 2 step, ... < 360 (``step`` must divide 360 into whole steps)."""
+    step = float(step)
+    if not math.isfinite(step) or step <= 0 or step > 360:
+        raise ValueError(f"step must be in (0, 360] degrees, got {step}")
+    n = 360.0 / step
+    if abs(n - round(n)) > 1e-9:
+        raise ValueError(f"step must divide 360 evenly, got {step} (360/step = {n:.3f})")
+    return np.arange(int(round(n))) * step
+
+
+def _params_key(p: Mapping[str, Any]) -> str:
+    return json.dumps(TreeParams(p).to_dict(), sort_keys=True, default=str)
+
+
+def rotation_sweep(
+    gt_params: Mapping[str, Any],
+    predict: Predictor,
+    step: float = 5.0,
+    size: int = 256,
+    refine_budget: int = 0,
+    samples: int = DEFAULT_SAMPLES,
+    seed: int = 0,
+    progress: Progress | None = None,
+    refine_size: int = 128,
+) -> SweepResult:
+    """Run the sweep; ``refine_budget`` > 0 refines each prediction with ``refine.search``."""
+    gt = TreeParams(gt_params)
+    if int(refine_budget) < 0:
+        raise ValueError(f"refine_budget must be >= 0, got {refine_budget}")
+    angles = yaw_angles(step)
+    from render.sketch import SketchRenderer
+
+    gt_mesh = build_mesh(grow(gt, seed=seed))
+    if gt_mesh.is_empty:
+        raise ValueError("the ground-truth parameters grow an empty tree; nothing to compare")
+    gt_combined = gt_mesh.combined()
+    renderer = SketchRenderer(gt_mesh)
+    cache: dict[str, Any] = {}  # identical predictions share one mesh and distance
+    result = SweepResult([], gt, seed=int(seed), size=int(size))
+    for i, yaw in enumerate(angles):
+        t0 = time.perf_counter()
+        img = renderer.sketch(float(yaw), size=size)
+        pred = TreeParams(predict(img))
+        refined, lb, la = False, float("nan"), float("nan")
+        if refine_budget > 0:
+            from refine.search import refine
+
+            res = refine(img, pred, budget=int(refine_budget), seed=seed, size=refine_size)
+            pred, refined, lb, la = res.params, True, res.loss_before, res.loss_after
+        key = _params_key(pred)
+        if key not in cache:
+            pm = build_mesh(grow(pred, seed=seed))
+            cache[key] = hausdorff(pm.combined(), gt_combined, samples)
+        d = cache[key]
+        result.rows.append(
+            SweepRow(
+                float(yaw),
+                d.max,
+                d.mean,
+                d.max_norm,
+                d.mean_norm,
+                d.status,
+                refined,
+                lb,
+                la,
+                time.perf_counter() - t0,
+            )
+        )
+        result.predictions.append(pred)
+        result.sketches.append(img)
+        if progress is not None:
+            progress(i + 1, len(angles))
+    return result
+
+
+def rows_csv(rows: list[SweepRow]) -> str:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=CSV_FIELDS, lineterminator="\n")
+    w.writeheader()
+    for r in rows:
+        d = asdict(r)
+        w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in d.items()})
+    return buf.getvalue()
+
+
+def write_csv(rows: list[SweepRow], path: str | Path) -> Path:
+    from weberpenn.params import atomic_write_text
+
+    path = Path(path)
+    atomic_write_text(path, rows_csv(rows))
+    return path
+
+
+def _save_fig(fig, path: Path) -> Path:
+    import os
+    import tempfile
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(suffix=".png", dir=path.parent)
+    os.close(fd)
+    try:
+        fig.savefig(tmp, dpi=100)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return path
+
+
+def plot_sweep(
+    result: SweepResult, path: str | Path, metric: str = "hd_max_norm", title: str = ""
+) -> Path:
+    """Distance against angle, each point coloured by its value (the paper's figure)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    x = np.array([r.angle for r in result.rows])
+    y = result.values(metric)
+    fig, ax = plt.subplots(figsize=(7, 3.2))
+    ok = np.isfinite(y)
+    sc = ax.scatter(x[ok], y[ok], c=y[ok], cmap="jet_r", s=18, edgecolors="none")
+    fig.colorbar(sc, ax=ax, label="HDD")
+    top = (
+        0.1 if ok.any() and np.nanmax(y) <= 0.1 else (float(np.nanmax(y)) * 1.1 if ok.any() else 1)
+    )
+    ax.set_ylim(0, top)
+    ax.set_xlim(-5, 360)
+    ax.set_xticks(range(0, 361, 45))
+    ax.set_xlabel("angle (degree)")
+    ax.set_ylabel("Hausdorff distance / GT diagonal" if metric.endswith("norm") else metric)
+    s = result.summary(metric)
+    if s.get("n"):
+        ax.axhline(s["mean"], color="grey", lw=0.8, ls="--")
+        ax.set_title(title or f"mean {s['mean']:.3f}, range {s['min']:.3f}-{s['max']:.3f}")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    try:
+        return _save_fig(fig, Path(path))
+    finally:
+        plt.close(fig)
+
+
+def plot_cases(
+    result: SweepResult, path: str | Path, metric: str = "hd_max_norm", size: int = 192
+) -> Path:
+    """Worst, median and best angle: input sketch, predicted tree, ground truth (same yaw)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from render.sketch import SketchRenderer
+
+    cases = result.cases(metric)
+    if not cases:
+        raise ValueError("no finite distances in the sweep; nothing to show")
+    gt_r = SketchRenderer(build_mesh(grow(result.gt_params, seed=result.seed)))
+    fig, axes = plt.subplots(3, 3, figsize=(7.5, 7.8))
+    for col, (name, i) in enumerate(cases.items()):
+        row = result.rows[i]
+        pm = build_mesh(grow(result.predictions[i], seed=result.seed))
+        imgs = [
+            (result.sketches[i], "input sketch"),
+            (SketchRenderer(pm).colour(row.angle, size=size, supersample=1), "predicted"),
+            (gt_r.colour(row.angle, size=size, supersample=1), "ground truth"),
+        ]
+        for r_i, (img, label) in enumerate(imgs):
+            ax = axes[r_i, col]
+            ax.imshow(img, cmap="gray" if img.ndim == 2 else None, vmin=0, vmax=255)
+            ax.set_xticks([])
+            ax.set_yticks([])
+            if r_i == 0:
+                ax.set_title(f"{name}: {row.angle:.0f} deg\nHDD {getattr(row, metric):.3f}")
+            if col == 0:
+                ax.set_ylabel(label)
+    fig.tight_layout()
+    try:
+        return _save_fig(fig, Path(path))
+    finally:
+        plt.close(fig)
+
+
+def tsn_predictor(checkpoint: str | Path | None = None) -> Predictor:
+    """A ``sketch -> TreeParams`` callable backed by ``tsn.predict`` (model loaded once)."""
+    from tsn import predict as _p
+
+    return _p.Predictor(checkpoint) if checkpoint is not None else _p.Predictor()

@@ -1,0 +1,49 @@
+"""eval.rotation: the yaw sweep with a stand-in predictor (no network needed)."""
+
+from __future__ import annotations
+
+import csv
+import math
+
+import numpy as np
+import pytest
+
+from eval.rotation import plot_cases, plot_sweep, rotation_sweep, write_csv, yaw_angles
+from weberpenn import species
+
+
+def test_yaw_angles():
+    a = yaw_angles(5)
+    assert len(a) == 72 and a[0] == 0 and a[-1] == 355
+    assert len(yaw_angles(90)) == 4
+    for bad in (0, -5, 7, 400, float("nan")):
+        with pytest.raises(ValueError, match="step"):
+            yaw_angles(bad)
+
+
+@pytest.mark.slow
+def test_sweep_72_rows_csv_and_plots(tmp_path):
+    gt = species.sample("palm", seed=1)
+    other = species.sample("palm", seed=2)
+    calls = []
+
+    def predict(img: np.ndarray):
+        assert img.dtype == np.uint8 and img.shape == (64, 64)
+        calls.append(1)
+        return gt if len(calls) % 2 else other  # two distinct predictions
+
+    ticks = []
+    res = rotation_sweep(
+        gt, predict, step=5, size=64, samples=2000, progress=lambda i, n: ticks.append((i, n))
+    )
+    assert len(res.rows) == 72 and len(calls) == 72 and ticks[-1] == (72, 72)
+    assert [r.angle for r in res.rows] == list(np.arange(72) * 5.0)
+    exact = [r for i, r in enumerate(res.rows) if i % 2 == 0]
+    assert all(r.hd_max == pytest.approx(0, abs=1e-6) for r in exact)
+    assert all(r.hd_max > 0 and math.isfinite(r.hd_max_norm) for r in res.rows[1::2])
+    assert res.cases()["worst"] % 2 == 1 and res.cases()["best"] % 2 == 0
+    out = write_csv(res.rows, tmp_path / "sweep.csv")
+    rows = list(csv.DictReader(out.open()))
+    assert len(rows) == 72 and float(rows[1]["angle"]) == 5.0
+    assert plot_sweep(res, tmp_path / "sweep.png").stat().st_size > 1000
+    assert plot_cases(res, tmp_path / "cases.png", size=64).stat().st_size > 1000
