@@ -2,12 +2,154 @@
 
 from __future__ import annotations
 
+import shlex
+import sys
+from pathlib import Path
+
 import typer
 
 from . import cli_eval_tsn
 
-eval_app = typer.Typer(help="Evaluate: 1-RMSE tables, Hausdorff distance, rotation sweep, reports.",
-                       no_args_is_help=True)
+eval_app = typer.Typer(
+    help="Evaluate: 1-RMSE tables, Hausdorff distance, rotation sweep, reports.",
+    no_args_is_help=True,
+)
+
+
+def _fail(msg: str) -> None:
+    typer.secho(f"error: {msg}", fg=typer.colors.RED, err=True)
+    raise typer.Exit(2)
+
+
+@eval_app.command("rotation")
+def rotation(
+    params: Path = typer.Option(
+        ..., "--params", help="Ground-truth parameter JSON (the tree to turn)."
+    ),
+    out: Path = typer.Option(
+        ..., "--out", help="Output folder (CSV, plot, worst/median/best picture)."
+    ),
+    step: float = typer.Option(5.0, "--step", help="Yaw step in degrees (must divide 360)."),
+    refine: bool = typer.Option(False, "--refine/--no-refine", help="Refine each prediction."),
+    budget: int = typer.Option(
+        20, "--budget", help="Refinement budget (tree evaluations) per angle."
+    ),
+    checkpoint: Path | None = typer.Option(
+        None, "--checkpoint", help="TSN checkpoint (default: shipped)."
+    ),
+    size: int = typer.Option(256, "--size", help="Sketch size in pixels."),
+    samples: int = typer.Option(10_000, "--samples", help="Hausdorff samples per direction."),
+    seed: int = typer.Option(0, "--seed", help="Growth seed for both trees."),
+) -> None:
+    """Turn a tree about its trunk, predict from each view's sketch, Hausdorff at each angle."""
+    from tqdm.auto import tqdm
+
+    from eval.rotation import plot_cases, plot_sweep, rotation_sweep, write_csv, yaw_angles
+    from weberpenn import ParamError, load_params
+
+    try:
+        gt = load_params(params)
+        n = len(yaw_angles(step))
+        if budget < 1:
+            raise ValueError(f"--budget must be >= 1, got {budget}")
+    except (ParamError, ValueError, OSError) as e:
+        _fail(str(e))
+    from eval.report import tsn_backend
+
+    try:
+        backend = tsn_backend(checkpoint)
+    except (RuntimeError, FileNotFoundError, ValueError) as e:
+        _fail(str(e))
+    with tqdm(total=n, desc="rotation sweep", dynamic_ncols=True) as bar:
+        res = rotation_sweep(
+            gt,
+            backend.predict,
+            step=step,
+            size=size,
+            refine_budget=budget if refine else 0,
+            samples=samples,
+            seed=seed,
+            progress=lambda i, total: bar.update(1),
+        )
+    out.mkdir(parents=True, exist_ok=True)
+    write_csv(res.rows, out / "rotation.csv")
+    plot_sweep(res, out / "rotation.png")
+    plot_cases(res, out / "rotation_cases.png")
+    s = res.summary()
+    typer.echo(
+        f"{len(res.rows)} angles; normalised max Hausdorff mean {s.get('mean', float('nan')):.4f}"
+        f" (min {s.get('min', float('nan')):.4f}, max {s.get('max', float('nan')):.4f}); "
+        f"wrote {out / 'rotation.csv'}, rotation.png, rotation_cases.png"
+    )
+
+
+@eval_app.command("all")
+def all_(
+    data: Path = typer.Option(..., "--data", help="Dataset folder (treesketch dataset build)."),
+    out: Path = typer.Option(Path("reports"), "--out", help="Report folder."),
+    checkpoint: Path | None = typer.Option(
+        None, "--checkpoint", help="TSN checkpoint (default: shipped)."
+    ),
+    refine_budget: int = typer.Option(
+        40, "--refine-budget", help="Refinement budget per tree (0: none)."
+    ),
+    per_species: int = typer.Option(
+        3, "--per-species", help="Held-out trees per species for Hausdorff."
+    ),
+    rotation_step: float = typer.Option(
+        5.0, "--rotation-step", help="Yaw step of the rotation sweep."
+    ),
+    rotation_budget: int = typer.Option(
+        0, "--rotation-budget", help="Refinement budget per sweep angle."
+    ),
+    rotation_species: str = typer.Option(
+        "all", "--rotation-species", help="'all', 'none' or comma list."
+    ),
+    samples: int = typer.Option(10_000, "--samples", help="Hausdorff samples per direction."),
+    max_sketches: int | None = typer.Option(
+        None, "--max-sketches", help="Cap the 1-RMSE sketches."
+    ),
+    backbone: list[str] = typer.Option(
+        [], "--compare", help="Another checkpoint for the 1-RMSE table, as NAME=PATH (repeatable)."
+    ),
+) -> None:
+    """Write the full evaluation report (markdown + PNGs) to --out."""
+    from eval.report import build_report, tsn_backend
+
+    extras = []
+    try:
+        main = tsn_backend(checkpoint)
+        for spec in backbone:
+            name, sep, path = spec.partition("=")
+            if not sep or not name or not path:
+                raise ValueError(f"--compare expects NAME=PATH, got {spec!r}")
+            extras.append(tsn_backend(Path(path), name=name))
+    except (RuntimeError, FileNotFoundError, ValueError) as e:
+        _fail(str(e))
+    if rotation_species == "all":
+        rot = None
+    elif rotation_species == "none":
+        rot = []
+    else:
+        rot = [s.strip() for s in rotation_species.split(",") if s.strip()]
+    try:
+        path = build_report(
+            data,
+            out,
+            main,
+            extras,
+            per_species=per_species,
+            refine_budget=refine_budget,
+            rotation_step=rotation_step,
+            rotation_refine_budget=rotation_budget,
+            rotation_species=rot,
+            samples=samples,
+            max_sketches=max_sketches,
+            command="treesketch " + " ".join(shlex.quote(a) for a in sys.argv[1:]),
+        )
+    except ValueError as e:
+        _fail(str(e))
+    typer.echo(f"wrote {path}")
 
 
 def register(app: typer.Typer) -> None:
