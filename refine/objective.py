@@ -243,6 +243,9 @@ class SearchSpace:
         values = self.base.to_dict()
         for u, t in zip(self.dims, x, strict=False):
             v: Any = u.lo + float(t) * (u.hi - u.lo)
+            here = values[u.key] if u.index is None else values[u.key][u.index]
+            if abs(float(here) - v) <= 1e-6 * (u.hi - u.lo):
+                continue  # the base's own value: keep it exactly (no round-trip error)
             if SPECS[u.key].kind == "int":
                 v = round(v)
             if u.index is None:

@@ -1,0 +1,79 @@
+"""refine.objective: the sketch distance and the search space."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from refine.objective import SearchSpace, SketchObjective, SketchTarget, sketch_distance
+from weberpenn import build_mesh, grow, species
+
+
+def _ring(r: float, width: float = 2.0, n: int = 128, cx: float = 64) -> np.ndarray:
+    yy, xx = np.mgrid[:n, :n]
+    return np.where(np.abs(np.hypot(yy - 64, xx - cx) - r) < width, 0, 255).astype(np.uint8)
+
+
+def test_identical_sketches_are_zero() -> None:
+    img = _ring(30)
+    assert sketch_distance(img, img) == 0.0
+    blank = np.full((64, 64), 255, np.uint8)
+    assert sketch_distance(blank, blank) == 0.0
+
+
+def test_grows_with_known_perturbation() -> None:
+    base = _ring(30)
+    d = [sketch_distance(base, _ring(30, cx=64 + s)) for s in (0, 2, 5, 10, 20)]
+    assert d[0] == 0.0
+    assert all(b > a for a, b in zip(d, d[1:], strict=False)), d
+
+
+def test_symmetric_and_blank_penalised() -> None:
+    a, b = _ring(30), _ring(20)
+    assert sketch_distance(a, b) == pytest.approx(sketch_distance(b, a))
+    blank = np.full((128, 128), 255, np.uint8)
+    assert sketch_distance(a, blank) > sketch_distance(a, b)
+
+
+def test_accepts_float_rgb_and_resizes() -> None:
+    a = _ring(30)
+    rgb = np.repeat(a[..., None], 3, axis=2)
+    assert sketch_distance(a, rgb) == 0.0
+    assert sketch_distance(a, a.astype(np.float32) / 255.0) == 0.0
+    with pytest.raises(ValueError, match="2-D"):
+        SketchTarget.from_image(np.zeros(5))
+
+
+def test_search_space_round_trip_and_projection() -> None:
+    gt = species.sample("bonsai", 4)
+    sp = SearchSpace.create("bonsai", gt)
+    assert sp.labels[-1] == "yaw" and "curveBack[0]" not in sp.labels
+    x = sp.from_params(gt, 90.0)
+    assert x.min() >= 0.0 and x.max() <= 1.0
+    p = sp.to_params(x)
+    assert p["curveBack"][0] == pytest.approx(-p["curve"][0])  # mirror kept
+    for u in sp.dims:
+        a, b = gt[u.key], p[u.key]
+        if u.index is not None:
+            a, b = a[u.index], b[u.index]
+        assert b == pytest.approx(a, abs=1e-9)
+    assert sp.yaw(x) == pytest.approx(90.0)
+    with pytest.raises(ValueError, match="not searchable"):
+        SearchSpace.create("bonsai", gt, keys=["nosuchkey"])
+
+
+def test_objective_deterministic_cached_and_zero_at_truth() -> None:
+    from render.sketch import SketchRenderer
+
+    gt = species.sample("palm", 2)
+    img = SketchRenderer(build_mesh(grow(gt), species="palm")).sketch(90.0, 128)
+    sp = SearchSpace.create("palm", gt)
+    obj = SketchObjective(SketchTarget.from_image(img, 128), sp)
+    x = sp.from_params(gt, 90.0)
+    assert obj(x) == pytest.approx(0.0, abs=1e-9)
+    assert obj.evaluations == 1
+    assert obj(x) == obj(x) and obj.evaluations == 1  # cached
+    x2 = x.copy()
+    x2[sp.labels.index("scaleV")] = 1.0 - x2[sp.labels.index("scaleV")]
+    obj2 = SketchObjective(SketchTarget.from_image(img, 128), sp)
+    assert obj2(x2) == obj(x2) > 0.0  # deterministic across objectives

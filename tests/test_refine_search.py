@@ -1,0 +1,91 @@
+"""refine.search: refinement recovers a perturbed tree, respects budget and time."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+from refine.objective import SearchSpace
+from refine.search import guess_species, refine
+from weberpenn import build_mesh, grow, species
+
+
+def _case(name: str = "palm", seed: int = 3, yaw: float = 0.0, shift: float = 0.3):
+    from render.sketch import SketchRenderer
+
+    gt = species.sample(name, seed)
+    img = SketchRenderer(build_mesh(grow(gt), species=name)).sketch(yaw, 128)
+    sp = SearchSpace.create(name, gt)
+    x = sp.from_params(gt, yaw)
+    rng = np.random.default_rng(seed)
+    xp = np.clip(x + rng.choice([-shift, shift], size=x.shape), 0.0, 1.0)
+    return img, gt, sp.to_params(xp)
+
+
+def test_guess_species_from_params() -> None:
+    for name in species.SPECIES:
+        assert guess_species(species.sample(name, 11)) == name
+
+
+def test_refine_improves_on_perturbed_truth() -> None:
+    img, _gt, start = _case()
+    seen: list[tuple[int, float]] = []
+    r = refine(img, start, budget=40, species="palm", progress=lambda n, b: seen.append((n, b)))
+    assert r.species == "palm"
+    assert r.loss_after <= r.loss_before
+    assert r.loss_after < 0.9 * r.loss_before, (r.loss_before, r.loss_after)
+    assert r.evaluations <= 40
+    assert seen and seen[-1][0] == r.evaluations
+    assert all(b2 <= b1 for (_, b1), (_, b2) in zip(seen, seen[1:], strict=False))
+    assert [t[0] for t in r.trace] == list(range(1, r.evaluations + 1))
+
+
+def test_start_point_at_truth_stays_at_zero() -> None:
+    img, gt, _ = _case()
+    r = refine(img, gt, budget=5, species="palm", yaw=0.0)
+    assert r.loss_before == pytest.approx(0.0, abs=1e-9)
+    assert r.loss_after == pytest.approx(0.0, abs=1e-9)
+    assert r.params["scaleV"] == pytest.approx(gt["scaleV"])
+
+
+def test_deterministic() -> None:
+    img, _gt, start = _case(seed=5)
+    a = refine(img, start, budget=15, species="palm")
+    b = refine(img, start, budget=15, species="palm")
+    assert a.loss_after == b.loss_after and a.yaw == b.yaw
+    assert a.params.to_dict() == b.params.to_dict()
+
+
+@pytest.mark.parametrize("algorithm", ["sbplx", "cobyla"])
+def test_other_algorithms_and_budget(algorithm: str) -> None:
+    img, _gt, start = _case(seed=6)
+    r = refine(img, start, budget=12, species="palm", algorithm=algorithm, global_evals=0)
+    assert r.evaluations <= 12 and r.loss_after <= r.loss_before
+
+
+def test_global_stage_and_discrete_neighbours() -> None:
+    img, _gt, start = _case(seed=7)
+    r = refine(img, start, budget=20, species="palm", global_evals=5, discrete_neighbours=True)
+    assert r.evaluations <= 20 and r.loss_after <= r.loss_before
+
+
+def test_time_limit_respected() -> None:
+    img, _gt, start = _case(name="maple", seed=2)
+    t = time.perf_counter()
+    r = refine(img, start, budget=10_000, species="maple", time_limit=2.0)
+    took = time.perf_counter() - t
+    assert r.stopped_by == "time"
+    assert took < 2.0 + 2.5  # one tree evaluation may run past the limit
+    assert r.loss_after <= r.loss_before
+
+
+def test_bad_arguments() -> None:
+    img, gt, _ = _case()
+    with pytest.raises(ValueError, match="budget"):
+        refine(img, gt, budget=0)
+    with pytest.raises(ValueError, match="algorithm"):
+        refine(img, gt, algorithm="nope")
+    with pytest.raises(ValueError, match="time_limit"):
+        refine(img, gt, time_limit=-1)
