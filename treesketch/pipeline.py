@@ -163,10 +163,15 @@ def _load_model(model: Any) -> Any:
 
 def _tsn_estimate(model: Any, img: np.ndarray) -> tuple[TreeParams, str]:
     """Ask TSN for (params, species); accepts the shapes tsn.predict may return."""
-    from tsn import predict as tsn_predict  # type: ignore[attr-defined]
+    import inspect
 
-    fn = getattr(tsn_predict, "predict", None)
-    out = fn(model, img) if callable(fn) else model(img)
+    if inspect.isfunction(model) or inspect.ismethod(model):  # a plain estimator function
+        out = model(img)
+    else:
+        from tsn import predict as tsn_predict  # type: ignore[attr-defined]
+
+        fn = getattr(tsn_predict, "predict", None)
+        out = fn(model, img) if callable(fn) else model(img)
     if isinstance(out, tuple) and len(out) >= 2:
         params, name = out[0], out[1]
     elif hasattr(out, "params"):

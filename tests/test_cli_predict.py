@@ -1,0 +1,105 @@
+"""`treesketch predict`: outputs, errors, and nothing partial when interrupted."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+import treesketch.pipeline as pl
+from treesketch import cli_predict
+from treesketch.cli import app
+from weberpenn import build_mesh, grow, species
+
+runner = CliRunner()
+
+
+@pytest.fixture()
+def sketch_png(tmp_path, monkeypatch):
+    from PIL import Image
+
+    from render.sketch import SketchRenderer
+
+    img = SketchRenderer(build_mesh(grow(species.sample("palm", 3)), species="palm")).sketch(0, 256)
+    p = tmp_path / "sketch.png"
+    Image.fromarray(img).save(p)
+    monkeypatch.setattr(
+        pl, "_load_model", lambda model: lambda im: (species.sample("palm", 8), "palm")
+    )
+    return p
+
+
+def _args(tmp_path, sketch_png, *extra: str) -> list[str]:
+    out = tmp_path / "out"
+    return [
+        "predict",
+        str(sketch_png),
+        "--out",
+        str(out / "tree.glb"),
+        "--params",
+        str(out / "tree.json"),
+        "--preset",
+        str(out / "tree_sapling.py"),
+        "--compare",
+        str(out / "compare.png"),
+        "--quiet",
+        *extra,
+    ]
+
+
+def test_writes_all_outputs(tmp_path, sketch_png) -> None:
+    res = runner.invoke(app, _args(tmp_path, sketch_png, "--budget", "6", "--height", "9"))
+    assert res.exit_code == 0, res.output
+    out = tmp_path / "out"
+    assert sorted(p.name for p in out.iterdir()) == [
+        "compare.png",
+        "tree.glb",
+        "tree.json",
+        "tree_sapling.py",
+    ]
+    params = json.loads((out / "tree.json").read_text())
+    assert params["levels"] == species.base("palm")["levels"]
+    assert (out / "tree.glb").read_bytes()[:4] == b"glTF"
+    assert "sketch distance" in res.output and "palm" in res.output
+    from PIL import Image
+
+    w, h = Image.open(out / "compare.png").size
+    assert w == 4 * 256 and h > 256
+
+
+def test_interrupted_run_writes_nothing(tmp_path, sketch_png, monkeypatch) -> None:
+    def boom(result, size=256):
+        raise KeyboardInterrupt  # e.g. Ctrl-C while the last output is being made
+
+    monkeypatch.setattr(cli_predict, "compare_image", boom)
+    res = runner.invoke(app, _args(tmp_path, sketch_png, "--no-refine"))
+    assert res.exit_code != 0
+    out = tmp_path / "out"
+    assert not out.exists() or list(out.iterdir()) == []  # no files, no temp folders
+
+
+def test_failed_pipeline_writes_nothing(tmp_path, sketch_png, monkeypatch) -> None:
+    def fail(*a, **k):
+        raise RuntimeError("mid-run failure")
+
+    monkeypatch.setattr(pl, "refine_search", fail)
+    res = runner.invoke(app, _args(tmp_path, sketch_png))
+    assert res.exit_code != 0
+    out = tmp_path / "out"
+    assert not out.exists() or list(out.iterdir()) == []
+
+
+def test_bad_inputs(tmp_path, sketch_png) -> None:
+    res = runner.invoke(app, ["predict", str(tmp_path / "nope.png"), "--out", "x.glb"])
+    assert res.exit_code == 2 and "not found" in res.output
+    res = runner.invoke(app, ["predict", str(sketch_png), "--out", str(tmp_path / "x.stl")])
+    assert res.exit_code == 2 and ".glb or .obj" in res.output
+    blank = tmp_path / "blank.png"
+    from PIL import Image
+
+    Image.fromarray(np.full((64, 64), 255, np.uint8)).save(blank)
+    res = runner.invoke(app, ["predict", str(blank), "--out", str(tmp_path / "b.glb")])
+    assert res.exit_code == 2 and "blank" in res.output
+    assert not (tmp_path / "b.glb").exists()
