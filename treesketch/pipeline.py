@@ -243,7 +243,12 @@ def predict_then_refine(
     algorithm: str = "bobyqa",
     seed: int = 0,
 ) -> Result:
-    """Sketch (path, bytes, image or array) -> :class:`Result` (see the module text)."""
+    """Sketch (path, bytes, image or array) -> :class:`Result` (see the module text).
+
+    ``model``: a loaded TSN model, a function ``image -> (params, species)``, the string
+    ``"template"`` (no network), or None to load the shipped checkpoint (falling back to
+    the template match when there is none).
+    """
     from render.sketch import SketchRenderer
 
     timings: dict[str, float] = {}
@@ -255,7 +260,7 @@ def predict_then_refine(
     timings["prepare"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    net = _load_model(model)
+    net = None if isinstance(model, str) and model == "template" else _load_model(model)
     yaw0 = 0.0
     if net is not None:
         params0, name = _tsn_estimate(net, img)
