@@ -116,7 +116,7 @@ def predict_command(
         False, "--no-refine", help="Skip the refinement: TSN's estimate only."
     ),
     budget: int = typer.Option(
-        None, "--budget", min=1, help="Refinement: most trees to evaluate (default 150)."
+        None, "--budget", min=1, help="Refinement: most trees to evaluate (default 100)."
     ),
     time_limit: float = typer.Option(
         None, "--time-limit", min=0.1, help="Refinement: most seconds (default 50)."

@@ -9,7 +9,7 @@ def serve_command(
     host: str = typer.Option("127.0.0.1", "--host", help="Address to listen on."),
     port: int = typer.Option(8000, "--port", min=1, max=65535, help="Port to listen on."),
     budget: int = typer.Option(
-        None, "--budget", min=1, help="Default refinement budget per request (default 150)."
+        None, "--budget", min=1, help="Default refinement budget per request (default 100)."
     ),
 ) -> None:
     """Serve POST /predict (sketch image -> parameters, species, losses, GLB link),

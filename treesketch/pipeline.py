@@ -40,7 +40,7 @@ __all__ = [
     "rescale_height",
 ]
 
-DEFAULT_BUDGET = 150
+DEFAULT_BUDGET = 100
 DEFAULT_TIME_LIMIT = 50.0
 SKETCH_SIZE = 256  # the size sketches are prepared and compared at (TSN's input size)
 SEARCH_SIZE = 128  # the size the refinement loop renders at

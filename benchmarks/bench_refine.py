@@ -1,0 +1,187 @@
+"""Benchmark: TSN alone vs TSN + refinement on held-out synthetic sketches.
+
+For N test-split sketches per species (one view per tree, views cycling front/left/back/
+right) of the dataset built by ``render.dataset``: the first estimate (TSN, or with
+``--estimator perturbed`` the ground truth moved by +-``--shift`` in every free unit-cube
+coordinate, a stand-in while no checkpoint exists), then ``refine.refine`` at the default
+budget and time limit.  Reports the sketch loss before/after, seconds, evaluations, and
+the mesh error: the symmetric Hausdorff distance (max, and mean) to the ground-truth mesh
+divided by the ground-truth bounding-box diagonal (``eval.hausdorff``).  The refined tree
+is turned about the trunk by (view yaw - found yaw), so it faces the way the sketch shows.
+
+    nice -n 10 .venv/bin/python benchmarks/bench_refine.py --data /work/data/ds_v1 \
+        --per-species 5 --json /work/data/bench_refine.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from eval.hausdorff import tree_hausdorff  # noqa: E402
+from refine.objective import SearchSpace  # noqa: E402
+from refine.search import refine  # noqa: E402
+from render.dataset import read_manifest  # noqa: E402
+from treesketch.pipeline import DEFAULT_BUDGET, DEFAULT_TIME_LIMIT, SEARCH_SIZE  # noqa: E402
+from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
+from weberpenn.treemesh import TreeMesh  # noqa: E402
+
+VIEW_ORDER = ("front", "left", "back", "right")
+
+
+def rotated(mesh: TreeMesh, degrees: float) -> TreeMesh:
+    """The mesh turned about the Z (trunk) axis."""
+    import trimesh
+
+    m = trimesh.transformations.rotation_matrix(math.radians(degrees), [0, 0, 1])
+    b, lv = mesh.branches.copy(), mesh.leaves.copy()
+    if len(b.vertices):
+        b.apply_transform(m)
+    if len(lv.vertices):
+        lv.apply_transform(m)
+    return TreeMesh(branches=b, leaves=lv, species=mesh.species, meta=dict(mesh.meta))
+
+
+def pick_rows(data: Path, per_species: int) -> list[dict]:
+    rows = read_manifest(data, split="test")
+    out = []
+    for name in species.SPECIES:
+        trees = sorted({r["tree_id"] for r in rows if r["species"] == name})[:per_species]
+        for i, tid in enumerate(trees):
+            view = VIEW_ORDER[i % len(VIEW_ORDER)]
+            out += [r for r in rows if r["tree_id"] == tid and r["view"] == view]
+    return out
+
+
+def perturbed(name: str, gt, shift: float, seed: int):
+    sp = SearchSpace.create(name, gt, search_yaw=False)
+    x = sp.from_params(gt)
+    rng = np.random.default_rng(seed)
+    return sp.to_params(np.clip(x + rng.choice([-shift, shift], size=x.shape), 0.0, 1.0))
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", type=Path, default=Path("/work/data/ds_v1"))
+    ap.add_argument("--per-species", type=int, default=5)
+    ap.add_argument("--budget", type=int, default=DEFAULT_BUDGET)
+    ap.add_argument("--time-limit", type=float, default=DEFAULT_TIME_LIMIT)
+    ap.add_argument("--estimator", choices=("tsn", "perturbed"), default="tsn")
+    ap.add_argument("--shift", type=float, default=0.25)
+    ap.add_argument("--samples", type=int, default=10_000, help="Hausdorff samples per side")
+    ap.add_argument("--json", type=Path, default=None)
+    args = ap.parse_args(argv)
+
+    from PIL import Image
+
+    model = None
+    if args.estimator == "tsn":
+        from treesketch.pipeline import _tsn_estimate
+        from tsn import predict as tsn_predict  # type: ignore[attr-defined]
+
+        model = tsn_predict.load_model()
+    records = []
+    for k, row in enumerate(pick_rows(args.data, args.per_species)):
+        name = row["species"]
+        img = np.asarray(Image.open(args.data / row["sketch"]).convert("L"))
+        gt = load_params(args.data / row["params"])
+        gt_mesh = build_mesh(grow(gt), species=name)
+        if model is not None:
+            start, guessed = _tsn_estimate(model, img)
+        else:
+            start, guessed = perturbed(name, gt, args.shift, k), name
+        r = refine(
+            img,
+            start,
+            budget=args.budget,
+            time_limit=args.time_limit,
+            species=guessed,
+            size=SEARCH_SIZE,
+        )
+        view_yaw = float(row["yaw"])
+        m0 = build_mesh(grow(start), species=guessed)
+        m1 = rotated(build_mesh(grow(r.params), species=guessed), view_yaw - r.yaw)
+        h0 = tree_hausdorff(m0, gt_mesh, args.samples)["combined"]
+        h1 = tree_hausdorff(m1, gt_mesh, args.samples)["combined"]
+        rec = {
+            "tree_id": row["tree_id"],
+            "view": row["view"],
+            "species": name,
+            "species_pred": guessed,
+            "loss_before": r.loss_before,
+            "loss_after": r.loss_after,
+            "seconds": r.seconds,
+            "evaluations": r.evaluations,
+            "stopped_by": r.stopped_by,
+            "yaw_view": view_yaw,
+            "yaw_found": r.yaw,
+            "haus_max_before": h0.max_norm,
+            "haus_max_after": h1.max_norm,
+            "haus_mean_before": h0.mean_norm,
+            "haus_mean_after": h1.mean_norm,
+        }
+        records.append(rec)
+        print(
+            f"{rec['tree_id']:>12} {rec['view']:>5} loss {r.loss_before:.4f}->{r.loss_after:.4f}"
+            f" {r.seconds:5.1f}s {r.evaluations:3d} ev  haus max {h0.max_norm:.4f}->"
+            f"{h1.max_norm:.4f} mean {h0.mean_norm:.4f}->{h1.mean_norm:.4f}",
+            flush=True,
+        )
+    summary = summarise(records)
+    print(json.dumps(summary, indent=1))
+    if args.json is not None:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        tmp = args.json.with_suffix(".tmp")
+        tmp.write_text(
+            json.dumps(
+                {
+                    "args": vars(args) | {"data": str(args.data), "json": str(args.json)},
+                    "summary": summary,
+                    "records": records,
+                },
+                indent=1,
+            )
+        )
+        tmp.replace(args.json)
+    return 0
+
+
+def summarise(records: list[dict]) -> dict:
+    n = len(records)
+    if n == 0:
+        return {"n": 0}
+    lb = np.array([r["loss_before"] for r in records])
+    la = np.array([r["loss_after"] for r in records])
+    hb = np.array([r["haus_max_before"] for r in records])
+    ha = np.array([r["haus_max_after"] for r in records])
+    mb = np.array([r["haus_mean_before"] for r in records])
+    ma = np.array([r["haus_mean_after"] for r in records])
+    sec = np.array([r["seconds"] for r in records])
+    return {
+        "n": n,
+        "loss_never_worse": bool(np.all(la <= lb + 1e-12)),
+        "loss_fell_frac": float(np.mean(la < lb)),
+        "loss_before_mean": float(lb.mean()),
+        "loss_after_mean": float(la.mean()),
+        "haus_max_improved_frac": float(np.mean(ha < hb)),
+        "haus_max_before_mean": float(hb.mean()),
+        "haus_max_after_mean": float(ha.mean()),
+        "haus_mean_improved_frac": float(np.mean(ma < mb)),
+        "haus_mean_before_mean": float(mb.mean()),
+        "haus_mean_after_mean": float(ma.mean()),
+        "seconds_mean": float(sec.mean()),
+        "seconds_max": float(sec.max()),
+        "evaluations_mean": float(np.mean([r["evaluations"] for r in records])),
+    }
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
