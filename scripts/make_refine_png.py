@@ -1,0 +1,96 @@
+"""docs/refine.png: one held-out sketch per species: the input, the first estimate's
+sketch (TSN, or the perturbed ground truth with ``--estimator perturbed``), the refined
+tree's sketch, and the ground truth's sketch and colour render.
+
+    .venv/bin/python scripts/make_refine_png.py --data /work/data/ds_v1 --out docs/refine.png
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from bench_refine import perturbed, pick_rows  # noqa: E402
+
+from refine.search import refine  # noqa: E402
+from render.sketch import SketchRenderer  # noqa: E402
+from treesketch.pipeline import DEFAULT_BUDGET, DEFAULT_TIME_LIMIT, SEARCH_SIZE  # noqa: E402
+from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
+
+
+def main(argv: list[str] | None = None) -> int:
+    from PIL import Image, ImageDraw
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", type=Path, default=Path("/work/data/ds_v1"))
+    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "refine.png")
+    ap.add_argument("--estimator", choices=("tsn", "perturbed"), default="tsn")
+    ap.add_argument("--budget", type=int, default=DEFAULT_BUDGET)
+    ap.add_argument("--size", type=int, default=160)
+    args = ap.parse_args(argv)
+
+    model = None
+    if args.estimator == "tsn":
+        from tsn import predict as tsn_predict  # type: ignore[attr-defined]
+
+        model = tsn_predict.load_model()
+    s = args.size
+    first = "TSN" if model is not None else "perturbed GT"
+    titles = ["input sketch", first, "refined", "ground truth", "GT render"]
+    cap = 16
+    sheet = Image.new("RGB", (s * len(titles), cap + s * len(species.SPECIES)), "white")
+    draw = ImageDraw.Draw(sheet)
+    for j, t in enumerate(titles):
+        draw.text((j * s + 4, 2), t, fill=(0, 0, 0))
+    rows = pick_rows(args.data, 1)
+    for i, row in enumerate(rows):
+        name = row["species"]
+        img = np.asarray(Image.open(args.data / row["sketch"]).convert("L"))
+        gt = load_params(args.data / row["params"])
+        if model is not None:
+            from treesketch.pipeline import _tsn_estimate
+
+            start, guessed = _tsn_estimate(model, img)
+        else:
+            start, guessed = perturbed(name, gt, 0.25, i), name
+        r = refine(
+            img,
+            start,
+            budget=args.budget,
+            time_limit=DEFAULT_TIME_LIMIT,
+            species=guessed,
+            size=SEARCH_SIZE,
+        )
+        gt_r = SketchRenderer(build_mesh(grow(gt), species=name))
+        panels = [
+            img,
+            SketchRenderer(build_mesh(grow(start), species=guessed)).sketch(r.start_yaw, 256),
+            SketchRenderer(build_mesh(grow(r.params), species=guessed)).sketch(r.yaw, 256),
+            gt_r.sketch(row["yaw"], 256),
+            gt_r.colour(row["yaw"], 256, supersample=2),
+        ]
+        y = cap + i * s
+        for j, p in enumerate(panels):
+            im = Image.fromarray(np.asarray(p, np.uint8)).convert("RGB").resize((s, s))
+            sheet.paste(im, (j * s, y))
+        draw.text((4, y + 2), f"{name} {row['view']}", fill=(200, 0, 0))
+        draw.text((s + 4, y + s - 12), f"loss {r.loss_before:.3f}", fill=(0, 0, 160))
+        draw.text((2 * s + 4, y + s - 12), f"loss {r.loss_after:.3f}", fill=(0, 0, 160))
+        print(f"{name}: {r.loss_before:.4f} -> {r.loss_after:.4f} ({r.evaluations} ev)", flush=True)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = args.out.with_suffix(".tmp.png")
+    sheet.save(tmp, optimize=True)
+    tmp.replace(args.out)
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
