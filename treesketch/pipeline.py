@@ -5,8 +5,8 @@ network for a first estimate (parameters and species), then lets ``refine.refine
 the species' free values and the view yaw until the tree's sketch matches the input.
 
 When no TSN checkpoint is available (``model=None`` and ``tsn.predict`` cannot load one)
-the first estimate is a template match: each species' reference tree is sketched from
-eight yaws and the closest one starts the search.  ``Result.estimator`` says which.
+the first estimate is a template match: three sampled trees per species are sketched
+from four yaws and the closest one starts the search.  ``Result.estimator`` says which.
 
 A sketch that does not look like a tree is not an error of the program: a blank page
 raises :class:`SketchError`; anything else (a circle, noise) gives a result whose
@@ -188,23 +188,24 @@ def _tsn_estimate(model: Any, img: np.ndarray) -> tuple[TreeParams, str]:
     return species.project(name, params), name
 
 
-def _template_estimate(img: np.ndarray) -> tuple[TreeParams, str, float]:
-    """Closest species reference tree over eight yaws (no network needed)."""
+def _template_estimate(img: np.ndarray, seeds: int = 3) -> tuple[TreeParams, str, float]:
+    """Closest of ``seeds`` sampled trees per species, each seen from four yaws (no
+    network needed; the species vary a lot within themselves, so one tree each is not
+    enough)."""
+    from refine.objective import target_distance
     from render.sketch import SketchRenderer
 
     target = SketchTarget.from_image(img, SEARCH_SIZE)
-    best: tuple[float, str, float] = (math.inf, species.SPECIES[0], 0.0)
+    best: tuple[float, str, int, float] = (math.inf, species.SPECIES[0], 0, 0.0)
     for name in species.SPECIES:
-        params = species.sample(name, 0)
-        r = SketchRenderer(build_mesh(grow(params), species=name))
-        for yaw in START_YAWS:
-            cand = SketchTarget.from_image(r.sketch(yaw, SEARCH_SIZE), SEARCH_SIZE)
-            from refine.objective import target_distance
-
-            d = target_distance(target, cand)
-            if d < best[0]:
-                best = (d, name, yaw)
-    return species.sample(best[1], 0), best[1], best[2]
+        for seed in range(seeds):
+            r = SketchRenderer(build_mesh(grow(species.sample(name, seed)), species=name))
+            for yaw in START_YAWS[:4]:
+                cand = SketchTarget.from_image(r.sketch(yaw, SEARCH_SIZE), SEARCH_SIZE)
+                d = target_distance(target, cand)
+                if d < best[0]:
+                    best = (d, name, seed, yaw)
+    return species.sample(best[1], best[2]), best[1], best[3]
 
 
 def tree_height(params: TreeParams) -> float:
