@@ -42,8 +42,11 @@ def rule_for(key: str, idx: int | None, vals: list, base: dict) -> dict:
     if key == "baseSplits":
         return {"rule": "randint", "lo": 0, "hi": base["maxBaseSplits"]}
     if key == "splitHeight":
-        return {"rule": "split_height", "with_splits": 0.6,
-                "without": [v for v, b in zip(vals, base["_baseSplits"]) if b == 0][0]}
+        return {
+            "rule": "split_height",
+            "with_splits": 0.6,
+            "without": [v for v, b in zip(vals, base["_baseSplits"], strict=True) if b == 0][0],
+        }
     if key == "nrings":
         n = round((min(vals) + max(vals)) / 2)
         return {"rule": "randint", "lo": max(2, n - 3), "hi": n + 3}
@@ -53,8 +56,11 @@ def rule_for(key: str, idx: int | None, vals: list, base: dict) -> dict:
         return {"rule": "mirror", "of": "curve"}
     if key in ("curveV1", "curveV2"):
         ext = max(vals, key=abs)
-        return {"rule": "uniform", "lo": 0.0, "hi": up(ext)} if ext > 0 else {
-            "rule": "uniform", "lo": up(ext), "hi": 0.0}
+        return (
+            {"rule": "uniform", "lo": 0.0, "hi": up(ext)}
+            if ext > 0
+            else {"rule": "uniform", "lo": up(ext), "hi": 0.0}
+        )
     if key in ("leafScaleV", "scaleV0"):
         return {"rule": "uniform_around_one", "amp": min(0.9, up(max(abs(v - 1) for v in vals)))}
     # splitAngleV1/2, rotateV, leafRotateV, leafDownAngleV, scaleV, downAngleV
@@ -87,8 +93,11 @@ def main(src: str) -> None:
                 unfixed.append({"key": key, "index": None, **rule_for(key, None, vals, base)})
         base.pop("_baseSplits")
         base["seed"] = 0
-        out["species"][name] = {"reference_files": [f.name for f in files], "base": base,
-                                "unfixed": unfixed}
+        out["species"][name] = {
+            "reference_files": [f.name for f in files],
+            "base": base,
+            "unfixed": unfixed,
+        }
     dst = Path(__file__).resolve().parent.parent / "weberpenn" / "species_data.json"
     dst.write_text(json.dumps(out, indent=1) + "\n")
     print(f"wrote {dst}")

@@ -13,6 +13,7 @@ never executed.
 from __future__ import annotations
 
 import ast
+import contextlib
 import json
 import math
 import os
@@ -81,9 +82,10 @@ def _fmt(x: float) -> str:
 
 
 A = 360.0  # angles: degrees in [-360, 360]
-F, I, B, S, E = "float", "int", "bool", "sign", "enum"
+F, I, B, S, E = "float", "int", "bool", "sign", "enum"  # noqa: E741
 
 # name, size, kind, lo, hi, head, default, meaning[, choices]
+# fmt: off
 _ROWS: list[tuple] = [
     ("attractOut", 4, F, 0.0, 1.0, "0_1", (0.0, 0.0, 0.0, 0.0), "per level: bend of the stem's azimuth towards the radial outward direction"),
     ("attractUp", 4, F, -50.0, 50.0, "-inf_inf", (0.0, 0.0, 0.0, 0.0), "per level: vertical attraction applied per segment (negative droops)"),
@@ -156,6 +158,7 @@ _ROWS: list[tuple] = [
     ("useOldDownAngle", 1, B, 0, 1, "0_1", False, "paper-like down-angle variation semantics"),
     ("useParentAngle", 1, B, 0, 1, "0_1", True, "first-level children follow the parent's declination"),
 ]
+# fmt: on
 
 PARAMS: tuple[ParamSpec, ...] = tuple(ParamSpec(*row) for row in _ROWS)
 SPECS: dict[str, ParamSpec] = {p.name: p for p in PARAMS}
@@ -196,7 +199,7 @@ SAPLING_IGNORED_KEYS: frozenset[str] = frozenset(
     """bevel showLeaves useArm armAnim leafAnim previewArm frameRate loopFrames wind gust gustF
     af1 af2 af3 af4 makeMesh armLevels boneStep do_update chooseSet presetName limitImport overwrite
     windSpeed windGust startCurv handleType splitByLen rMode closeTip autoTaper leafDupliObj bend
-    curveV splitAngleV""".split()
+    curveV splitAngleV""".split()  # noqa: SIM905
 )
 
 assert len(PARAMS) == 70, len(PARAMS)
@@ -418,10 +421,8 @@ def fill_from_sapling(values: Mapping[str, Any]) -> dict[str, Any]:
         idx = 3
     for leaf_key, stem_key in (("leafDownAngle", "downAngle"), ("leafRotate", "rotate")):
         if leaf_key not in src and stem_key in src:
-            try:
+            with contextlib.suppress(TypeError, IndexError, KeyError):
                 src[leaf_key] = src[stem_key][idx]
-            except (TypeError, IndexError, KeyError):
-                pass
     for spec in PARAMS:
         src.setdefault(spec.name, spec.default)
     if "seed" in src and isinstance(src["seed"], int) and not 0 <= src["seed"] < 2**63:

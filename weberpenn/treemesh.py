@@ -39,7 +39,9 @@ class TreeMesh:
         """Both meshes concatenated into one (for distances and simple exports)."""
         parts = [m for m in (self.branches, self.leaves) if len(m.faces)]
         if not parts:
-            return trimesh.Trimesh(vertices=np.zeros((0, 3)), faces=np.zeros((0, 3), dtype=np.int64))
+            return trimesh.Trimesh(
+                vertices=np.zeros((0, 3)), faces=np.zeros((0, 3), dtype=np.int64)
+            )
         return trimesh.util.concatenate(parts)
 
     def export(self, path: str | os.PathLike[str]) -> Path:
