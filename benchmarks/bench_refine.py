@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from pathlib import Path
 
@@ -26,28 +25,14 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from eval.hausdorff import tree_hausdorff  # noqa: E402
+from eval.hausdorff import rotate_about_trunk, tree_hausdorff  # noqa: E402
 from refine.objective import SearchSpace  # noqa: E402
 from refine.search import refine  # noqa: E402
 from render.dataset import read_manifest  # noqa: E402
 from treesketch.pipeline import DEFAULT_BUDGET, DEFAULT_TIME_LIMIT, SEARCH_SIZE  # noqa: E402
 from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
-from weberpenn.treemesh import TreeMesh  # noqa: E402
 
 VIEW_ORDER = ("front", "left", "back", "right")
-
-
-def rotated(mesh: TreeMesh, degrees: float) -> TreeMesh:
-    """The mesh turned about the Z (trunk) axis."""
-    import trimesh
-
-    m = trimesh.transformations.rotation_matrix(math.radians(degrees), [0, 0, 1])
-    b, lv = mesh.branches.copy(), mesh.leaves.copy()
-    if len(b.vertices):
-        b.apply_transform(m)
-    if len(lv.vertices):
-        lv.apply_transform(m)
-    return TreeMesh(branches=b, leaves=lv, species=mesh.species, meta=dict(mesh.meta))
 
 
 def pick_rows(data: Path, per_species: int) -> list[dict]:
@@ -108,7 +93,7 @@ def main(argv: list[str] | None = None) -> int:
         )
         view_yaw = float(row["yaw"])
         m0 = build_mesh(grow(start), species=guessed)
-        m1 = rotated(build_mesh(grow(r.params), species=guessed), view_yaw - r.yaw)
+        m1 = rotate_about_trunk(build_mesh(grow(r.params), species=guessed), view_yaw - r.yaw)
         h0 = tree_hausdorff(m0, gt_mesh, args.samples)["combined"]
         h1 = tree_hausdorff(m1, gt_mesh, args.samples)["combined"]
         rec = {

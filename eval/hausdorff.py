@@ -144,6 +144,24 @@ def tree_hausdorff(
     }
 
 
+def rotate_about_trunk(mesh: TreeMesh, degrees: float) -> TreeMesh:
+    """A copy of ``mesh`` turned by ``degrees`` about the Z (trunk) axis.
+
+    A tree found by refinement to match a sketch seen at yaw ``y_found`` estimates the
+    ground truth seen at the sketch's yaw ``y_view``; turned by ``y_view - y_found`` it is
+    in the ground truth's frame (camera yaw turns the camera, see ``render.camera``).
+    """
+    from weberpenn.treemesh import TreeMesh
+
+    m = trimesh.transformations.rotation_matrix(math.radians(float(degrees)), [0, 0, 1])
+    b, lv = mesh.branches.copy(), mesh.leaves.copy()
+    if len(b.vertices):
+        b.apply_transform(m)
+    if len(lv.vertices):
+        lv.apply_transform(m)
+    return TreeMesh(branches=b, leaves=lv, species=mesh.species, meta=dict(mesh.meta))
+
+
 def params_hausdorff(pred_params, gt_params, seed: int = 0, samples: int = DEFAULT_SAMPLES):
     """Grow both parameter dictionaries with the same ``seed`` and compare (dict per part)."""
     from weberpenn import build_mesh, grow

@@ -27,7 +27,7 @@ import numpy as np
 
 from weberpenn import TreeParams, build_mesh, grow
 
-from .hausdorff import DEFAULT_SAMPLES, hausdorff
+from .hausdorff import DEFAULT_SAMPLES, hausdorff, rotate_about_trunk
 
 Predictor = Callable[[np.ndarray], Mapping[str, Any]]
 Progress = Callable[[int, int], None]
@@ -150,9 +150,16 @@ def rotation_sweep(
 
             res = refine(img, pred, budget=int(refine_budget), seed=seed, size=refine_size)
             pred, refined, lb, la = res.params, True, res.loss_before, res.loss_after
-        key = _params_key(pred)
+            # the refined tree matches the sketch at the yaw it found: turn it into the
+            # ground truth's frame before measuring
+            turn = (float(yaw) - res.yaw) % 360.0
+        else:
+            turn = 0.0
+        key = f"{_params_key(pred)}@{turn:.6f}"
         if key not in cache:
             pm = build_mesh(grow(pred, seed=seed))
+            if turn:
+                pm = rotate_about_trunk(pm, turn)
             cache[key] = hausdorff(pm.combined(), gt_combined, samples)
         d = cache[key]
         result.rows.append(

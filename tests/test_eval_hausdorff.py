@@ -134,3 +134,21 @@ def test_tree_parts_use_whole_tree_diagonal():
     assert out["branches"].max == pytest.approx(0, abs=1e-6)
     assert out["leaves"].max == pytest.approx(0.1, abs=0.01)
     assert 0 < out["combined"].max <= out["leaves"].max + 1e-6
+
+
+def test_rotate_about_trunk_matches_camera_yaw():
+    """A tree turned by d, seen from yaw y + d, looks like the tree seen from yaw y."""
+    from eval.hausdorff import rotate_about_trunk
+    from refine.objective import sketch_distance
+    from render.sketch import SketchRenderer
+    from weberpenn import build_mesh, grow, species
+
+    m = build_mesh(grow(species.sample("maple", 5)), species="maple")
+    t = rotate_about_trunk(m, 60.0)
+    assert t.species == "maple" and len(t.leaves.faces) == len(m.leaves.faces)
+    assert np.allclose(t.bounds()[:, 2], m.bounds()[:, 2])
+    a = SketchRenderer(m).sketch(30.0, 128)
+    same = sketch_distance(a, SketchRenderer(t).sketch(90.0, 128))
+    other = sketch_distance(a, SketchRenderer(t).sketch(-30.0, 128))
+    assert same < 0.02 < other, (same, other)
+    assert hausdorff(rotate_about_trunk(t, -60.0).combined(), m.combined(), 2000).max < 1e-6

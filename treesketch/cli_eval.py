@@ -112,19 +112,35 @@ def all_(
     backbone: list[str] = typer.Option(
         [], "--compare", help="Another checkpoint for the 1-RMSE table, as NAME=PATH (repeatable)."
     ),
+    model: str = typer.Option(
+        "tsn",
+        "--model",
+        help="'tsn' (the checkpoint) or 'nns' (nearest-neighbour baseline, no network).",
+    ),
+    nns: bool = typer.Option(
+        True, "--nns/--no-nns", help="With --model tsn: add the nearest-neighbour baseline row."
+    ),
 ) -> None:
     """Write the full evaluation report (markdown + PNGs) to --out."""
+    from eval.baseline import nns_backend
     from eval.report import build_report, tsn_backend
 
     extras = []
+    if model not in ("tsn", "nns"):
+        _fail(f"--model must be 'tsn' or 'nns', got {model!r}")
     try:
-        main = tsn_backend(checkpoint)
+        if model == "tsn":
+            main = tsn_backend(checkpoint)
+            if nns:  # scored on TSN's own normaliser, so the rows compare
+                extras.append(nns_backend(data, reference=main.normalise_targets))
+        else:
+            main = nns_backend(data)
         for spec in backbone:
             name, sep, path = spec.partition("=")
             if not sep or not name or not path:
                 raise ValueError(f"--compare expects NAME=PATH, got {spec!r}")
             extras.append(tsn_backend(Path(path), name=name))
-    except (RuntimeError, FileNotFoundError, ValueError) as e:
+    except (RuntimeError, ValueError, OSError) as e:  # DatasetError is a ValueError
         _fail(str(e))
     if rotation_species == "all":
         rot = None

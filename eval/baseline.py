@@ -1,0 +1,144 @@
+"""Nearest-neighbour sketch search (NNS) baseline, as a :class:`eval.report.Backend`.
+
+Predicts the parameters of the indexed training sketch closest to the input (cosine
+similarity between 32x32 area-downsized, blurred ink images).  It needs no network, so it
+is the stand-in when no TSN checkpoint exists, and a row to compare TSN against.
+
+1-RMSE needs normalised target matrices.  With ``reference`` (another backend's
+``normalise_targets``, e.g. TSN's, whose normaliser was fitted on the training split and
+saved with its checkpoint) NNS is scored on exactly the same scale as that model.  Without
+it, :func:`encode` builds the (4, 62) layout from the parameter table (scalars repeated in
+the four rows, booleans and signs as 0/1, enums as their number) and a per-key max-abs
+scale is fitted on the indexed training trees.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from weberpenn import TreeParams
+from weberpenn.params import PREDICTED_KEYS, SPECS
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .report import Backend
+
+__all__ = ["FEATURE", "NNS_NAME", "encode", "features", "nns_backend"]
+
+FEATURE = 32
+NNS_NAME = "NNS baseline"
+
+Normaliser = Callable[[Sequence[Mapping]], np.ndarray]
+
+
+def encode(params: Mapping) -> np.ndarray:
+    """(4, 62) un-normalised target matrix in ``PREDICTED_KEYS`` order."""
+    out = np.zeros((4, len(PREDICTED_KEYS)))
+    for j, k in enumerate(PREDICTED_KEYS):
+        spec, v = SPECS[k], params[k]
+        vals = list(v) if spec.size == 4 else [v] * 4
+        for i, x in enumerate(vals):
+            if spec.kind == "bool":
+                out[i, j] = float(bool(x))
+            elif spec.kind == "sign":
+                out[i, j] = 1.0 if float(x) > 0 else 0.0
+            elif spec.kind == "enum":
+                sx = str(x)
+                out[i, j] = float(sx) if sx.lstrip("-").isdigit() else float(spec.choices.index(sx))
+            else:
+                out[i, j] = float(x)
+    return out
+
+
+def features(img: np.ndarray) -> np.ndarray:
+    """Unit-length (FEATURE*FEATURE,) ink descriptor of a uint8 sketch (255 = white)."""
+    from scipy.ndimage import gaussian_filter
+
+    a = np.asarray(img)
+    if a.ndim != 2 or min(a.shape) < 1:
+        raise ValueError(f"a sketch must be a 2-D greyscale image, got shape {a.shape}")
+    a = 1.0 - a.astype(np.float32) / (255.0 if a.dtype == np.uint8 else 1.0)
+    n = a.shape[0]
+    if a.shape[1] == n and n % FEATURE == 0:
+        k = n // FEATURE
+        a = a.reshape(FEATURE, k, FEATURE, k).mean(axis=(1, 3))
+    else:
+        from PIL import Image
+
+        a = np.asarray(
+            Image.fromarray(np.ascontiguousarray(a), mode="F").resize(
+                (FEATURE, FEATURE), Image.Resampling.BOX
+            ),
+            dtype=np.float32,
+        )
+    a = gaussian_filter(a, 1.0)
+    return (a / (np.linalg.norm(a) + 1e-6)).ravel()
+
+
+def nns_backend(
+    data: str | Path,
+    split: str = "train",
+    max_rows: int | None = 2000,
+    bar: bool = True,
+    reference: Normaliser | None = None,
+) -> Backend:
+    """Fit the NNS baseline on (up to ``max_rows`` evenly spaced rows of) ``split`` of the
+    dataset at ``data``; ``reference`` as in the module text."""
+    from render.dataset import read_manifest
+
+    from .report import Backend, _load_sketch, _progress
+
+    data = Path(data)
+    rows = read_manifest(data, split=split)
+    if not rows:
+        raise ValueError(f"{data}: the {split!r} split is empty")
+    if max_rows is not None and len(rows) > max_rows:
+        rows = [rows[i] for i in np.linspace(0, len(rows) - 1, max_rows).round().astype(int)]
+    params: dict[str, TreeParams] = {}
+    feats, owners = [], []
+    for r in _progress(rows, "NNS index", len(rows), bar):
+        if r["params"] not in params:
+            params[r["params"]] = TreeParams(
+                json.loads((data / r["params"]).read_text(encoding="utf-8"))
+            )
+        feats.append(features(_load_sketch(data / r["sketch"])))
+        owners.append(r["params"])
+    index = np.stack(feats)
+
+    if reference is None:
+        mats = {k: encode(p) for k, p in params.items()}
+        scale = np.abs(np.stack(list(mats.values()))).max(axis=(0, 1))
+        scale = np.where(scale > 0, scale, 1.0)
+
+        def normalise_targets(ps: Sequence[Mapping]) -> np.ndarray:
+            return np.stack([encode(p) / scale for p in ps])
+
+        norm_info = "own max-abs scale over the indexed trees"
+    else:
+        normalise_targets = reference
+        norm_info = "the reference model's normaliser"
+
+    def nearest(img: np.ndarray) -> str:
+        return owners[int(np.argmax(index @ features(img)))]
+
+    def predict(img: np.ndarray) -> TreeParams:
+        return params[nearest(img)]
+
+    def predict_normalised(imgs: np.ndarray) -> np.ndarray:
+        return np.asarray(normalise_targets([params[nearest(i)] for i in imgs]))
+
+    return Backend(
+        name=NNS_NAME,
+        predict=predict,
+        predict_normalised=predict_normalised,
+        normalise_targets=normalise_targets,
+        info={
+            "kind": "baseline",
+            "index": f"{len(rows)} {split} sketches of {len(params)} trees",
+            "normalisation": norm_info,
+        },
+    )
