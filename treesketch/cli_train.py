@@ -1,10 +1,71 @@
-"""`treesketch train` commands (being written; see the issue tracker)."""
+"""`treesketch train`: train the TSN regressor on a dataset (see ``tsn.train``)."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import typer
 
 
+def _fail(msg: str) -> None:
+    typer.echo(f"error: {msg}", err=True)
+    raise typer.Exit(2)
+
+
+def train_cmd(
+    data: Path = typer.Option(..., "--data", help="Dataset folder (treesketch dataset build)."),
+    out: Path = typer.Option(..., "--out", help="Checkpoint to write, e.g. checkpoints/NAME.pt."),
+    backbone: str = typer.Option("lite0", "--backbone", help="lite0 (pretrained) or resnet_small."),
+    size: int = typer.Option(128, "--size", help="Input size in pixels (multiple of 32)."),
+    epochs: int = typer.Option(30, "--epochs", help="Training epochs."),
+    batch: int = typer.Option(64, "--batch", help="Batch size."),
+    lr: float = typer.Option(1e-3, "--lr", help="Adam learning rate (cosine decay to lr/100)."),
+    copies: int = typer.Option(3, "--copies", help="Augmented copies cached per sketch."),
+    cut: int | None = typer.Option(
+        None, "--cut", help="Frozen (cached) backbone stages; default per backbone."
+    ),
+    seed: int = typer.Option(0, "--seed", help="Seed of augmentation, shuffling and init."),
+    work: Path | None = typer.Option(
+        None,
+        "--work",
+        help="Folder for feature cache, state, log.csv, loss.png (default OUT.work).",
+    ),
+    threads: int | None = typer.Option(None, "--threads", help="torch CPU threads."),
+    max_sketches: int | None = typer.Option(
+        None, "--max-sketches", help="Use only the first N sketches of each split (quick runs)."
+    ),
+    resume: bool = typer.Option(False, "--resume", help="Continue an interrupted run."),
+) -> None:
+    """Train TSN: cached frozen early layers, fine-tuned last layers and six heads."""
+    from tsn.train import TrainConfig, TrainError, train
+
+    cfg = TrainConfig(
+        data=str(data),
+        out=str(out),
+        backbone=backbone,
+        size=size,
+        epochs=epochs,
+        batch=batch,
+        lr=lr,
+        copies=copies,
+        cut=cut,
+        seed=seed,
+        work=str(work) if work else None,
+        threads=threads,
+        max_sketches=max_sketches,
+        resume=resume,
+    )
+    try:
+        res = train(cfg, log=lambda s: typer.echo(s))
+    except (TrainError, ValueError, OSError) as e:
+        _fail(str(e))
+        return
+    typer.echo(
+        f"best val 1-RMSE {res['best_val_overall']:.4f} at epoch {res['best_epoch']}; "
+        f"checkpoint {res['out']}; log {res['work']}/log.csv ({res['seconds']:.0f} s)"
+    )
+
+
 def register(app: typer.Typer) -> None:
     """Add this module's commands to the main app."""
-    del app
+    app.command("train")(train_cmd)

@@ -1,0 +1,117 @@
+"""TSN checkpoint files: weights (fp16), normaliser, species identifier, training record.
+
+A checkpoint is one ``torch.save`` file holding plain data only (tensors, lists, dicts,
+strings, numbers), written to a temporary name and renamed::
+
+    format        "treesketch-tsn/1"
+    backbone      registry name (``tsn.model.BACKBONES``)
+    size          input size in pixels (square)
+    cut           stages frozen during training (informative)
+    state_dict    model weights, floating tensors stored as fp16
+    normaliser    ``tsn.encoding.Normaliser.to_dict()``
+    species_id    ``tsn.species_id.SpeciesIdentifier.to_dict()``
+    train         how it was trained (config, epochs, wall time, validation scores)
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from .encoding import Normaliser
+from .model import TSN
+from .species_id import SpeciesIdentifier
+
+FORMAT = "treesketch-tsn/1"
+
+
+class CheckpointError(ValueError):
+    """A missing, unreadable or foreign checkpoint file."""
+
+
+@dataclass
+class Loaded:
+    model: TSN
+    normaliser: Normaliser
+    species_id: SpeciesIdentifier
+    size: int
+    info: dict[str, Any]
+    path: Path | None = None
+
+
+def atomic_torch_save(obj: Any, path: str | os.PathLike[str]) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        torch.save(obj, tmp)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def half_state(model: torch.nn.Module) -> dict[str, torch.Tensor]:
+    return {
+        k: (v.detach().to("cpu", torch.float16) if v.is_floating_point() else v.detach().cpu())
+        for k, v in model.state_dict().items()
+    }
+
+
+def save_checkpoint(
+    path: str | os.PathLike[str],
+    model: TSN,
+    size: int,
+    cut: int,
+    normaliser: Normaliser,
+    species_id: SpeciesIdentifier,
+    info: dict[str, Any],
+) -> Path:
+    return atomic_torch_save(
+        {
+            "format": FORMAT,
+            "backbone": model.backbone_name,
+            "size": int(size),
+            "cut": int(cut),
+            "state_dict": half_state(model),
+            "normaliser": normaliser.to_dict(),
+            "species_id": species_id.to_dict(),
+            "train": info,
+        },
+        path,
+    )
+
+
+def load_checkpoint(path: str | os.PathLike[str], device: str = "cpu") -> Loaded:
+    path = Path(path)
+    if not path.is_file():
+        raise CheckpointError(f"{path}: no such checkpoint file")
+    try:
+        ck = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as e:  # noqa: BLE001 - torch raises many kinds for a bad file
+        raise CheckpointError(f"{path}: not a TSN checkpoint ({type(e).__name__}: {e})") from None
+    if not isinstance(ck, dict) or ck.get("format") != FORMAT:
+        raise CheckpointError(f"{path}: not a TSN checkpoint (format {FORMAT!r} expected)")
+    try:
+        model = TSN(ck["backbone"], pretrained=False)
+        sd = {k: v.float() if v.is_floating_point() else v for k, v in ck["state_dict"].items()}
+        model.load_state_dict(sd)
+    except (KeyError, RuntimeError, ValueError) as e:
+        raise CheckpointError(f"{path}: weights do not fit the network: {e}") from None
+    model.eval().to(device)
+    return Loaded(
+        model,
+        Normaliser.from_dict(ck["normaliser"]),
+        SpeciesIdentifier.from_dict(ck["species_id"]),
+        int(ck["size"]),
+        dict(ck.get("train", {})),
+        path,
+    )

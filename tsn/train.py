@@ -1,0 +1,438 @@
+"""Training TSN on a dataset made by ``render.dataset`` (fast on a few CPU cores).
+
+Recipe (``train(TrainConfig(...))`` or ``treesketch train``):
+
+1. Read the ``train`` and ``val`` splits; encode every tree's dictionary (``tsn.encoding``);
+   fit the max-abs :class:`~tsn.encoding.Normaliser` and the species identifier
+   (Algorithm 1) on the training trees only.
+2. Freeze the first ``cut`` stages of the backbone and run them ONCE over every training
+   sketch and ``copies`` augmented copies of it (``tsn.data.augment``: affine jitter, stroke
+   thickness, line breaks, missing crown parts) and over the clean validation sketches;
+   the feature maps are kept as fp16 (and on disk in the work folder, so a resumed run
+   does not recompute them).  ``cut=0`` trains the whole network on cached input images.
+3. Train the remaining stages and the six heads with Adam (cosine learning-rate decay),
+   loss = sum over heads of the MSE on normalised targets; each epoch visits every
+   training sketch once, in one of its cached versions chosen at random.
+4. After every epoch: validation loss and 1-RMSE per head on the ``val`` split (held-out
+   trees), a row in ``log.csv``, ``loss.png``, the full training state (``state.pt``, for
+   ``--resume``) and, when the validation 1-RMSE improved, the checkpoint at ``out``.
+   Every file is written to a temporary name and renamed.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+import math
+import os
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from weberpenn.params import HEADS, TreeParams
+
+from . import data as tdata
+from . import encoding
+from .checkpoint import atomic_torch_save, save_checkpoint
+from .model import BACKBONES, TSN, ModelError
+from .species_id import SpeciesIdentifier
+
+
+class TrainError(ValueError):
+    """Bad training settings or an unusable dataset."""
+
+
+@dataclass
+class TrainConfig:
+    data: str
+    out: str
+    backbone: str = "lite0"
+    size: int = 128
+    epochs: int = 30
+    batch: int = 64
+    lr: float = 1e-3
+    copies: int = 3  # augmented copies per training sketch (plus the clean one)
+    cut: int | None = None  # frozen stages; None = the backbone's default
+    seed: int = 0
+    work: str | None = None  # cache, state, log; default: OUT with suffix .work
+    threads: int | None = None
+    max_sketches: int | None = None  # per split, for quick tests
+    resume: bool = False
+    pretrained: bool = True
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def check(self) -> None:
+        if self.backbone not in BACKBONES:
+            raise TrainError(
+                f"unknown backbone {self.backbone!r}; choose one of {', '.join(BACKBONES)}"
+            )
+        for name, lo, hi in (("size", 32, 1024), ("epochs", 1, 100_000), ("batch", 1, 4096)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+                raise TrainError(f"--{name} must be an integer in [{lo}, {hi}], got {v!r}")
+        if not 0 <= self.copies <= 64:
+            raise TrainError(f"--copies must be in [0, 64], got {self.copies}")
+        if not (self.lr > 0 and math.isfinite(self.lr)):
+            raise TrainError(f"--lr must be a positive number, got {self.lr}")
+        if self.size % 32:
+            raise TrainError(f"--size must be a multiple of 32, got {self.size}")
+
+    @property
+    def work_dir(self) -> Path:
+        return Path(self.work) if self.work else Path(self.out).with_suffix(".work")
+
+
+# ----------------------------------------------------------------------------- data
+@dataclass
+class Split:
+    images: list[np.ndarray]  # uint8 sketches
+    mats: np.ndarray  # (N, 4, 62) un-normalised targets
+    species: list[str]
+    tree_ids: list[str]
+
+
+def load_split(data: Path, split: str, limit: int | None = None) -> Split:
+    from render.dataset import DatasetError, read_manifest
+
+    try:
+        rows = read_manifest(data, split=split)
+    except DatasetError as e:
+        raise TrainError(str(e)) from None
+    if limit is not None:
+        rows = rows[:limit]
+    if not rows:
+        raise TrainError(f"{data}: the {split!r} split is empty")
+    images, mats, cache = [], [], {}
+    for r in rows:
+        images.append(tdata.to_grey(data / r["sketch"]))
+        if r["params"] not in cache:
+            p = TreeParams(json.loads((data / r["params"]).read_text(encoding="utf-8")))
+            cache[r["params"]] = encoding.encode(p)
+        mats.append(cache[r["params"]])
+    return Split(images, np.stack(mats), [r["species"] for r in rows], [r["tree_id"] for r in rows])
+
+
+def fit_species_id(split: Split, normaliser: encoding.Normaliser) -> SpeciesIdentifier:
+    by: dict[str, list[np.ndarray]] = {}
+    for m, s in zip(split.mats, split.species, strict=True):
+        by.setdefault(s, []).append(m)
+    return SpeciesIdentifier.fit({s: np.stack(v) for s, v in by.items()}, normaliser.scale)
+
+
+# ----------------------------------------------------------------------------- cache
+def _cache_key(cfg: TrainConfig, cut: int, split: Split, tag: str) -> str:
+    h = hashlib.sha1()
+    h.update(
+        json.dumps(
+            [tag, cfg.backbone, cfg.size, cut, cfg.copies, cfg.seed, cfg.pretrained],
+            sort_keys=True,
+        ).encode()
+    )
+    h.update(str(Path(cfg.data).resolve()).encode())
+    h.update("|".join(split.tree_ids).encode())
+    return h.hexdigest()[:16]
+
+
+@torch.no_grad()
+def compute_features(
+    model: TSN, imgs: list[np.ndarray], cut: int, size: int, device: str, batch: int = 64
+) -> torch.Tensor:
+    """Output of the first ``cut`` stages (fp16, CPU); ``cut=0``: the prepared grey input."""
+    out = []
+    model.eval()
+    for s in range(0, len(imgs), batch):
+        x = torch.from_numpy(np.stack([tdata.preprocess(i, size) for i in imgs[s : s + batch]]))
+        x = x[:, None]
+        f = x if cut == 0 else model.features(x.to(device), cut).cpu()
+        out.append(f.to(torch.float16))
+    return torch.cat(out)
+
+
+def build_cache(
+    model: TSN,
+    split: Split,
+    cut: int,
+    cfg: TrainConfig,
+    device: str,
+    copies: int,
+    tag: str,
+    log: Callable[[str], None],
+) -> torch.Tensor:
+    """``(copies + 1, N, ...)`` fp16: version 0 clean, 1.. augmented (seeded per image)."""
+    path = cfg.work_dir / f"cache_{tag}_{_cache_key(cfg, cut, split, tag)}.pt"
+    if path.is_file():
+        try:
+            t = torch.load(path, map_location="cpu", weights_only=True)
+            if t.shape[:2] == (copies + 1, len(split.images)):
+                log(f"[train] {tag} features from {path}")
+                return t
+        except Exception:  # noqa: BLE001 - a damaged cache is recomputed
+            pass
+    versions = []
+    t0 = time.perf_counter()
+    for v in range(copies + 1):
+        if v == 0:
+            imgs = split.images
+        else:
+            imgs = [
+                tdata.augment(im, np.random.default_rng([cfg.seed, v, i]))
+                for i, im in enumerate(split.images)
+            ]
+        versions.append(compute_features(model, imgs, cut, cfg.size, device))
+        log(
+            f"[train] {tag} version {v + 1}/{copies + 1} cached "
+            f"({len(imgs)} sketches, {time.perf_counter() - t0:.0f} s)"
+        )
+    t = torch.stack(versions)
+    atomic_torch_save(t, path)
+    return t
+
+
+# ----------------------------------------------------------------------------- training
+def head_targets(mats_norm: np.ndarray) -> dict[str, torch.Tensor]:
+    return {
+        h: torch.from_numpy(np.ascontiguousarray(v)).float()
+        for h, v in encoding.split_heads(mats_norm).items()
+    }
+
+
+def loss_fn(out: dict[str, torch.Tensor], tgt: dict[str, torch.Tensor]) -> torch.Tensor:
+    """Sum over the six heads of the mean squared error."""
+    return sum(torch.mean((out[h] - tgt[h]) ** 2) for h in HEADS)  # type: ignore[return-value]
+
+
+def one_minus_rmse(pred: np.ndarray, target: np.ndarray) -> dict[str, float]:
+    """Paper metric on normalised ``(N, 4, 62)`` matrices: per head and overall."""
+    sq = (np.asarray(pred) - np.asarray(target)) ** 2
+    heads = {h: float(1 - np.sqrt(sq[..., encoding.HEAD_COLUMNS[h]].mean())) for h in HEADS}
+    return {**heads, "overall": float(np.mean(list(heads.values())))}
+
+
+def _forward(model: TSN, f: torch.Tensor, cut: int) -> dict[str, torch.Tensor]:
+    f = f.float()
+    if cut == 0:
+        f = model.prepare(f)
+    return model.forward_from(f, cut)
+
+
+@torch.no_grad()
+def predict_cached(
+    model: TSN, feats: torch.Tensor, cut: int, device: str, batch: int = 128
+) -> np.ndarray:
+    model.eval()
+    outs = []
+    for s in range(0, len(feats), batch):
+        o = _forward(model, feats[s : s + batch].to(device), cut)
+        outs.append(encoding.join_heads({h: v.cpu().numpy() for h, v in o.items()}))
+    return np.concatenate(outs)
+
+
+def set_trainable(model: TSN, cut: int) -> list[torch.nn.Parameter]:
+    frozen = {id(p) for m in model.frozen_modules(cut) for p in m.parameters()}
+    params = []
+    for p in model.parameters():
+        p.requires_grad_(id(p) not in frozen)
+        if p.requires_grad:
+            params.append(p)
+    return params
+
+
+def train_mode(model: TSN, cut: int) -> None:
+    model.train()
+    for m in model.frozen_modules(cut):
+        m.eval()
+
+
+def _plot(rows: list[dict[str, Any]], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ep = [r["epoch"] for r in rows]
+    fig, ax = plt.subplots(1, 2, figsize=(10, 4))
+    ax[0].plot(ep, [r["train_loss"] for r in rows], label="train")
+    ax[0].plot(ep, [r["val_loss"] for r in rows], label="val")
+    ax[0].set_xlabel("epoch")
+    ax[0].set_ylabel("loss (sum of head MSE)")
+    ax[0].set_yscale("log")
+    ax[0].legend()
+    for h in [*HEADS, "overall"]:
+        ax[1].plot(ep, [r[f"val_{h}"] for r in rows], label=h, lw=2 if h == "overall" else 1)
+    ax[1].set_xlabel("epoch")
+    ax[1].set_ylabel("val 1-RMSE")
+    ax[1].legend(fontsize=7)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    plt.close(fig)
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_bytes(buf.getvalue())
+    os.replace(tmp, path)
+
+
+def _write_csv(rows: list[dict[str, Any]], path: Path) -> None:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(rows[0]))
+    w.writeheader()
+    w.writerows(rows)
+    from weberpenn.params import atomic_write_text
+
+    atomic_write_text(path, buf.getvalue())
+
+
+def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any]:
+    """Train (or resume) and return a summary; the best checkpoint is at ``cfg.out``."""
+    cfg.check()
+    t_start = time.perf_counter()
+    if cfg.threads:
+        torch.set_num_threads(int(cfg.threads))
+    device = "cuda" if torch.cuda.is_available() else "cpu"
+    torch.manual_seed(cfg.seed)
+    data = Path(cfg.data)
+    if not data.is_dir():
+        raise TrainError(f"--data {data}: no such dataset folder")
+    work = cfg.work_dir
+    work.mkdir(parents=True, exist_ok=True)
+    state_path = work / "state.pt"
+    if state_path.exists() and not cfg.resume:
+        raise TrainError(
+            f"{state_path} exists: pass --resume to continue that run, or remove {work}"
+        )
+
+    trn = load_split(data, "train", cfg.max_sketches)
+    val = load_split(data, "val", cfg.max_sketches)
+    normaliser = encoding.Normaliser.fit(trn.mats)
+    species_id = fit_species_id(trn, normaliser)
+    y_trn = head_targets(normaliser.normalise(trn.mats))
+    y_val_norm = normaliser.normalise(val.mats)
+    y_val = head_targets(y_val_norm)
+    log(f"[train] {len(trn.images)} train / {len(val.images)} val sketches, device {device}")
+
+    try:
+        model = TSN(cfg.backbone, pretrained=cfg.pretrained).to(device)
+    except ModelError as e:
+        raise TrainError(str(e)) from None
+    cut = BACKBONES[cfg.backbone][1] if cfg.cut is None else int(cfg.cut)
+    if not 0 <= cut < model.n_stages:
+        raise TrainError(f"--cut must be in [0, {model.n_stages - 1}], got {cut}")
+    f_trn = build_cache(model, trn, cut, cfg, device, cfg.copies, "train", log)
+    f_val = build_cache(model, val, cut, cfg, device, 0, "val", log)[0]
+    params = set_trainable(model, cut)
+    opt = torch.optim.Adam(params, lr=cfg.lr)
+    sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, T_max=cfg.epochs, eta_min=cfg.lr / 100)
+
+    rows: list[dict[str, Any]] = []
+    best, best_epoch, start_epoch, elapsed_before = -math.inf, 0, 1, 0.0
+    if cfg.resume and state_path.is_file():
+        st = torch.load(state_path, map_location="cpu", weights_only=False)
+        model.load_state_dict(st["model"])
+        opt.load_state_dict(st["opt"])
+        sched.load_state_dict(st["sched"])
+        rows, best, best_epoch = st["rows"], st["best"], st["best_epoch"]
+        start_epoch, elapsed_before = st["epoch"] + 1, st["elapsed"]
+        torch.set_rng_state(st["rng"])
+        log(f"[train] resumed after epoch {st['epoch']} (best val 1-RMSE {best:.4f})")
+    t_run = time.perf_counter()
+
+    n = len(trn.images)
+    gen = torch.Generator().manual_seed(cfg.seed)
+    for _ in range(start_epoch - 1):  # same permutations as an uninterrupted run
+        torch.randperm(n, generator=gen)
+        torch.randint(0, cfg.copies + 1, (n,), generator=gen)
+    for epoch in range(start_epoch, cfg.epochs + 1):
+        t0 = time.perf_counter()
+        train_mode(model, cut)
+        perm = torch.randperm(n, generator=gen)
+        ver = torch.randint(0, cfg.copies + 1, (n,), generator=gen)
+        total, seen = 0.0, 0
+        for s in range(0, n, cfg.batch):
+            idx = perm[s : s + cfg.batch]
+            if len(idx) < 2:  # batch norm needs two samples
+                continue
+            x = f_trn[ver[idx], idx].to(device)
+            tgt = {h: y[idx].to(device) for h, y in y_trn.items()}
+            loss = loss_fn(_forward(model, x, cut), tgt)
+            opt.zero_grad(set_to_none=True)
+            loss.backward()
+            opt.step()
+            total += loss.item() * len(idx)
+            seen += len(idx)
+        sched.step()
+        pred = predict_cached(model, f_val, cut, device)
+        with torch.no_grad():
+            val_loss = float(
+                loss_fn(
+                    {h: torch.from_numpy(v).float() for h, v in encoding.split_heads(pred).items()},
+                    y_val,
+                )
+            )
+        scores = one_minus_rmse(pred, y_val_norm)
+        sp = species_id.identify_many(normaliser.denormalise(pred))
+        sp_acc = float(np.mean([a == b for a, b in zip(sp, val.species, strict=True)]))
+        row = {
+            "epoch": epoch,
+            "train_loss": total / max(seen, 1),
+            "val_loss": val_loss,
+            **{f"val_{k}": v for k, v in scores.items()},
+            "val_species_acc": sp_acc,
+            "lr": opt.param_groups[0]["lr"],
+            "seconds": time.perf_counter() - t0,
+        }
+        rows.append(row)
+        elapsed = elapsed_before + time.perf_counter() - t_run
+        improved = scores["overall"] > best
+        if improved:
+            best, best_epoch = scores["overall"], epoch
+            info = {
+                "config": {k: v for k, v in asdict(cfg).items() if k != "resume"},
+                "cut": cut,
+                "epoch": epoch,
+                "epochs": cfg.epochs,
+                "val": scores,
+                "val_species_acc": sp_acc,
+                "n_train": n,
+                "n_val": len(val.images),
+                "train_seconds": elapsed,
+                "device": device,
+                "torch": torch.__version__,
+                "threads": torch.get_num_threads(),
+            }
+            save_checkpoint(cfg.out, model, cfg.size, cut, normaliser, species_id, info)
+        atomic_torch_save(
+            {
+                "model": model.state_dict(),
+                "opt": opt.state_dict(),
+                "sched": sched.state_dict(),
+                "rows": rows,
+                "best": best,
+                "best_epoch": best_epoch,
+                "epoch": epoch,
+                "elapsed": elapsed,
+                "rng": torch.get_rng_state(),
+            },
+            state_path,
+        )
+        _write_csv(rows, work / "log.csv")
+        _plot(rows, work / "loss.png")
+        log(
+            f"[train] epoch {epoch}/{cfg.epochs} train {row['train_loss']:.4f} val {val_loss:.4f} "
+            f"val 1-RMSE {scores['overall']:.4f} species {sp_acc:.3f} "
+            f"({row['seconds']:.0f} s){' *' if improved else ''}"
+        )
+    return {
+        "best_val_overall": best,
+        "best_epoch": best_epoch,
+        "epochs": len(rows),
+        "rows": rows,
+        "out": cfg.out,
+        "work": str(work),
+        "seconds": time.perf_counter() - t_start,
+    }
