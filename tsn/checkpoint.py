@@ -95,7 +95,9 @@ def load_checkpoint(path: str | os.PathLike[str], device: str = "cpu") -> Loaded
     if not path.is_file():
         raise CheckpointError(f"{path}: no such checkpoint file")
     try:
-        ck = torch.load(path, map_location="cpu", weights_only=True)
+        # early checkpoints recorded torch.__version__ (a TorchVersion, a str subclass)
+        with torch.serialization.safe_globals([torch.torch_version.TorchVersion]):
+            ck = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as e:  # noqa: BLE001 - torch raises many kinds for a bad file
         raise CheckpointError(f"{path}: not a TSN checkpoint ({type(e).__name__}: {e})") from None
     if not isinstance(ck, dict) or ck.get("format") != FORMAT:

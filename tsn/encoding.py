@@ -234,16 +234,50 @@ def decode_dict(mat: np.ndarray, normaliser: Normaliser | None = None) -> dict[s
     return {k: out[k] for k in (p.name for p in PARAMS)}
 
 
+def _shrink(d: dict[str, Any], message: str) -> bool:
+    """Make an over-large decoded tree smaller (the key named by the error); False = stuck."""
+    if "'branches'" in message:
+        b = list(d["branches"])
+        if max(b[1:]) <= 1 and d["baseSplits"] == 0:
+            return False
+        d["branches"] = (b[0], *(max(int(v * 0.8), 1) if v > 1 else v for v in b[1:]))
+        d["baseSplits"] = int(d["baseSplits"] * 0.8)
+        return True
+    if "'leaves'" in message:
+        if abs(d["leaves"]) <= 1:
+            return False
+        d["leaves"] = int(d["leaves"] * 0.8)
+        return True
+    if "'curveRes'" in message:
+        if d["resU"] > 1:
+            d["resU"] -= 1
+            return True
+        if d["bevelRes"] > 0:
+            d["bevelRes"] -= 1
+            return True
+        c = list(d["curveRes"])
+        if max(c) <= 1:
+            return False
+        d["curveRes"] = tuple(max(v - 1, 1) for v in c)
+        return True
+    return False
+
+
 def decode(mat: np.ndarray, normaliser: Normaliser | None = None) -> TreeParams:
     """Un-normalised ``(4, 62)`` matrix -> validated :class:`TreeParams`.
 
     The trunk length must stay positive (``scale + scaleV > 0``); when the prediction
-    breaks it, ``scaleV`` is raised to keep a tenth of ``scale``.
+    breaks it, ``scaleV`` is raised to keep a tenth of ``scale``.  A prediction whose tree
+    would exceed the table's size limits (stems, leaves, mesh vertices) is shrunk step by
+    step (branch counts, leaves, resolutions times 0.8 or minus one) until it fits.
     """
     d = decode_dict(mat, normaliser)
     if d["scale"] + d["scaleV"] <= 0:
         d["scaleV"] = -0.9 * d["scale"]
-    try:
-        return TreeParams(d)
-    except ParamError as e:
-        raise ParamError(f"decoded prediction is not a valid tree: {e}") from None
+    for _ in range(200):
+        try:
+            return TreeParams(d)
+        except ParamError as e:
+            if not _shrink(d, str(e)):
+                raise ParamError(f"decoded prediction is not a valid tree: {e}") from None
+    raise ParamError("decoded prediction is not a valid tree: could not shrink it to the limits")

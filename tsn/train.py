@@ -402,7 +402,7 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
                 "n_val": len(val.images),
                 "train_seconds": elapsed,
                 "device": device,
-                "torch": torch.__version__,
+                "torch": str(torch.__version__),
                 "threads": torch.get_num_threads(),
             }
             save_checkpoint(cfg.out, model, cfg.size, cut, normaliser, species_id, info)

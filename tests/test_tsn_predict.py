@@ -1,0 +1,108 @@
+"""tsn.predict: a checkpoint predicts a valid TreeParams from a rendered sketch; bad input."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+from tsn_helpers import make_checkpoint
+
+from tsn import predict as tp
+from tsn.checkpoint import CheckpointError
+from tsn.data import SketchInputError, augment, preprocess
+from weberpenn import TreeParams, build_mesh, grow, species
+
+
+@pytest.fixture(scope="module")
+def model(tmp_path_factory: pytest.TempPathFactory) -> tp.TSNModel:
+    path = make_checkpoint(tmp_path_factory.mktemp("ck") / "tiny.pt", size=64)
+    return tp.load_model(path, device="cpu")
+
+
+@pytest.fixture(scope="module")
+def sketch() -> np.ndarray:
+    from render.sketch import SketchRenderer
+
+    mesh = build_mesh(grow(species.sample("palm", 4)), species="palm")
+    return SketchRenderer(mesh).sketch(0.0, 128)
+
+
+def test_predict_rendered_sketch(model: tp.TSNModel, sketch: np.ndarray) -> None:
+    pred = tp.predict(model, sketch)
+    assert isinstance(pred.params, TreeParams) and isinstance(pred.decoded, TreeParams)
+    assert pred.species in species.SPECIES
+    assert {h: v.shape for h, v in pred.raw.items()}["angle"] == (4, 16)
+    assert pred.matrix.shape == (4, 62)
+    # projected onto the species: its fixed values
+    assert pred.params["levels"] == species.base(pred.species)["levels"]
+    # same answer for the same drawing given as RGB, RGBA (on white), PIL, path, bytes
+    rgba = np.zeros((*sketch.shape, 4), np.uint8)
+    rgba[..., 3] = 255 - sketch  # ink opaque, page transparent
+    im = Image.fromarray(sketch)
+    buf = io.BytesIO()
+    im.save(buf, format="PNG")
+    for other in (np.stack([sketch] * 3, -1), rgba, im, buf.getvalue()):
+        np.testing.assert_allclose(model.predict(other).matrix, pred.matrix, rtol=1e-4, atol=1e-3)
+    big = np.asarray(im.resize((300, 300)))  # any size
+    assert isinstance(model.predict(big).params, TreeParams)
+    assert len(model.predict_batch([sketch, big])) == 2
+
+
+def test_preprocess_crops_and_pads(sketch: np.ndarray) -> None:
+    x = tp.preprocess(sketch, 64)
+    assert x.shape == (64, 64) and x.dtype == np.float32 and 0 <= x.min() < 0.5 <= x.max() <= 1
+    shifted = np.full((200, 300), 255, np.uint8)
+    shifted[50:178, 100:228] = sketch
+    np.testing.assert_allclose(tp.preprocess(shifted, 64), x, atol=1e-6)
+    aug = augment(sketch, np.random.default_rng(0))
+    assert aug.shape == sketch.shape and aug.dtype == np.uint8 and (aug < 200).any()
+    assert preprocess(aug, 32).shape == (32, 32)
+
+
+def test_predictor_callable(model: tp.TSNModel, sketch: np.ndarray) -> None:
+    pr = tp.Predictor(model.loaded.path)
+    assert isinstance(pr(sketch), TreeParams)
+
+
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        (np.full((64, 64), 255, np.uint8), "empty image"),
+        (np.zeros((64, 64), np.uint8), "all black"),
+        (np.full((64, 64, 4), 0, np.uint8), "empty image"),  # fully transparent = white page
+        ("no/such/file.png", "no such image"),
+        (b"not a png", "not an image"),
+        (np.zeros(5), "not an image"),
+        (np.zeros((4, 4)), "too small"),
+        (np.full((32, 32), np.nan), "NaN"),
+        (None, "not an image"),
+        ({"a": 1}, "not an image"),
+    ],
+)
+def test_bad_inputs(model: tp.TSNModel, bad: object, match: str) -> None:
+    with pytest.raises(SketchInputError, match=match):
+        model.predict(bad)
+
+
+def test_text_file_is_not_an_image(model: tp.TSNModel, tmp_path: Path) -> None:
+    f = tmp_path / "notes.png"
+    f.write_text("hello")
+    with pytest.raises(SketchInputError, match="not an image"):
+        model.predict(f)
+
+
+def test_bad_checkpoints(tmp_path: Path) -> None:
+    with pytest.raises(CheckpointError, match="no such checkpoint"):
+        tp.load_model(tmp_path / "missing.pt")
+    junk = tmp_path / "junk.pt"
+    junk.write_bytes(b"\x00garbage")
+    with pytest.raises(CheckpointError, match="not a TSN checkpoint"):
+        tp.load_model(junk)
+    import torch
+
+    torch.save({"format": "other"}, tmp_path / "other.pt")
+    with pytest.raises(CheckpointError, match="not a TSN checkpoint"):
+        tp.load_model(tmp_path / "other.pt")

@@ -1,0 +1,133 @@
+"""Sketch -> parameters with a trained TSN checkpoint.
+
+``model = load_model()`` loads the shipped checkpoint (``checkpoints/tsn_lite0.pt``, or
+the path in ``$TREESKETCH_TSN_CHECKPOINT``); ``model.predict(image)`` (or the module-level
+``predict(model, image)``) accepts a path, PIL image, bytes or array of any size (grey,
+RGB, or RGBA composited on white) and returns a :class:`Prediction`:
+
+* ``raw``: the network's six head outputs (normalised ``(4, n)`` arrays, the paper's
+  output, what 1-RMSE scores);
+* ``species``: Algorithm 1 on the denormalised output (``tsn.species_id``);
+* ``decoded``: the output decoded to a valid dictionary (``tsn.encoding.decode``: rounded,
+  thresholded, snapped, clamped to the training range);
+* ``params``: ``decoded`` projected onto the identified species
+  (``weberpenn.species.project``: its fixed values, unfixed ones clipped to its ranges).
+
+``preprocess(image)`` is the network's input preparation (``tsn.data.preprocess``: crop
+to the drawing, pad square, area-resize; float32, 1 = white), identical to training.
+Bad input raises :class:`tsn.data.SketchInputError` (a ``ValueError``).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from weberpenn import species as wp_species
+from weberpenn.params import TreeParams
+
+from . import data as tdata
+from . import encoding
+from .checkpoint import CheckpointError, Loaded, load_checkpoint
+from .data import SketchInputError
+
+__all__ = [
+    "DEFAULT_CHECKPOINT",
+    "CheckpointError",
+    "Prediction",
+    "Predictor",
+    "SketchInputError",
+    "TSNModel",
+    "load_model",
+    "predict",
+    "preprocess",
+]
+
+DEFAULT_CHECKPOINT = Path(__file__).resolve().parents[1] / "checkpoints" / "tsn_lite0.pt"
+ENV_CHECKPOINT = "TREESKETCH_TSN_CHECKPOINT"
+
+
+@dataclass(frozen=True)
+class Prediction:
+    params: TreeParams  # decoded and projected onto the identified species
+    species: str
+    raw: dict[str, np.ndarray]  # per head, normalised network output (4, n)
+    decoded: TreeParams  # decoded, not projected
+    matrix: np.ndarray  # (4, 62) denormalised network output
+
+
+class TSNModel:
+    """A loaded checkpoint: network, normaliser, species identifier, input size."""
+
+    def __init__(self, loaded: Loaded) -> None:
+        self.loaded = loaded
+        self.net = loaded.model
+        self.normaliser = loaded.normaliser
+        self.species_id = loaded.species_id
+        self.size = loaded.size
+        self.info = loaded.info
+        self.device = next(self.net.parameters()).device
+
+    def __repr__(self) -> str:
+        return f"TSNModel({self.loaded.path}, backbone={self.net.backbone_name}, size={self.size})"
+
+    def preprocess(self, image: Any) -> np.ndarray:
+        return tdata.preprocess(image, self.size)
+
+    @torch.no_grad()
+    def raw_batch(self, images: Any) -> np.ndarray:
+        """Normalised network output ``(N, 4, 62)`` for a sequence of images."""
+        x = np.stack([self.preprocess(im) for im in images])
+        self.net.eval()
+        out = self.net(torch.from_numpy(x)[:, None].to(self.device))
+        return encoding.join_heads({h: v.cpu().numpy() for h, v in out.items()})
+
+    def from_raw(self, raw: np.ndarray) -> Prediction:
+        """Decode one normalised ``(4, 62)`` network output."""
+        mat = self.normaliser.denormalise(raw)
+        name = self.species_id.identify(mat)
+        decoded = encoding.decode(mat, self.normaliser)
+        projected = wp_species.project(name, decoded)
+        return Prediction(projected, name, encoding.split_heads(raw), decoded, mat)
+
+    def predict(self, image: Any) -> Prediction:
+        return self.from_raw(self.raw_batch([image])[0])
+
+    def predict_batch(self, images: Any) -> list[Prediction]:
+        return [self.from_raw(r) for r in self.raw_batch(list(images))]
+
+    def __call__(self, image: Any) -> Prediction:
+        return self.predict(image)
+
+
+def load_model(path: str | os.PathLike[str] | None = None, device: str | None = None) -> TSNModel:
+    """Load a checkpoint (default: ``$TREESKETCH_TSN_CHECKPOINT`` or the shipped one)."""
+    if path is None:
+        path = os.environ.get(ENV_CHECKPOINT) or DEFAULT_CHECKPOINT
+    dev = device or ("cuda" if torch.cuda.is_available() else "cpu")
+    return TSNModel(load_checkpoint(path, dev))
+
+
+def predict(model: TSNModel, image: Any) -> Prediction:
+    """Module-level form of ``model.predict(image)``."""
+    return model.predict(image)
+
+
+def preprocess(image: Any, size: int = tdata.DEFAULT_SIZE) -> np.ndarray:
+    """The network's input: crop to the drawing, pad square, area-resize (1 = white)."""
+    return tdata.preprocess(image, size)
+
+
+class Predictor:
+    """``sketch -> TreeParams`` callable over a checkpoint (loaded once)."""
+
+    def __init__(self, checkpoint: str | os.PathLike[str] | None = None) -> None:
+        self.model = load_model(checkpoint)
+
+    def __call__(self, image: Any) -> TreeParams:
+        return self.model.predict(image).params
