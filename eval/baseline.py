@@ -22,7 +22,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from weberpenn import TreeParams
-from weberpenn.params import PREDICTED_KEYS, SPECS
 
 if TYPE_CHECKING:  # pragma: no cover
     from .report import Backend
@@ -36,22 +35,10 @@ Normaliser = Callable[[Sequence[Mapping]], np.ndarray]
 
 
 def encode(params: Mapping) -> np.ndarray:
-    """(4, 62) un-normalised target matrix in ``PREDICTED_KEYS`` order."""
-    out = np.zeros((4, len(PREDICTED_KEYS)))
-    for j, k in enumerate(PREDICTED_KEYS):
-        spec, v = SPECS[k], params[k]
-        vals = list(v) if spec.size == 4 else [v] * 4
-        for i, x in enumerate(vals):
-            if spec.kind == "bool":
-                out[i, j] = float(bool(x))
-            elif spec.kind == "sign":
-                out[i, j] = 1.0 if float(x) > 0 else 0.0
-            elif spec.kind == "enum":
-                sx = str(x)
-                out[i, j] = float(sx) if sx.lstrip("-").isdigit() else float(spec.choices.index(sx))
-            else:
-                out[i, j] = float(x)
-    return out
+    """(4, 62) un-normalised target matrix in ``PREDICTED_KEYS`` order (``tsn.encoding``)."""
+    from tsn.encoding import encode as tsn_encode
+
+    return tsn_encode(params)
 
 
 def features(img: np.ndarray) -> np.ndarray:
