@@ -124,19 +124,10 @@ def _to_grey(im: Any) -> np.ndarray:
 
 
 def _prepare_input(img: np.ndarray) -> np.ndarray:
-    """The sketch as TSN sees it: TSN's own preprocessing when available, else padded
-    to a square (white) and area-resized to SKETCH_SIZE."""
-    try:
-        from tsn import predict as tsn_predict  # type: ignore[attr-defined]
-    except ImportError:
-        tsn_predict = None
-    for name in ("preprocess", "prepare_sketch", "prepare"):
-        fn = getattr(tsn_predict, name, None) if tsn_predict is not None else None
-        if callable(fn):
-            out = _as_sketch_image(fn(img))
-            if out is not None:
-                return prepare_uint8(out)
-            break  # a network tensor (normalised, channels first...): frame it ourselves
+    """The refinement target: the sketch padded to a square (white) and area-resized to
+    SKETCH_SIZE, in its own framing.  TSN's ``preprocess`` is not used here: it crops to
+    the drawing (``tsn.predict.predict`` does that itself), while the refinement renders
+    with the dataset's camera framing, which the target must keep."""
     h, w = img.shape
     n = max(h, w)
     sq = np.full((n, n), 255, np.uint8)
