@@ -96,28 +96,3 @@ def test_load_sketch_inputs(tmp_path) -> None:
         load_sketch(b"not an image")
     with pytest.raises(SketchError, match="2-D"):
         load_sketch(np.zeros(10))
-
-
-@pytest.mark.parametrize(
-    "kind", ["uint8", "float", "inverted", "chw_tensor", "normalised", "not_an_image"]
-)
-def test_tsn_preprocess_output_shapes(kind: str) -> None:
-    """Whatever tsn.predict.preprocess returns, the refinement target is a 2-D sketch
-    with dark lines on white (or our own framing when it is a network tensor)."""
-    from treesketch.pipeline import _as_sketch_image
-
-    img = _gt_sketch()
-    f = img.astype(np.float32) / 255.0
-    out = {
-        "uint8": img,
-        "float": f,
-        "inverted": 1.0 - f,
-        "chw_tensor": np.repeat(f[None, None], 3, axis=1),
-        "normalised": (f - 0.45) / 0.22,
-        "not_an_image": np.zeros(5),
-    }[kind]
-    got = _as_sketch_image(out)
-    if kind in ("normalised", "not_an_image"):
-        assert got is None
-    else:
-        assert got.shape == img.shape and np.allclose(got, f, atol=1e-6)

@@ -135,36 +135,6 @@ def _prepare_input(img: np.ndarray) -> np.ndarray:
     return prepare_uint8(sq)
 
 
-def _as_sketch_image(out: Any) -> np.ndarray | None:
-    """TSN's preprocessed sketch as a 2-D image (uint8, or float in 0..1), or None when it
-    is not one (e.g. a normalised multi-channel tensor)."""
-    if hasattr(out, "detach"):  # a torch tensor
-        out = out.detach().cpu().numpy()
-    try:
-        a = np.asarray(out)
-    except (TypeError, ValueError):
-        return None
-    if a.dtype == object or a.size == 0:
-        return None
-    a = np.squeeze(a)
-    if a.ndim == 3:
-        if a.shape[0] in (1, 3) and a.shape[-1] not in (1, 3):
-            a = a.mean(axis=0)  # channels first
-        elif a.shape[-1] in (1, 3, 4):
-            a = a[..., :3].mean(axis=-1)
-        else:
-            return None
-    if a.ndim != 2 or min(a.shape) < 8:
-        return None
-    if a.dtype == np.uint8:
-        a = a.astype(np.float32) / 255.0
-    a = a.astype(np.float32)
-    if not np.all(np.isfinite(a)) or a.min() < -1e-3 or a.max() > 1.0 + 1e-3:
-        return None  # not a 0..1 image: mean/std normalised, leave the framing to us
-    a = np.clip(a, 0.0, 1.0)
-    return 1.0 - a if a.mean() < 0.5 else a  # a line drawing is mostly page: ink = dark
-
-
 def prepare_uint8(img: np.ndarray) -> np.ndarray:
     return np.round(prepare_sketch(img, SKETCH_SIZE) * 255).astype(np.uint8)
 
