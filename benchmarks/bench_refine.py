@@ -1,10 +1,11 @@
 """Benchmark: TSN alone vs TSN + refinement on held-out synthetic sketches.
 
 For N test-split sketches per species (one view per tree, views cycling front/left/back/
-right) of the dataset built by ``render.dataset``: the first estimate (TSN, or with
+right) of the dataset built by ``render.dataset``: the first estimate (TSN; or with
+``--estimator nns`` the nearest training sketch's parameters, ``eval.baseline``; or with
 ``--estimator perturbed`` the ground truth moved by +-``--shift`` in every free unit-cube
-coordinate, a stand-in while no checkpoint exists), then ``refine.refine`` at the default
-budget and time limit.  Reports the sketch loss before/after, seconds, evaluations, and
+coordinate), then ``refine.refine`` at the default budget and time limit, the view yaw
+searched (``--known-yaw`` gives it the true one, an oracle).  Reports the sketch loss before/after, seconds, evaluations, and
 the mesh error: the symmetric Hausdorff distance (max, and mean) to the ground-truth mesh
 divided by the ground-truth bounding-box diagonal (``eval.hausdorff``).  The refined tree
 is turned about the trunk by (view yaw - found yaw), so it faces the way the sketch shows.
@@ -27,7 +28,7 @@ sys.path.insert(0, str(ROOT))
 
 from eval.hausdorff import rotate_about_trunk, tree_hausdorff  # noqa: E402
 from refine.objective import SearchSpace  # noqa: E402
-from refine.search import refine  # noqa: E402
+from refine.search import guess_species, refine  # noqa: E402
 from render.dataset import read_manifest  # noqa: E402
 from treesketch.pipeline import DEFAULT_BUDGET, DEFAULT_TIME_LIMIT, SEARCH_SIZE  # noqa: E402
 from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
@@ -59,7 +60,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--per-species", type=int, default=5)
     ap.add_argument("--budget", type=int, default=DEFAULT_BUDGET)
     ap.add_argument("--time-limit", type=float, default=DEFAULT_TIME_LIMIT)
-    ap.add_argument("--estimator", choices=("tsn", "perturbed"), default="tsn")
+    ap.add_argument("--estimator", choices=("tsn", "nns", "perturbed"), default="tsn")
+    ap.add_argument(
+        "--known-yaw",
+        action="store_true",
+        help="give refinement the sketch's true view yaw (an oracle; default: searched)",
+    )
     ap.add_argument("--shift", type=float, default=0.25)
     ap.add_argument("--samples", type=int, default=10_000, help="Hausdorff samples per side")
     ap.add_argument("--json", type=Path, default=None)
@@ -67,12 +73,16 @@ def main(argv: list[str] | None = None) -> int:
 
     from PIL import Image
 
-    model = None
+    model = nns = None
     if args.estimator == "tsn":
         from treesketch.pipeline import _tsn_estimate
         from tsn import predict as tsn_predict  # type: ignore[attr-defined]
 
         model = tsn_predict.load_model()
+    elif args.estimator == "nns":
+        from eval.baseline import nns_backend
+
+        nns = nns_backend(args.data, bar=False)
     records = []
     for k, row in enumerate(pick_rows(args.data, args.per_species)):
         name = row["species"]
@@ -81,6 +91,9 @@ def main(argv: list[str] | None = None) -> int:
         gt_mesh = build_mesh(grow(gt), species=name)
         if model is not None:
             start, guessed = _tsn_estimate(model, img)
+        elif nns is not None:
+            start = nns.predict(img)
+            guessed = guess_species(start)
         else:
             start, guessed = perturbed(name, gt, args.shift, k), name
         r = refine(
@@ -90,6 +103,7 @@ def main(argv: list[str] | None = None) -> int:
             time_limit=args.time_limit,
             species=guessed,
             size=SEARCH_SIZE,
+            yaw=float(row["yaw"]) if args.known_yaw else None,
         )
         view_yaw = float(row["yaw"])
         m0 = build_mesh(grow(start), species=guessed)
@@ -112,6 +126,8 @@ def main(argv: list[str] | None = None) -> int:
             "haus_max_after": h1.max_norm,
             "haus_mean_before": h0.mean_norm,
             "haus_mean_after": h1.mean_norm,
+            "params_start": start.to_dict(),
+            "params_refined": r.params.to_dict(),
         }
         records.append(rec)
         print(
