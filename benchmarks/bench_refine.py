@@ -9,6 +9,9 @@ searched (``--known-yaw`` gives it the true one, an oracle).  Reports the sketch
 the mesh error: the symmetric Hausdorff distance (max, and mean) to the ground-truth mesh
 divided by the ground-truth bounding-box diagonal (``eval.hausdorff``).  The refined tree
 is turned about the trunk by (view yaw - found yaw), so it faces the way the sketch shows.
+Also the "aligned" max distance: each tree turned about its trunk to its best fit
+(``aligned_tree_hausdorff``), the shape error without the orientation a single sketch
+cannot tell.
 
     nice -n 10 .venv/bin/python benchmarks/bench_refine.py --data /work/data/ds_v1 \
         --per-species 5 --json /work/data/bench_refine.json
@@ -26,7 +29,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from eval.hausdorff import rotate_about_trunk, tree_hausdorff  # noqa: E402
+from eval.hausdorff import (  # noqa: E402
+    aligned_tree_hausdorff,
+    rotate_about_trunk,
+    tree_hausdorff,
+)
 from refine.objective import SearchSpace  # noqa: E402
 from refine.search import guess_species, refine  # noqa: E402
 from render.dataset import read_manifest  # noqa: E402
@@ -68,6 +75,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--shift", type=float, default=0.25)
     ap.add_argument("--samples", type=int, default=10_000, help="Hausdorff samples per side")
+    ap.add_argument(
+        "--align-step", type=float, default=15.0, help="turns tried for the aligned distance"
+    )
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args(argv)
 
@@ -110,6 +120,9 @@ def main(argv: list[str] | None = None) -> int:
         m1 = rotate_about_trunk(build_mesh(grow(r.params), species=guessed), view_yaw - r.yaw)
         h0 = tree_hausdorff(m0, gt_mesh, args.samples)["combined"]
         h1 = tree_hausdorff(m1, gt_mesh, args.samples)["combined"]
+        # the same, each tree turned about its trunk to its best fit (shape alone)
+        t0, a0 = aligned_tree_hausdorff(m0, gt_mesh, args.samples, args.align_step)
+        t1, a1 = aligned_tree_hausdorff(m1, gt_mesh, args.samples, args.align_step)
         rec = {
             "tree_id": row["tree_id"],
             "view": row["view"],
@@ -126,6 +139,10 @@ def main(argv: list[str] | None = None) -> int:
             "haus_max_after": h1.max_norm,
             "haus_mean_before": h0.mean_norm,
             "haus_mean_after": h1.mean_norm,
+            "aligned_max_before": a0["combined"].max_norm,
+            "aligned_max_after": a1["combined"].max_norm,
+            "aligned_turn_before": t0,
+            "aligned_turn_after": t1,
             "params_start": start.to_dict(),
             "params_refined": r.params.to_dict(),
         }
@@ -133,7 +150,8 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"{rec['tree_id']:>12} {rec['view']:>5} loss {r.loss_before:.4f}->{r.loss_after:.4f}"
             f" {r.seconds:5.1f}s {r.evaluations:3d} ev  haus max {h0.max_norm:.4f}->"
-            f"{h1.max_norm:.4f} mean {h0.mean_norm:.4f}->{h1.mean_norm:.4f}",
+            f"{h1.max_norm:.4f} mean {h0.mean_norm:.4f}->{h1.mean_norm:.4f}"
+            f" aligned max {a0['combined'].max_norm:.4f}->{a1['combined'].max_norm:.4f}",
             flush=True,
         )
     summary = summarise(records)
@@ -166,6 +184,8 @@ def summarise(records: list[dict]) -> dict:
     mb = np.array([r["haus_mean_before"] for r in records])
     ma = np.array([r["haus_mean_after"] for r in records])
     sec = np.array([r["seconds"] for r in records])
+    ab = np.array([r["aligned_max_before"] for r in records])
+    aa = np.array([r["aligned_max_after"] for r in records])
     return {
         "n": n,
         "loss_never_worse": bool(np.all(la <= lb + 1e-12)),
@@ -178,6 +198,9 @@ def summarise(records: list[dict]) -> dict:
         "haus_mean_improved_frac": float(np.mean(ma < mb)),
         "haus_mean_before_mean": float(mb.mean()),
         "haus_mean_after_mean": float(ma.mean()),
+        "aligned_max_improved_frac": float(np.mean(aa < ab)),
+        "aligned_max_before_mean": float(ab.mean()),
+        "aligned_max_after_mean": float(aa.mean()),
         "seconds_mean": float(sec.mean()),
         "seconds_max": float(sec.max()),
         "evaluations_mean": float(np.mean([r["evaluations"] for r in records])),

@@ -152,3 +152,17 @@ def test_rotate_about_trunk_matches_camera_yaw():
     other = sketch_distance(a, SketchRenderer(t).sketch(-30.0, 128))
     assert same < 0.02 < other, (same, other)
     assert hausdorff(rotate_about_trunk(t, -60.0).combined(), m.combined(), 2000).max < 1e-6
+
+
+def test_aligned_distance_undoes_a_turn():
+    from eval.hausdorff import aligned_tree_hausdorff, rotate_about_trunk
+    from weberpenn import build_mesh, grow, species
+
+    m = build_mesh(grow(species.sample("palm", 2)), species="palm")
+    turned = rotate_about_trunk(m, 90.0)
+    plain = tree_hausdorff(turned, m, 2000)["combined"].max
+    turn, d = aligned_tree_hausdorff(turned, m, samples=2000, step=45.0, coarse_samples=500)
+    assert turn == 270.0 and d["combined"].max < 1e-6 < plain
+    assert set(d) == {"branches", "leaves", "combined"}
+    with pytest.raises(ValueError, match="step"):
+        aligned_tree_hausdorff(m, m, step=0)
