@@ -75,6 +75,11 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--shift", type=float, default=0.25)
     ap.add_argument("--samples", type=int, default=10_000, help="Hausdorff samples per side")
+    ap.add_argument("--algorithm", default="bobyqa", help="bobyqa, sbplx or cobyla")
+    ap.add_argument("--initial-step", type=float, default=None, help="unit-cube first step")
+    ap.add_argument(
+        "--prior-weight", type=float, default=None, help="pull towards the first estimate"
+    )
     ap.add_argument(
         "--align-step", type=float, default=15.0, help="turns tried for the aligned distance"
     )
@@ -114,6 +119,9 @@ def main(argv: list[str] | None = None) -> int:
             species=guessed,
             size=SEARCH_SIZE,
             yaw=float(row["yaw"]) if args.known_yaw else None,
+            algorithm=args.algorithm,
+            **({} if args.initial_step is None else {"initial_step": args.initial_step}),
+            **({} if args.prior_weight is None else {"prior_weight": args.prior_weight}),
         )
         view_yaw = float(row["yaw"])
         m0 = build_mesh(grow(start), species=guessed)

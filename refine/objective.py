@@ -281,7 +281,8 @@ class SearchSpace:
 
 @dataclass
 class SketchObjective:
-    """``objective(x)`` -> sketch distance of the tree at ``x`` to the target.
+    """``objective(x)`` -> sketch distance of the tree at ``x`` to the target (plus the
+    optional prior :meth:`penalty`).
 
     Counts evaluations (cache hits excluded), keeps the best point seen, and caches losses
     by the point rounded to ``decimals``.  The last tree's renderer is kept so points that
@@ -294,8 +295,11 @@ class SketchObjective:
     decimals: int = 6
     chamfer_weight: float = 10.0
     silhouette_weight: float = 1.0
+    prior: np.ndarray | None = None  # unit-cube point (first estimate) the prior pulls to
+    prior_weight: float = 0.0
     evaluations: int = 0
-    best_loss: float = math.inf
+    best_loss: float = math.inf  # objective: sketch distance + prior penalty
+    best_sketch_loss: float = math.inf  # the sketch distance alone at the best point
     best_x: np.ndarray | None = None
     best_params: TreeParams | None = None
     best_yaw: float = 0.0
@@ -305,6 +309,10 @@ class SketchObjective:
     _scene_key: tuple[float, ...] | None = field(default=None, repr=False)
     _renderer: Any = field(default=None, repr=False)
     render_seconds: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.prior is not None:  # on the same grid as the evaluated points
+            self.prior = np.asarray(self.key(self.prior), dtype=np.float64)
 
     def key(self, x: Sequence[float]) -> tuple[float, ...]:
         return tuple(round(float(v), self.decimals) for v in np.clip(x, 0.0, 1.0))
@@ -326,6 +334,17 @@ class SketchObjective:
         cand = SketchTarget.from_image(img, self.target.size, self.scales)
         return target_distance(self.target, cand, self.chamfer_weight, self.silhouette_weight)
 
+    def penalty(self, x: Sequence[float]) -> float:
+        """``prior_weight`` times the squared distance from ``prior`` over the searched
+        values (not the yaw): a move must buy more sketch match than it strays from the
+        first estimate, so values the sketch barely constrains stay where the estimator
+        put them instead of drifting with the sketch distance's pixel noise."""
+        if self.prior is None or self.prior_weight <= 0:
+            return 0.0
+        n = len(self.space.dims)
+        d = np.asarray(x[:n], dtype=np.float64) - np.asarray(self.prior[:n], dtype=np.float64)
+        return float(self.prior_weight * np.dot(d, d))
+
     def rebase(self, space: SearchSpace) -> None:
         """Search another space (e.g. a different held discrete value): clears the cache,
         keeps the counters and the best point seen."""
@@ -340,12 +359,14 @@ class SketchObjective:
         if hit is not None:
             return hit
         t0 = time.perf_counter()
-        loss = self.loss_of_sketch(self.sketch_at(k))
+        sketch_loss = self.loss_of_sketch(self.sketch_at(k))
         self.render_seconds += time.perf_counter() - t0
+        loss = sketch_loss + self.penalty(k)
         self._cache[k] = loss
         self.evaluations += 1
         if loss < self.best_loss:
             self.best_loss = loss
+            self.best_sketch_loss = sketch_loss
             self.best_x = np.asarray(k, dtype=np.float64)
             self.best_params = self.space.to_params(k)
             self.best_yaw = self.space.yaw(k)

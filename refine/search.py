@@ -114,12 +114,15 @@ def refine(
     discrete_neighbours: bool = False,
     initial_step: float = 0.12,
     xtol: float = 1e-3,
+    prior_weight: float = 0.0,
 ) -> RefineResult:
     """Refine ``initial_params`` so its sketch matches ``sketch`` (see the module text).
 
     ``budget`` caps the tree evaluations (grow + mesh + sketch; the start views count),
     ``time_limit`` the seconds; ``yaw`` fixes the view instead of searching it; ``keys``
-    restricts the searched values; ``global_evals`` > 0 runs GN_CRS2_LM first.
+    restricts the searched values; ``global_evals`` > 0 runs GN_CRS2_LM first;
+    ``prior_weight`` > 0 adds ``prior_weight * |x - x_start|^2`` (unit cube, yaw excluded)
+    to what is minimised.  ``loss_before``/``loss_after`` are always the sketch distance.
     """
     import nlopt
 
@@ -140,7 +143,14 @@ def refine(
     deadline = None if time_limit is None else t0 + float(time_limit)
 
     space = SearchSpace.create(name, initial_params, keys, search_yaw=yaw is None, yaw=yaw or 0.0)
-    obj = SketchObjective(target, space)
+    if not (math.isfinite(prior_weight) and prior_weight >= 0):
+        raise ValueError(f"prior_weight must be >= 0, got {prior_weight!r}")
+    obj = SketchObjective(
+        target,
+        space,
+        prior=space.from_params(initial_params, 0.0),
+        prior_weight=float(prior_weight),
+    )
     stopped = ["tolerance"]
 
     def out_of_budget() -> str | None:
@@ -233,7 +243,7 @@ def refine(
         loss_after = loss_before
         best_params, best_yaw = space.to_params(x0), start_yaw
     else:
-        loss_after = obj.best_loss
+        loss_after = obj.best_sketch_loss  # <= best objective <= objective at the start
         best_params, best_yaw = obj.best_params, obj.best_yaw
     if loss_after > loss_before:  # cannot happen (start point first), kept as a guard
         loss_after, best_params, best_yaw = loss_before, space.to_params(x0), start_yaw

@@ -89,3 +89,16 @@ def test_bad_arguments() -> None:
         refine(img, gt, algorithm="nope")
     with pytest.raises(ValueError, match="time_limit"):
         refine(img, gt, time_limit=-1)
+
+
+def test_prior_weight_holds_the_start_and_reports_sketch_loss() -> None:
+    img, _gt, start = _case(seed=8)
+    free = refine(img, start, budget=15, species="palm", yaw=0.0)
+    held = refine(img, start, budget=15, species="palm", yaw=0.0, prior_weight=1e6)
+    assert held.loss_before == pytest.approx(free.loss_before)
+    assert held.loss_after == pytest.approx(held.loss_before)  # no move pays for itself
+    assert held.params["scaleV"] == pytest.approx(start["scaleV"])
+    some = refine(img, start, budget=15, species="palm", yaw=0.0, prior_weight=0.5)
+    assert some.loss_after <= some.loss_before
+    with pytest.raises(ValueError, match="prior_weight"):
+        refine(img, start, budget=5, prior_weight=-1.0)
