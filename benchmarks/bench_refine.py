@@ -31,8 +31,9 @@ sys.path.insert(0, str(ROOT))
 
 from eval.hausdorff import (  # noqa: E402
     aligned_tree_hausdorff,
+    bbox_diagonal,
+    hausdorff,
     rotate_about_trunk,
-    tree_hausdorff,
 )
 from refine.objective import SearchSpace  # noqa: E402
 from refine.search import guess_species, refine  # noqa: E402
@@ -126,8 +127,9 @@ def main(argv: list[str] | None = None) -> int:
         view_yaw = float(row["yaw"])
         m0 = build_mesh(grow(start), species=guessed)
         m1 = rotate_about_trunk(build_mesh(grow(r.params), species=guessed), view_yaw - r.yaw)
-        h0 = tree_hausdorff(m0, gt_mesh, args.samples)["combined"]
-        h1 = tree_hausdorff(m1, gt_mesh, args.samples)["combined"]
+        gt_c, diag = gt_mesh.combined(), bbox_diagonal(gt_mesh.bounds())
+        h0 = hausdorff(m0.combined(), gt_c, args.samples, diag)  # branches + leaves
+        h1 = hausdorff(m1.combined(), gt_c, args.samples, diag)
         # the same, each tree turned about its trunk to its best fit (shape alone)
         t0, a0 = aligned_tree_hausdorff(m0, gt_mesh, args.samples, args.align_step)
         t1, a1 = aligned_tree_hausdorff(m1, gt_mesh, args.samples, args.align_step)
@@ -147,8 +149,8 @@ def main(argv: list[str] | None = None) -> int:
             "haus_max_after": h1.max_norm,
             "haus_mean_before": h0.mean_norm,
             "haus_mean_after": h1.mean_norm,
-            "aligned_max_before": a0["combined"].max_norm,
-            "aligned_max_after": a1["combined"].max_norm,
+            "aligned_max_before": a0.max_norm,
+            "aligned_max_after": a1.max_norm,
             "aligned_turn_before": t0,
             "aligned_turn_after": t1,
             "params_start": start.to_dict(),
@@ -159,7 +161,7 @@ def main(argv: list[str] | None = None) -> int:
             f"{rec['tree_id']:>12} {rec['view']:>5} loss {r.loss_before:.4f}->{r.loss_after:.4f}"
             f" {r.seconds:5.1f}s {r.evaluations:3d} ev  haus max {h0.max_norm:.4f}->"
             f"{h1.max_norm:.4f} mean {h0.mean_norm:.4f}->{h1.mean_norm:.4f}"
-            f" aligned max {a0['combined'].max_norm:.4f}->{a1['combined'].max_norm:.4f}",
+            f" aligned max {a0.max_norm:.4f}->{a1.max_norm:.4f}",
             flush=True,
         )
     summary = summarise(records)

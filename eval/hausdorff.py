@@ -168,10 +168,11 @@ def aligned_tree_hausdorff(
     samples: int = DEFAULT_SAMPLES,
     step: float = 15.0,
     coarse_samples: int = 2000,
-) -> tuple[float, dict[str, Distance]]:
+) -> tuple[float, Distance]:
     """Mesh error up to a turn about the trunk: ``pred`` turned every ``step`` degrees,
-    the turn with the smallest combined max distance (at ``coarse_samples``) kept and
-    measured again at ``samples``.  Returns (turn in degrees, distances per part).
+    the turn with the smallest max distance between ``coarse_samples`` surface points of
+    each (KD-trees) kept and measured exactly at ``samples``.  Returns (turn in degrees,
+    the combined branch+leaf :class:`Distance`, normalised by the ground-truth diagonal).
 
     A single sketch says nothing about which way the tree faces in depth, and an estimate
     from it (TSN's or refined) has no reason to share the ground truth's orientation; this
@@ -179,14 +180,24 @@ def aligned_tree_hausdorff(
     """
     if not (math.isfinite(step) and 0 < step <= 360):
         raise ValueError(f"step must be in (0, 360] degrees, got {step}")
-    gt_c = gt.combined()
+    from scipy.spatial import cKDTree
+
+    a, b = pred.combined(), gt.combined()
     diag = bbox_diagonal(gt.bounds())
+    if len(a.faces) == 0 or len(b.faces) == 0:
+        return 0.0, hausdorff(a, b, samples, diag)
+    # coarse search on surface point samples (a turn moves points, not the KD-trees)
+    pa = np.asarray(trimesh.sample.sample_surface(a, coarse_samples, seed=0)[0])
+    pb = np.asarray(trimesh.sample.sample_surface(b, coarse_samples, seed=1)[0])
+    ta, tb = cKDTree(pa), cKDTree(pb)
     best, best_d = 0.0, math.inf
     for turn in np.arange(0.0, 360.0 - 1e-9, float(step)):
-        d = hausdorff(rotate_about_trunk(pred, turn).combined(), gt_c, coarse_samples, diag).max
-        if math.isfinite(d) and d < best_d:
-            best, best_d = float(turn), d
-    return best, tree_hausdorff(rotate_about_trunk(pred, best), gt, samples)
+        c, s = math.cos(math.radians(turn)), math.sin(math.radians(turn))
+        rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        d = max(tb.query(pa @ rot.T)[0].max(), ta.query(pb @ rot)[0].max())
+        if d < best_d:
+            best, best_d = float(turn), float(d)
+    return best, hausdorff(rotate_about_trunk(pred, best).combined(), b, samples, diag)
 
 
 def params_hausdorff(pred_params, gt_params, seed: int = 0, samples: int = DEFAULT_SAMPLES):

@@ -162,7 +162,7 @@ def test_aligned_distance_undoes_a_turn():
     turned = rotate_about_trunk(m, 90.0)
     plain = tree_hausdorff(turned, m, 2000)["combined"].max
     turn, d = aligned_tree_hausdorff(turned, m, samples=2000, step=45.0, coarse_samples=500)
-    assert turn == 270.0 and d["combined"].max < 1e-6 < plain
-    assert set(d) == {"branches", "leaves", "combined"}
+    assert turn == 270.0 and d.max < 1e-6 < plain
+    assert d.diagonal == pytest.approx(bbox_diagonal(m.bounds()))
     with pytest.raises(ValueError, match="step"):
         aligned_tree_hausdorff(m, m, step=0)
