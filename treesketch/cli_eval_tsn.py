@@ -81,7 +81,7 @@ def evaluate(
 
 
 def format_result(res: dict[str, Any], split: str) -> str:
-    from eval.metrics import PAPER_ONE_MINUS_RMSE, format_table
+    from eval.metrics import PAPER_ONE_MINUS_RMSE, format_hardest, format_table
 
     table = format_table(
         {
@@ -95,6 +95,7 @@ def format_result(res: dict[str, Any], split: str) -> str:
         f"1-RMSE on the {split!r} split: {res['n']} sketches of {res['n_trees']} held-out trees "
         f"(checkpoint {res['checkpoint']}, {res['seconds']:.0f} s)\n\n{table}\n\n"
         f"species identification (Algorithm 1): {res['species_acc']:.2%} ({sp}); paper target 98%"
+        f"\n\nhardest keys (raw network output):\n\n{format_hardest(res['raw'], 8)}"
     )
 
 
@@ -120,7 +121,11 @@ def eval_tsn(
     typer.echo(format_result(res, split))
     if json_out is not None:
         plain = {
-            k: ({**v.heads, "overall": v.overall} if hasattr(v, "heads") else v)
+            k: (
+                {**v.heads, "overall": v.overall, "key_rmse": v.key_rmse}
+                if hasattr(v, "heads")
+                else v
+            )
             for k, v in res.items()
         }
         atomic_write_text(json_out, json.dumps(plain, indent=1) + "\n")
