@@ -35,6 +35,9 @@ def train_cmd(
         None, "--max-sketches", help="Use only the first N sketches of each split (quick runs)."
     ),
     resume: bool = typer.Option(False, "--resume", help="Continue an interrupted run."),
+    loss: str = typer.Option(
+        "mse", "--loss", help="mse: sum of per-head MSE (paper); rmse: sum of per-head RMSE."
+    ),
 ) -> None:
     """Train TSN: cached frozen early layers, fine-tuned last layers and six heads."""
     from tsn.train import TrainConfig, TrainError, train
@@ -54,6 +57,7 @@ def train_cmd(
         threads=threads,
         max_sketches=max_sketches,
         resume=resume,
+        loss=loss,
     )
     try:
         res = train(cfg, log=lambda s: typer.echo(s))

@@ -66,6 +66,7 @@ class TrainConfig:
     max_sketches: int | None = None  # per split, for quick tests
     resume: bool = False
     pretrained: bool = True
+    loss: str = "mse"  # "mse": sum of per-head MSE (paper); "rmse": sum of per-head RMSE
     extra: dict[str, Any] = field(default_factory=dict)
 
     def check(self) -> None:
@@ -81,6 +82,8 @@ class TrainConfig:
             raise TrainError(f"--copies must be in [0, 64], got {self.copies}")
         if not (self.lr > 0 and math.isfinite(self.lr)):
             raise TrainError(f"--lr must be a positive number, got {self.lr}")
+        if self.loss not in LOSSES:
+            raise TrainError(f"--loss must be one of {', '.join(LOSSES)}, got {self.loss!r}")
         if self.size % 32:
             raise TrainError(f"--size must be a multiple of 32, got {self.size}")
 
@@ -203,9 +206,19 @@ def head_targets(mats_norm: np.ndarray) -> dict[str, torch.Tensor]:
     }
 
 
-def loss_fn(out: dict[str, torch.Tensor], tgt: dict[str, torch.Tensor]) -> torch.Tensor:
-    """Sum over the six heads of the mean squared error."""
-    return sum(torch.mean((out[h] - tgt[h]) ** 2) for h in HEADS)  # type: ignore[return-value]
+def loss_fn(
+    out: dict[str, torch.Tensor], tgt: dict[str, torch.Tensor], kind: str = "mse"
+) -> torch.Tensor:
+    """Sum over the six heads of the mean squared error (``kind="mse"``, the paper's loss),
+    or of its square root (``"rmse"``: the paper's metric, 1 - RMSE per head, directly;
+    heads with small errors then weigh as much as the others)."""
+    mse = [torch.mean((out[h] - tgt[h]) ** 2) for h in HEADS]
+    if kind == "rmse":
+        return sum(torch.sqrt(m + 1e-12) for m in mse)  # type: ignore[return-value]
+    return sum(mse)  # type: ignore[return-value]
+
+
+LOSSES = ("mse", "rmse")
 
 
 def one_minus_rmse(pred: np.ndarray, target: np.ndarray) -> dict[str, float]:
@@ -359,7 +372,7 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
                 continue
             x = f_trn[ver[idx], idx].to(device)
             tgt = {h: y[idx].to(device) for h, y in y_trn.items()}
-            loss = loss_fn(_forward(model, x, cut), tgt)
+            loss = loss_fn(_forward(model, x, cut), tgt, cfg.loss)
             opt.zero_grad(set_to_none=True)
             loss.backward()
             opt.step()
@@ -369,7 +382,7 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
         pred = predict_cached(model, f_val, cut, device)
         with torch.no_grad():
             val_loss = float(
-                loss_fn(
+                loss_fn(  # always the paper's loss, comparable across runs
                     {h: torch.from_numpy(v).float() for h, v in encoding.split_heads(pred).items()},
                     y_val,
                 )
