@@ -297,6 +297,8 @@ class SketchObjective:
     silhouette_weight: float = 1.0
     prior: np.ndarray | None = None  # unit-cube point (first estimate) the prior pulls to
     prior_weight: float = 0.0
+    yaw_prior: float = 0.0  # degrees: the view assumed unless the sketch says otherwise
+    yaw_weight: float = 0.0
     evaluations: int = 0
     best_loss: float = math.inf  # objective: sketch distance + prior penalty
     best_sketch_loss: float = math.inf  # the sketch distance alone at the best point
@@ -338,12 +340,20 @@ class SketchObjective:
         """``prior_weight`` times the squared distance from ``prior`` over the searched
         values (not the yaw): a move must buy more sketch match than it strays from the
         first estimate, so values the sketch barely constrains stay where the estimator
-        put them instead of drifting with the sketch distance's pixel noise."""
+        put them instead of drifting with the sketch distance's pixel noise.
+
+        Plus ``yaw_weight * (turn / 180)^2`` for a searched yaw ``turn`` degrees away from
+        ``yaw_prior``: a view other than the assumed one must fit clearly better (many
+        trees look alike from every side, and a noise-picked view turns the whole tree)."""
+        out = 0.0
+        if self.yaw_weight > 0 and self.space.search_yaw:
+            turn = abs((self.space.yaw(x) - self.yaw_prior + 180.0) % 360.0 - 180.0) / 180.0
+            out += self.yaw_weight * turn * turn
         if self.prior is None or self.prior_weight <= 0:
-            return 0.0
+            return out
         n = len(self.space.dims)
         d = np.asarray(x[:n], dtype=np.float64) - np.asarray(self.prior[:n], dtype=np.float64)
-        return float(self.prior_weight * np.dot(d, d))
+        return out + float(self.prior_weight * np.dot(d, d))
 
     def rebase(self, space: SearchSpace) -> None:
         """Search another space (e.g. a different held discrete value): clears the cache,

@@ -102,3 +102,15 @@ def test_prior_weight_holds_the_start_and_reports_sketch_loss() -> None:
     assert some.loss_after <= some.loss_before
     with pytest.raises(ValueError, match="prior_weight"):
         refine(img, start, budget=5, prior_weight=-1.0)
+
+
+def test_view_prior_keeps_front_unless_another_view_fits_clearly() -> None:
+    img, gt, _ = _case(name="maple", seed=2, yaw=90.0)
+    r = refine(img, gt, budget=10, species="maple")
+    assert r.yaw == pytest.approx(90.0) and r.start_yaw == 90.0  # clearly better: taken
+    assert r.loss_before == pytest.approx(0.0, abs=1e-9)  # the sketch distance, no penalty
+    front, gt, _ = _case(name="maple", seed=2, yaw=0.0)
+    r0 = refine(front, gt, budget=10, species="maple", yaw_weight=1e3)
+    assert r0.start_yaw == 0.0 and r0.loss_after == pytest.approx(0.0, abs=1e-9)
+    with pytest.raises(ValueError, match="yaw_weight"):
+        refine(front, gt, budget=5, yaw_weight=float("nan"))
