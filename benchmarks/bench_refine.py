@@ -75,6 +75,9 @@ def main(argv: list[str] | None = None) -> int:
         help="give refinement the sketch's true view yaw (an oracle; default: searched)",
     )
     ap.add_argument("--shift", type=float, default=0.25)
+    ap.add_argument(
+        "--markdown", type=Path, default=None, help="only print the tables of a --json file"
+    )
     ap.add_argument("--samples", type=int, default=10_000, help="Hausdorff samples per side")
     ap.add_argument("--algorithm", default="bobyqa", help="bobyqa, sbplx or cobyla")
     ap.add_argument("--initial-step", type=float, default=None, help="unit-cube first step")
@@ -86,6 +89,10 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args(argv)
+    if args.markdown is not None:
+        recs = json.loads(args.markdown.read_text())["records"]
+        print(markdown(recs, summarise(recs)))
+        return 0
 
     from PIL import Image
 
@@ -181,6 +188,43 @@ def main(argv: list[str] | None = None) -> int:
         )
         tmp.replace(args.json)
     return 0
+
+
+def markdown(records: list[dict], summary: dict) -> str:
+    """Per-sketch table and per-species means (for RESULTS.md)."""
+    lines = [
+        "| sketch | view | loss before -> after | s | evals | yaw view / found |"
+        " Hausdorff max before -> after | aligned max before -> after |",
+        "|---|---|---|---:|---:|---|---|---|",
+    ]
+    for r in records:
+        lines.append(
+            f"| {r['tree_id']} | {r['view']} | {r['loss_before']:.4f} -> {r['loss_after']:.4f} |"
+            f" {r['seconds']:.1f} | {r['evaluations']} | {r['yaw_view']:.0f} / "
+            f"{r['yaw_found']:.0f} | {r['haus_max_before']:.4f} -> {r['haus_max_after']:.4f} |"
+            f" {r['aligned_max_before']:.4f} -> {r['aligned_max_after']:.4f} |"
+        )
+    lines += [
+        "",
+        "| species | n | loss before -> after | Hausdorff max before -> after (improved) |"
+        " aligned max before -> after (improved) | s mean / max |",
+        "|---|---:|---|---|---|---|",
+    ]
+    groups: dict[str, list[dict]] = {}
+    for r in records:
+        groups.setdefault(r["species"], []).append(r)
+    groups["all"] = records
+    for sp, rs in groups.items():
+        s = summarise(rs)
+        hb, ha = s["haus_max_before_mean"], s["haus_max_after_mean"]
+        ab, aa = s["aligned_max_before_mean"], s["aligned_max_after_mean"]
+        lines.append(
+            f"| {sp} | {s['n']} | {s['loss_before_mean']:.4f} -> {s['loss_after_mean']:.4f} |"
+            f" {hb:.4f} -> {ha:.4f} ({s['haus_max_improved_frac']:.0%}) |"
+            f" {ab:.4f} -> {aa:.4f} ({s['aligned_max_improved_frac']:.0%}) |"
+            f" {s['seconds_mean']:.1f} / {s['seconds_max']:.1f} |"
+        )
+    return "\n".join(lines)
 
 
 def summarise(records: list[dict]) -> dict:
