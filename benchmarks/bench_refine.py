@@ -55,6 +55,12 @@ def pick_rows(data: Path, per_species: int) -> list[dict]:
     return out
 
 
+def searchable(name: str, params, hold: set[str]) -> list[str]:
+    """The species' searched labels minus those whose key is in ``hold``."""
+    sp = SearchSpace.create(name, params, search_yaw=False)
+    return [u.label for u in sp.dims if u.key not in hold]
+
+
 def perturbed(name: str, gt, shift: float, seed: int):
     sp = SearchSpace.create(name, gt, search_yaw=False)
     x = sp.from_params(gt)
@@ -75,6 +81,10 @@ def main(argv: list[str] | None = None) -> int:
         help="give refinement the sketch's true view yaw (an oracle; default: searched)",
     )
     ap.add_argument("--shift", type=float, default=0.25)
+    ap.add_argument("--species", default=None, help="comma list (default: all five)")
+    ap.add_argument(
+        "--hold", default=None, help="comma list of keys not searched (e.g. rotate,rLastAng)"
+    )
     ap.add_argument(
         "--markdown", type=Path, default=None, help="only print the tables of a --json file"
     )
@@ -107,8 +117,12 @@ def main(argv: list[str] | None = None) -> int:
 
         nns = nns_backend(args.data, bar=False)
     records = []
+    only = None if args.species is None else set(args.species.split(","))
+    hold = set() if args.hold is None else set(args.hold.split(","))
     for k, row in enumerate(pick_rows(args.data, args.per_species)):
         name = row["species"]
+        if only is not None and name not in only:
+            continue
         img = np.asarray(Image.open(args.data / row["sketch"]).convert("L"))
         gt = load_params(args.data / row["params"])
         gt_mesh = build_mesh(grow(gt), species=name)
@@ -130,6 +144,7 @@ def main(argv: list[str] | None = None) -> int:
             algorithm=args.algorithm,
             **({} if args.initial_step is None else {"initial_step": args.initial_step}),
             **({} if args.prior_weight is None else {"prior_weight": args.prior_weight}),
+            **({"keys": searchable(guessed, start, hold)} if hold else {}),
         )
         view_yaw = float(row["yaw"])
         m0 = build_mesh(grow(start), species=guessed)
