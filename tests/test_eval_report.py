@@ -73,11 +73,14 @@ def test_report_on_tiny_dataset(tmp_path):
     md = out.read_text()
     assert "| stand-in | 0.9000" in md and "0.9253" in md and "0.031" in md
     assert "Symmetric Hausdorff distance" in md and "| palm | 2 |" in md and "| all | 3 |" in md
+    assert "aligned max" in md and "(the aligned max on " in md
     assert (out.parent / "rotation_palm.png").stat().st_size > 1000
     assert (out.parent / "rotation_cases_palm.png").is_file()
     assert len((out.parent / "rotation_palm.csv").read_text().splitlines()) == 5
     res = json.loads((out.parent / "results.json").read_text())
     assert len(res["hausdorff"]) == 3 and res["hausdorff"][0]["refined"] is not None
+    al = res["hausdorff"][0]["aligned_max_norm"]
+    assert 0 <= al["tsn"] <= res["hausdorff"][0]["tsn"]["combined"]["max_norm"] + 0.02
     assert res["species_accuracy"]["n"] == 3
 
 
