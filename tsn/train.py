@@ -263,7 +263,7 @@ def train_mode(model: TSN, cut: int) -> None:
         m.eval()
 
 
-def _plot(rows: list[dict[str, Any]], path: Path) -> None:
+def _plot(rows: list[dict[str, Any]], path: Path, loss: str = "mse") -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -274,7 +274,7 @@ def _plot(rows: list[dict[str, Any]], path: Path) -> None:
     ax[0].plot(ep, [r["train_loss"] for r in rows], label="train")
     ax[0].plot(ep, [r["val_loss"] for r in rows], label="val")
     ax[0].set_xlabel("epoch")
-    ax[0].set_ylabel("loss (sum of head MSE)")
+    ax[0].set_ylabel(f"loss (train: sum of head {loss.upper()}; val: sum of head MSE)")
     ax[0].set_yscale("log")
     ax[0].legend()
     for h in [*HEADS, "overall"]:
@@ -434,7 +434,7 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
             state_path,
         )
         _write_csv(rows, work / "log.csv")
-        _plot(rows, work / "loss.png")
+        _plot(rows, work / "loss.png", cfg.loss)
         log(
             f"[train] epoch {epoch}/{cfg.epochs} train {row['train_loss']:.4f} val {val_loss:.4f} "
             f"val 1-RMSE {scores['overall']:.4f} species {sp_acc:.3f} "
