@@ -62,7 +62,7 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=30)
     ap.add_argument("--batch", type=int, default=64)
     ap.add_argument("--threads", type=int, default=1, help="torch threads for inference")
-    ap.add_argument("--train-threads", type=int, default=2, help="torch threads for training")
+    ap.add_argument("--train-threads", type=int, default=1, help="torch threads for training")
     ap.add_argument("--markdown", action="store_true")
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
