@@ -106,3 +106,18 @@ def test_bad_checkpoints(tmp_path: Path) -> None:
     torch.save({"format": "other"}, tmp_path / "other.pt")
     with pytest.raises(CheckpointError, match="not a TSN checkpoint"):
         tp.load_model(tmp_path / "other.pt")
+
+
+@pytest.mark.skipif(not tp.DEFAULT_CHECKPOINT.is_file(), reason="no shipped checkpoint")
+def test_shipped_checkpoint_predicts_species() -> None:
+    from render.sketch import SketchRenderer
+
+    model = tp.load_model()
+    assert model.size == 128 and model.net.backbone_name == "lite0"
+    for name, seed, yaw in (("palm", 9001, 0.0), ("pine", 9002, 90.0), ("cherry", 9003, 180.0)):
+        img = SketchRenderer(build_mesh(grow(species.sample(name, seed)), species=name)).sketch(
+            yaw, 256
+        )
+        pred = model.predict(img)
+        assert pred.species == name
+        assert isinstance(pred.params, TreeParams)
