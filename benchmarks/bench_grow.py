@@ -1,6 +1,7 @@
 """Benchmark grow + mesh per species and compare with Blender Sapling's recorded seconds.
 
     .venv/bin/python benchmarks/bench_grow.py [--trees 20] [--markdown] [--write]
+        [--blender blender] [--repeats 3]
 
 For each species: ``species.sample(name, seed)`` for seeds 0..trees-1, then
 ``build_mesh(grow(params))`` timed on one thread (BLAS/OpenMP pinned to 1 thread); the
@@ -8,6 +9,12 @@ median seconds, median branch/leaf triangle counts and Sapling's mean seconds on
 species' three reference dictionaries (``sapling_reference_stats.json``; Sapling's branch
 faces are quads, so its triangles are twice its faces) give the speed-up.  ``--write``
 replaces this benchmark's section of ``benchmarks/RESULTS.md``.
+
+``--blender BIN`` also times Blender's own Sapling in the same run, on this machine: the
+species' three reference dictionaries are exported as Sapling presets
+(``weberpenn.export.save_sapling_preset``), ``scripts/blender_time_sapling.py`` runs
+``tree_add`` on each ``--repeats`` times inside Blender, and our grow + mesh is timed on the
+very same dictionaries; the same-run ratio is reported beside the recorded one.
 """
 
 from __future__ import annotations
@@ -22,10 +29,13 @@ import datetime as dt  # noqa: E402
 import json  # noqa: E402
 import platform  # noqa: E402
 import statistics  # noqa: E402
+import subprocess  # noqa: E402
+import tempfile  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from weberpenn import build_mesh, grow, species  # noqa: E402
+from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
+from weberpenn.export import save_sapling_preset  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 STATS = ROOT.parent / "shared" / "reference" / "sapling_reference_stats.json"
@@ -90,6 +100,81 @@ def run(trees: int) -> list[dict]:
             }
         )
     return rows
+
+
+def same_run_sapling(blender: str, repeats: int) -> list[dict]:
+    """Sapling and our generator on each species' reference dictionaries, this machine."""
+    script = ROOT / "scripts" / "blender_time_sapling.py"
+    ref_dir = STATS.parent / "treesketchnet_test_params"
+    out = []
+    with tempfile.TemporaryDirectory() as tmp:
+        presets, owners = [], []
+        for name in species.SPECIES:
+            for f in species.reference_files(name):
+                path = ref_dir / Path(f).name if not Path(f).is_file() else Path(f)
+                params = load_params(path)
+                preset = Path(tmp) / f"{Path(f).stem}.py"
+                save_sapling_preset(params, preset)
+                presets.append(str(preset))
+                owners.append((name, params))
+        res_path = Path(tmp) / "sapling.json"
+        cmd = [blender, "--background", "--factory-startup", "--python", str(script), "--"]
+        proc = subprocess.run(
+            [*cmd, str(res_path), str(repeats), *presets], capture_output=True, text=True
+        )
+        if proc.returncode != 0 or not res_path.is_file():
+            tail = (proc.stdout + proc.stderr)[-2000:]
+            raise SystemExit(f"blender failed (exit {proc.returncode}):\n{tail}")
+        sap = json.loads(res_path.read_text())
+    for (name, params), s in zip(owners, sap, strict=True):
+        ours = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            build_mesh(grow(params), species=name)
+            ours.append(time.perf_counter() - t0)
+        out.append(
+            {
+                "species": name,
+                "sapling_s": statistics.median(s["seconds"]),
+                "ours_s": statistics.median(ours),
+            }
+        )
+    by: dict[str, dict] = {}
+    for r in out:
+        b = by.setdefault(r["species"], {"species": r["species"], "sapling": [], "ours": []})
+        b["sapling"].append(r["sapling_s"])
+        b["ours"].append(r["ours_s"])
+    return [
+        {
+            "species": b["species"],
+            "sapling_s": statistics.mean(b["sapling"]),
+            "ours_s": statistics.mean(b["ours"]),
+            "speedup": statistics.mean(b["sapling"]) / statistics.mean(b["ours"]),
+        }
+        for b in by.values()
+    ]
+
+
+def markdown_same_run(rows: list[dict], repeats: int) -> str:
+    lines = [
+        "",
+        f"Same run, same machine (`--blender blender --repeats {repeats}`): Blender "
+        "Sapling (Debian blender 3.4.1) and our grow + mesh on each species' three "
+        "reference dictionaries (median of the repeats per dictionary, mean over the three).",
+        "",
+        "| species | Sapling s | ours s | speed-up (same run) |",
+        "|---|---:|---:|---:|",
+    ]
+    lines += [
+        f"| {r['species']} | {r['sapling_s']:.3f} | {r['ours_s']:.3f} | {r['speedup']:.1f}x |"
+        for r in rows
+    ]
+    lines += [
+        "",
+        f"Smallest same-run speed-up: {min(r['speedup'] for r in rows):.1f}x (target >= 10x).",
+        "",
+    ]
+    return "\n".join(lines)
 
 
 def markdown(rows: list[dict], trees: int) -> str:
@@ -163,9 +248,23 @@ def main() -> None:
     ap.add_argument("--trees", type=int, default=20, help="trees per species (seeds 0..N-1)")
     ap.add_argument("--markdown", action="store_true", help="print the Markdown section")
     ap.add_argument("--write", action="store_true", help="update benchmarks/RESULTS.md")
+    ap.add_argument("--blender", help="Blender binary: also time Sapling in the same run")
+    ap.add_argument("--repeats", type=int, default=3, help="Sapling/ours runs per dictionary")
     args = ap.parse_args()
+    if args.trees < 1 or args.repeats < 1:
+        ap.error("--trees and --repeats must be at least 1")
     rows = run(args.trees)
     text = markdown(rows, args.trees)
+    if args.blender:
+        text = (
+            text.rstrip("\n")
+            + "\n"
+            + markdown_same_run(same_run_sapling(args.blender, args.repeats), args.repeats)
+        )
+        text = text.replace(
+            f"--trees {args.trees} --write`",
+            f"--trees {args.trees} --blender {args.blender} --repeats {args.repeats} --write`",
+        )
     if args.markdown or not args.write:
         print(text)
     if args.write:

@@ -46,7 +46,13 @@ def rot_axis(v: np.ndarray, axis: np.ndarray, a: np.ndarray) -> np.ndarray:
     k = normalize(axis)
     c, s = np.cos(a)[:, None], np.sin(a)[:, None]
     kv = np.einsum("ij,ij->i", k, v)[:, None]
-    return v * c + np.cross(k, v) * s + k * kv * (1.0 - c)
+    kx, ky, kz = k[:, 0], k[:, 1], k[:, 2]
+    vx, vy, vz = v[:, 0], v[:, 1], v[:, 2]
+    kxv = np.empty_like(v)  # k x v without np.cross's axis shuffling
+    kxv[:, 0] = ky * vz - kz * vy
+    kxv[:, 1] = kz * vx - kx * vz
+    kxv[:, 2] = kx * vy - ky * vx
+    return v * c + kxv * s + k * kv * (1.0 - c)
 
 
 def apply(frames: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -128,6 +134,30 @@ def track_frames(d: np.ndarray) -> np.ndarray:
     if special.any():
         m[special] = _track_frames_exact(d[special])
     return m
+
+
+def track_x_and_yz(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``track_frames(d)[:, :, 0]`` and ``track_frames(d)[:, 2, 1]`` without the full frames.
+
+    The same arithmetic as :func:`track_frames` (identical results), for the per-segment
+    attraction step that needs only the frame's X axis and the Z component of its Y axis.
+    """
+    d = np.asarray(d, dtype=np.float64)
+    x, y, z = d[:, 0], d[:, 1], d[:, 2]
+    special = (np.abs(x) + np.abs(y)) < 1e-4
+    if special.any():
+        t = track_frames(d)
+        return t[:, :, 0], t[:, 2, 1]
+    ln = np.sqrt(x * x + y * y + z * z)
+    zx, zy, zz = x / ln, y / ln, z / ln
+    yx, yy, yz = -zz * zx, -zz * zy, 1.0 - zz * zz
+    yl = np.sqrt(yx * yx + yy * yy + yz * yz)
+    yx, yy, yz = yx / yl, yy / yl, yz / yl
+    ax = np.empty_like(d)
+    ax[:, 0] = yy * zz - yz * zy
+    ax[:, 1] = yz * zx - yx * zz
+    ax[:, 2] = yx * zy - yy * zx
+    return ax, yz
 
 
 def _track_frames_exact(d: np.ndarray) -> np.ndarray:

@@ -23,6 +23,7 @@ from ._grow_math import (
     rot_y,
     rot_z,
     track_frames,
+    track_x_and_yz,
 )
 from ._grow_shapes import find_taper, shape_ratio
 
@@ -151,13 +152,12 @@ def rng_for(seed: int, params_seed: int, level: int, stream: int) -> np.random.G
 def _attract_up(v: np.ndarray, att: float, res: int) -> np.ndarray:
     if att == 0.0 or len(v) == 0:
         return v
-    t = track_frames(v)
+    axis_x, yz = track_x_and_yz(v)
     dec = np.arccos(np.clip(normalize(v)[:, 2], -1.0, 1.0))
-    yz = t[:, 2, 1]
     a = att * dec * np.abs(yz) / res
     a = np.where(-dec + a < -np.pi, -np.pi + dec, a)
     a = np.where(dec - a < 0.0, dec, a)
-    return rot_axis(v, t[:, :, 0], -a)
+    return rot_axis(v, axis_x, -a)
 
 
 def grow_level(
