@@ -24,21 +24,33 @@ def rot_x(v: np.ndarray, a: np.ndarray | float) -> np.ndarray:
     """Rotate vectors about the X axis by angles ``a``."""
     c, s = np.cos(a), np.sin(a)
     x, y, z = v[:, 0], v[:, 1], v[:, 2]
-    return np.stack([x + 0.0 * c, c * y - s * z, s * y + c * z], axis=1)
+    out = np.empty((len(v), 3))
+    out[:, 0] = x + 0.0 * c
+    out[:, 1] = c * y - s * z
+    out[:, 2] = s * y + c * z
+    return out
 
 
 def rot_y(v: np.ndarray, a: np.ndarray | float) -> np.ndarray:
     """Rotate vectors about the Y axis by angles ``a``."""
     c, s = np.cos(a), np.sin(a)
     x, y, z = v[:, 0], v[:, 1], v[:, 2]
-    return np.stack([c * x + s * z, y + 0.0 * c, -s * x + c * z], axis=1)
+    out = np.empty((len(v), 3))
+    out[:, 0] = c * x + s * z
+    out[:, 1] = y + 0.0 * c
+    out[:, 2] = -s * x + c * z
+    return out
 
 
 def rot_z(v: np.ndarray, a: np.ndarray | float) -> np.ndarray:
     """Rotate vectors about the Z axis by angles ``a``."""
     c, s = np.cos(a), np.sin(a)
     x, y, z = v[:, 0], v[:, 1], v[:, 2]
-    return np.stack([c * x - s * y, s * x + c * y, z + 0.0 * c], axis=1)
+    out = np.empty((len(v), 3))
+    out[:, 0] = c * x - s * y
+    out[:, 1] = s * x + c * y
+    out[:, 2] = z + 0.0 * c
+    return out
 
 
 def rot_axis(v: np.ndarray, axis: np.ndarray, a: np.ndarray) -> np.ndarray:
@@ -229,13 +241,18 @@ def _compatible_eul(e: np.ndarray, old: np.ndarray) -> np.ndarray:
     de = e - old
     hi = de > 5.1
     lo = de < -5.1
-    e = np.where(hi, e - np.floor(de / TAU + 0.5) * TAU, e)
-    e = np.where(lo, e + np.floor(-de / TAU + 0.5) * TAU, e)
+    if hi.any():
+        e = np.where(hi, e - np.floor(de / TAU + 0.5) * TAU, e)
+    if lo.any():
+        e = np.where(lo, e + np.floor(-de / TAU + 0.5) * TAU, e)
     de = e - old
     ade = np.abs(de)
+    big, small = ade > 3.2, ade < 1.6
+    if not big.any():  # no flip can happen: skip the per-axis pass
+        return e
     for i in range(3):
         j, k = (i + 1) % 3, (i + 2) % 3
-        flip = (ade[:, i] > 3.2) & (ade[:, j] < 1.6) & (ade[:, k] < 1.6)
+        flip = big[:, i] & small[:, j] & small[:, k]
         e[:, i] = np.where(flip, np.where(de[:, i] > 0.0, e[:, i] - TAU, e[:, i] + TAU), e[:, i])
     return e
 
@@ -246,22 +263,14 @@ def euler_compat(m: np.ndarray, compat_z: np.ndarray) -> np.ndarray:
     r21, r22, r12, r11 = m[:, 2, 1], m[:, 2, 2], m[:, 1, 2], m[:, 1, 1]
     cy = np.hypot(r00, r10)
     big = cy > _FLT_EPS16
-    e1 = np.stack(
-        [
-            np.where(big, np.arctan2(r21, r22), np.arctan2(-r12, r11)),
-            np.arctan2(-r20, cy),
-            np.where(big, np.arctan2(r10, r00), 0.0),
-        ],
-        axis=1,
-    )
-    e2 = np.stack(
-        [
-            np.where(big, np.arctan2(-r21, -r22), e1[:, 0]),
-            np.where(big, np.arctan2(-r20, -cy), e1[:, 1]),
-            np.where(big, np.arctan2(-r10, -r00), 0.0),
-        ],
-        axis=1,
-    )
+    e1 = np.empty((len(m), 3))
+    e1[:, 0] = np.where(big, np.arctan2(r21, r22), np.arctan2(-r12, r11))
+    e1[:, 1] = np.arctan2(-r20, cy)
+    e1[:, 2] = np.where(big, np.arctan2(r10, r00), 0.0)
+    e2 = np.empty((len(m), 3))
+    e2[:, 0] = np.where(big, np.arctan2(-r21, -r22), e1[:, 0])
+    e2[:, 1] = np.where(big, np.arctan2(-r20, -cy), e1[:, 1])
+    e2[:, 2] = np.where(big, np.arctan2(-r10, -r00), 0.0)
     old = np.zeros_like(e1)
     old[:, 2] = compat_z
     e1 = _compatible_eul(e1, old)

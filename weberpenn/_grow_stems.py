@@ -269,7 +269,10 @@ def grow_level(
             lv_c = rng.uniform(1.0 - lv, 1.0 + lv, ncl) if lv > 0.0 else np.ones(ncl)
             bscale = np.minimum(lv_c * tf[par], 1.0)
             a = angle[par] + cang[par]
-            v = np.stack([np.zeros(ncl), -np.sin(a), np.cos(a)], axis=1)
+            v = np.empty((ncl, 3))
+            v[:, 0] = 0.0
+            v[:, 1] = -np.sin(a)
+            v[:, 2] = np.cos(a)
             v = rot_y(v, cvar[par])
             if trunk:
                 v = rot_z(v, branch_rot[par])
@@ -308,7 +311,10 @@ def grow_level(
             )
 
         a = np.where(sp, -angle + cang, cang)
-        v = np.stack([np.zeros(nsp), -np.sin(a), np.cos(a)], axis=1)
+        v = np.empty((nsp, 3))
+        v[:, 0] = 0.0
+        v[:, 1] = -np.sin(a)
+        v[:, 2] = np.cos(a)
         v = rot_y(v, cvar)
         if sp.any():
             if trunk:
