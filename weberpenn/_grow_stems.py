@@ -153,7 +153,8 @@ def _attract_up(v: np.ndarray, att: float, res: int) -> np.ndarray:
     if att == 0.0 or len(v) == 0:
         return v
     axis_x, yz = track_x_and_yz(v)
-    dec = np.arccos(np.clip(normalize(v)[:, 2], -1.0, 1.0))
+    n = np.sqrt(np.einsum("ij,ij->i", v, v))  # normalize(v)[:, 2], Z only
+    dec = np.arccos(np.clip(v[:, 2] / np.where(n > 0.0, n, 1.0), -1.0, 1.0))
     a = att * dec * np.abs(yz) / res
     a = np.where(-dec + a < -np.pi, -np.pi + dec, a)
     a = np.where(dec - a < 0.0, dec, a)

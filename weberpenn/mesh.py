@@ -51,8 +51,13 @@ def tube_counts(n_points: int, res_u: int, bevel_res: int) -> tuple[int, int]:
     return sides * rings, 2 * sides * (rings - 1)
 
 
+def _norm(v: np.ndarray) -> np.ndarray:
+    """``np.linalg.norm(v, axis=-1)`` for float arrays (same arithmetic, less call overhead)."""
+    return np.sqrt(np.add.reduce(v * v, axis=-1))
+
+
 def _unit(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    n = np.linalg.norm(v, axis=-1)
+    n = _norm(v)
     return v / np.maximum(n, _EPS)[..., None], n
 
 
@@ -66,12 +71,12 @@ def _handles(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     nxt[:, -1] = 2.0 * p[:, -1] - p[:, -2]
     da = p - prev
     db = nxt - p
-    la = np.linalg.norm(da, axis=-1)
-    lb = np.linalg.norm(db, axis=-1)
+    la = _norm(da)
+    lb = _norm(db)
     la = np.where(la == 0.0, 1.0, la)
     lb = np.where(lb == 0.0, 1.0, lb)
     t = da / la[..., None] + db / lb[..., None]
-    tl = np.linalg.norm(t, axis=-1) * _AUTO
+    tl = _norm(t) * _AUTO
     ok = tl > _EPS
     tl = np.where(ok, tl, 1.0)
     la = np.minimum(la, 5.0 * lb)  # each leg at most five times the other
@@ -150,7 +155,7 @@ def _frames(t: np.ndarray, lengths: np.ndarray) -> np.ndarray:
         bad = ln < 1e-6  # the tangent turned onto the normal: take any perpendicular
         if bad.any():
             alt = np.cross(tj[bad], np.array([0.0, 0.0, 1.0]))
-            alt = np.where(np.linalg.norm(alt, axis=1)[:, None] > 1e-6, alt, (1.0, 0.0, 0.0))
+            alt = np.where(_norm(alt)[:, None] > 1e-6, alt, (1.0, 0.0, 0.0))
             v[bad] = _unit(alt)[0]
         normals[:a, j] = v
     return normals
