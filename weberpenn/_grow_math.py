@@ -263,18 +263,20 @@ def euler_compat(m: np.ndarray, compat_z: np.ndarray) -> np.ndarray:
     r21, r22, r12, r11 = m[:, 2, 1], m[:, 2, 2], m[:, 1, 2], m[:, 1, 1]
     cy = np.hypot(r00, r10)
     big = cy > _FLT_EPS16
-    e1 = np.empty((len(m), 3))
+    n = len(m)
+    both = np.empty((2 * n, 3))  # both Euler solutions, made compatible in one batch
+    e1, e2 = both[:n], both[n:]
     e1[:, 0] = np.where(big, np.arctan2(r21, r22), np.arctan2(-r12, r11))
     e1[:, 1] = np.arctan2(-r20, cy)
     e1[:, 2] = np.where(big, np.arctan2(r10, r00), 0.0)
-    e2 = np.empty((len(m), 3))
     e2[:, 0] = np.where(big, np.arctan2(-r21, -r22), e1[:, 0])
     e2[:, 1] = np.where(big, np.arctan2(-r20, -cy), e1[:, 1])
     e2[:, 2] = np.where(big, np.arctan2(-r10, -r00), 0.0)
-    old = np.zeros_like(e1)
-    old[:, 2] = compat_z
-    e1 = _compatible_eul(e1, old)
-    e2 = _compatible_eul(e2, old)
+    old2 = np.zeros((2 * n, 3))
+    old2[:n, 2] = compat_z
+    old2[n:, 2] = compat_z
+    both = _compatible_eul(both, old2)
+    e1, e2, old = both[:n], both[n:], old2[:n]
     d1 = np.abs(e1 - old).sum(axis=1)
     d2 = np.abs(e2 - old).sum(axis=1)
     return np.where((d1 > d2)[:, None], e2, e1)
