@@ -172,14 +172,18 @@ def _frames(t: np.ndarray, lengths: np.ndarray) -> np.ndarray:
 
 def _ring_faces(rings: int, sides: int) -> np.ndarray:
     """Triangles of one tube, vertex index = ring * sides + side (outward winding)."""
-    j = np.arange(rings - 1)[:, None]
-    k = np.arange(sides)[None, :]
+    j = np.arange(rings - 1, dtype=np.int64)[:, None]
+    k = np.arange(sides, dtype=np.int64)[None, :]
     a = j * sides + k
     b = j * sides + (k + 1) % sides
-    c = b + sides
-    d = a + sides
-    tri = np.stack([np.stack([a, b, c], -1), np.stack([a, c, d], -1)], axis=2)
-    return tri.reshape(-1, 3).astype(np.int64)
+    tri = np.empty((rings - 1, sides, 2, 3), dtype=np.int64)
+    tri[:, :, 0, 0] = a
+    tri[:, :, 0, 1] = b
+    tri[:, :, 0, 2] = b + sides
+    tri[:, :, 1, 0] = a
+    tri[:, :, 1, 1] = b + sides
+    tri[:, :, 1, 2] = a + sides
+    return tri.reshape(-1, 3)
 
 
 def _branches(sk: Skeleton) -> tuple[trimesh.Trimesh, dict]:
