@@ -244,7 +244,7 @@ def grow_level(
         else:
             frame = track_frames(dirv)
             tf = np.ones(nsp)
-        tip = pts[np.arange(nsp), k]
+        tip = pts[:, k]  # a view: only column k + 1 of ``pts`` is written below
         if n > 0 and kp > 0.0 and att_out > 0.0:
             d = np.arctan2(tip[:, 0], -tip[:, 1]) + TAU
             e = euler_compat(frame, d)
