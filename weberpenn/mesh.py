@@ -70,14 +70,17 @@ def _unit(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return v / np.maximum(n, _EPS)[..., None], n
 
 
-def _handles(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Left and right Bezier handles of control points ``p`` (G, n, 3), Blender's AUTO rule."""
+def _handles(p: np.ndarray, first: np.ndarray, last: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Left and right Bezier handles of the control points ``p`` (N, 3) of all stems at
+    once, Blender's AUTO rule; stem ``i`` owns rows ``first[i] .. last[i]`` (2 or more)."""
     prev = np.empty_like(p)
     nxt = np.empty_like(p)
-    prev[:, 1:] = p[:, :-1]
-    nxt[:, :-1] = p[:, 1:]
-    prev[:, 0] = 2.0 * p[:, 0] - p[:, 1]  # end points mirror their neighbour
-    nxt[:, -1] = 2.0 * p[:, -1] - p[:, -2]
+    prev[1:] = p[:-1]
+    prev[0] = p[0]
+    nxt[:-1] = p[1:]
+    nxt[-1] = p[-1]
+    prev[first] = 2.0 * p[first] - p[first + 1]  # end points mirror their neighbour
+    nxt[last] = 2.0 * p[last] - p[last - 1]
     da = p - prev
     db = nxt - p
     la = _norm(da)
@@ -93,15 +96,17 @@ def _handles(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     left = np.where(ok[..., None], p - t * (la / tl)[..., None], p)
     right = np.where(ok[..., None], p + t * (lb / tl)[..., None], p)
     # Sapling sets the first point of every spline to VECTOR handles
-    right[:, 0] = p[:, 0] + (p[:, 1] - p[:, 0]) / 3.0
-    left[:, 0] = p[:, 0] - (p[:, 1] - p[:, 0]) / 3.0
+    right[first] = p[first] + (p[first + 1] - p[first]) / 3.0
+    left[first] = p[first] - (p[first + 1] - p[first]) / 3.0
     return left, right
 
 
-def _sample(p: np.ndarray, r: np.ndarray, res_u: int) -> tuple[np.ndarray, np.ndarray]:
-    """Evaluate the Bezier splines of a group: (G, R, 3) positions and (G, R) radii."""
+def _sample(
+    p: np.ndarray, left: np.ndarray, right: np.ndarray, r: np.ndarray, res_u: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Evaluate the Bezier splines of a group (points and handles (G, n, 3), radii (G, n)):
+    (G, R, 3) positions and (G, R) radii."""
     g, n, _ = p.shape
-    left, right = _handles(p)
     t = np.arange(res_u, dtype=np.float64) / res_u
     b0 = (1 - t) ** 3
     b1 = 3 * (1 - t) ** 2 * t
@@ -210,9 +215,11 @@ def _branches(sk: Skeleton) -> tuple[trimesh.Trimesh, dict]:
     v0 = f0 = 0
     # stems grouped by control-point count, stem order kept inside a group
     sampled = {}
+    tubes = counts >= 2
+    left, right = _handles(pts, offsets[:-1][tubes], offsets[1:][tubes] - 1)
     for n in groups:
         sel = offsets[members[n]][:, None] + np.arange(n)[None, :]
-        x, rr = _sample(pts[sel], rad[sel], res_u)  # (G, R, 3), (G, R)
+        x, rr = _sample(pts[sel], left[sel], right[sel], rad[sel], res_u)  # (G, R, 3), (G, R)
         sampled[n] = (x, rr, _tangents(x))
     # one parallel-transport sweep over all stems, longest first (prefix slices)
     desc = groups[::-1]
