@@ -120,6 +120,31 @@ def quat_to_mat(w: np.ndarray, x: np.ndarray, y: np.ndarray, z: np.ndarray) -> n
     return m
 
 
+def _track_closed_form(
+    d: np.ndarray, special: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """X axis (N, 3), Y axis components (3 arrays) and Z axis components of the closed-form
+    track frame: Z is ``d`` normalised, Y is world up made perpendicular to it, X = Y x Z.
+    Rows marked ``special`` (near the vertical) get placeholder values."""
+    x, y, z = d[:, 0], d[:, 1], d[:, 2]
+    ln = np.sqrt(x * x + y * y + z * z)
+    ln = np.where(special, 1.0, ln)
+    zx, zy, zz = x / ln, y / ln, z / ln
+    yx, yy, yz = -zz * zx, -zz * zy, 1.0 - zz * zz
+    yl = np.sqrt(yx * yx + yy * yy + yz * yz)
+    yl = np.where(special, 1.0, yl)
+    yx, yy, yz = yx / yl, yy / yl, yz / yl
+    ax = np.empty_like(d)
+    ax[:, 0] = yy * zz - yz * zy
+    ax[:, 1] = yz * zx - yx * zz
+    ax[:, 2] = yx * zy - yy * zx
+    return ax, np.stack([yx, yy, yz], axis=1), np.stack([zx, zy, zz], axis=1), yz
+
+
+def _near_vertical(d: np.ndarray) -> np.ndarray:
+    return (np.abs(d[:, 0]) + np.abs(d[:, 1])) < 1e-4
+
+
 def track_frames(d: np.ndarray) -> np.ndarray:
     """Frames of ``Vector.to_track_quat('Z', 'Y')`` for each row of ``d``.
 
@@ -128,47 +153,23 @@ def track_frames(d: np.ndarray) -> np.ndarray:
     quaternion construction (:func:`_track_frames_exact`) near the vertical.
     """
     d = np.asarray(d, dtype=np.float64)
-    x, y, z = d[:, 0], d[:, 1], d[:, 2]
-    special = (np.abs(x) + np.abs(y)) < 1e-4
-    ln = np.sqrt(x * x + y * y + z * z)
-    ln = np.where(special, 1.0, ln)
-    zx, zy, zz = x / ln, y / ln, z / ln
-    yx, yy, yz = -zz * zx, -zz * zy, 1.0 - zz * zz
-    yl = np.sqrt(yx * yx + yy * yy + yz * yz)
-    yl = np.where(special, 1.0, yl)
-    yx, yy, yz = yx / yl, yy / yl, yz / yl
-    m = np.empty((len(d), 3, 3))
-    m[:, 0, 0] = yy * zz - yz * zy
-    m[:, 1, 0] = yz * zx - yx * zz
-    m[:, 2, 0] = yx * zy - yy * zx
-    m[:, 0, 1], m[:, 1, 1], m[:, 2, 1] = yx, yy, yz
-    m[:, 0, 2], m[:, 1, 2], m[:, 2, 2] = zx, zy, zz
+    special = _near_vertical(d)
+    ax, ay, az, _ = _track_closed_form(d, special)
+    m = np.stack([ax, ay, az], axis=2)
     if special.any():
         m[special] = _track_frames_exact(d[special])
     return m
 
 
 def track_x_and_yz(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``track_frames(d)[:, :, 0]`` and ``track_frames(d)[:, 2, 1]`` without the full frames.
-
-    The same arithmetic as :func:`track_frames` (identical results), for the per-segment
-    attraction step that needs only the frame's X axis and the Z component of its Y axis.
-    """
+    """``track_frames(d)[:, :, 0]`` and ``track_frames(d)[:, 2, 1]`` without the full frames
+    (the per-segment attraction step needs only these)."""
     d = np.asarray(d, dtype=np.float64)
-    x, y, z = d[:, 0], d[:, 1], d[:, 2]
-    special = (np.abs(x) + np.abs(y)) < 1e-4
+    special = _near_vertical(d)
     if special.any():
         t = track_frames(d)
         return t[:, :, 0], t[:, 2, 1]
-    ln = np.sqrt(x * x + y * y + z * z)
-    zx, zy, zz = x / ln, y / ln, z / ln
-    yx, yy, yz = -zz * zx, -zz * zy, 1.0 - zz * zz
-    yl = np.sqrt(yx * yx + yy * yy + yz * yz)
-    yx, yy, yz = yx / yl, yy / yl, yz / yl
-    ax = np.empty_like(d)
-    ax[:, 0] = yy * zz - yz * zy
-    ax[:, 1] = yz * zx - yx * zz
-    ax[:, 2] = yx * zy - yy * zx
+    ax, _, _, yz = _track_closed_form(d, special)
     return ax, yz
 
 
