@@ -7,9 +7,8 @@ is the stand-in when no TSN checkpoint exists, and a row to compare TSN against.
 1-RMSE needs normalised target matrices.  With ``reference`` (another backend's
 ``normalise_targets``, e.g. TSN's, whose normaliser was fitted on the training split and
 saved with its checkpoint) NNS is scored on exactly the same scale as that model.  Without
-it, :func:`encode` builds the (4, 62) layout from the parameter table (scalars repeated in
-the four rows, booleans and signs as 0/1, enums as their number) and a per-key max-abs
-scale is fitted on the indexed training trees.
+it, a plain per-key max-abs scale (every head, angles included) is fitted on the indexed
+training trees, over ``tsn.encoding``'s (4, 62) matrices.
 """
 
 from __future__ import annotations
@@ -26,19 +25,12 @@ from weberpenn import TreeParams
 if TYPE_CHECKING:  # pragma: no cover
     from .report import Backend
 
-__all__ = ["FEATURE", "NNS_NAME", "encode", "features", "nns_backend"]
+__all__ = ["FEATURE", "NNS_NAME", "features", "nns_backend"]
 
 FEATURE = 32
 NNS_NAME = "NNS baseline"
 
 Normaliser = Callable[[Sequence[Mapping]], np.ndarray]
-
-
-def encode(params: Mapping) -> np.ndarray:
-    """(4, 62) un-normalised target matrix in ``PREDICTED_KEYS`` order (``tsn.encoding``)."""
-    from tsn.encoding import encode as tsn_encode
-
-    return tsn_encode(params)
 
 
 def features(img: np.ndarray) -> np.ndarray:
@@ -97,12 +89,13 @@ def nns_backend(
     index = np.stack(feats)
 
     if reference is None:
-        mats = {k: encode(p) for k, p in params.items()}
-        scale = np.abs(np.stack(list(mats.values()))).max(axis=(0, 1))
+        from tsn.encoding import encode_many
+
+        scale = np.abs(encode_many(params.values())).max(axis=(0, 1))
         scale = np.where(scale > 0, scale, 1.0)
 
         def normalise_targets(ps: Sequence[Mapping]) -> np.ndarray:
-            return np.stack([encode(p) / scale for p in ps])
+            return encode_many(ps) / scale
 
         norm_info = "own max-abs scale over the indexed trees"
     else:

@@ -9,8 +9,9 @@ import pytest
 from PIL import Image
 from typer.testing import CliRunner
 
-from eval.baseline import NNS_NAME, encode, features, nns_backend
+from eval.baseline import NNS_NAME, features, nns_backend
 from eval.metrics import one_minus_rmse
+from tsn.encoding import encode
 from weberpenn import build_mesh, grow, species
 from weberpenn.params import PREDICTED_KEYS, SPECS
 
