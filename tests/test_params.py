@@ -124,13 +124,16 @@ def test_enum_and_bool_coercion():
 
 
 def test_explosive_sizes_rejected():
-    with pytest.raises(ParamError, match="out of range"):
+    with pytest.raises(ParamError, match="out of range") as e:
         TreeParams(_d(branches=[0, 10**7, 10, 10]))
-    with pytest.raises(ParamError, match="stems"):
+    assert e.value.key == "branches"
+    with pytest.raises(ParamError, match="stems") as e:
         TreeParams(_d(levels=4, branches=[0, 400, 400, 400]))
-    with pytest.raises(ParamError, match="leaves"):
+    assert e.value.key == "branches"
+    with pytest.raises(ParamError, match="leaves") as e:
         TreeParams(_d(levels=3, branches=[0, 100, 40, 10], leaves=2000))
-    with pytest.raises(ParamError, match="vertices"):
+    assert e.value.key == "leaves"
+    with pytest.raises(ParamError, match="vertices") as e:
         TreeParams(
             _d(
                 levels=2,
@@ -140,6 +143,7 @@ def test_explosive_sizes_rejected():
                 bevelRes=int(SPECS["bevelRes"].hi),
             )
         )
+    assert e.value.key == "curveRes"
 
 
 def test_scale_plus_scale_v_positive():

@@ -234,21 +234,22 @@ def decode_dict(mat: np.ndarray, normaliser: Normaliser | None = None) -> dict[s
     return {k: out[k] for k in (p.name for p in PARAMS)}
 
 
-def _shrink(d: dict[str, Any], message: str) -> bool:
-    """Make an over-large decoded tree smaller (the key named by the error); False = stuck."""
-    if "'branches'" in message:
+def _shrink(d: dict[str, Any], key: str | None) -> bool:
+    """Make an over-large decoded tree smaller (``key``: the one the error blames); False =
+    stuck."""
+    if key == "branches":
         b = list(d["branches"])
         if max(b[1:]) <= 1 and d["baseSplits"] == 0:
             return False
         d["branches"] = (b[0], *(max(int(v * 0.8), 1) if v > 1 else v for v in b[1:]))
         d["baseSplits"] = int(d["baseSplits"] * 0.8)
         return True
-    if "'leaves'" in message:
+    if key == "leaves":
         if abs(d["leaves"]) <= 1:
             return False
         d["leaves"] = int(d["leaves"] * 0.8)
         return True
-    if "'curveRes'" in message:
+    if key == "curveRes":
         if d["resU"] > 1:
             d["resU"] -= 1
             return True
@@ -278,6 +279,6 @@ def decode(mat: np.ndarray, normaliser: Normaliser | None = None) -> TreeParams:
         try:
             return TreeParams(d)
         except ParamError as e:
-            if not _shrink(d, str(e)):
+            if not _shrink(d, e.key):
                 raise ParamError(f"decoded prediction is not a valid tree: {e}") from None
     raise ParamError("decoded prediction is not a valid tree: could not shrink it to the limits")

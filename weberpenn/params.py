@@ -208,13 +208,20 @@ assert [len(HEAD_KEYS[h]) for h in HEADS] == [17, 4, 12, 12, 16, 1]
 
 
 class ParamError(ValueError):
-    """A parameter dictionary is invalid; the message names the key, value and range."""
+    """A parameter dictionary is invalid; the message names the key, value and range.
+
+    ``key`` is the offending parameter's name when one key is to blame (else ``None``).
+    """
+
+    def __init__(self, message: str, key: str | None = None) -> None:
+        super().__init__(message)
+        self.key = key
 
 
 def _bad(key: str, value: Any, why: str) -> ParamError:
     spec = SPECS.get(key.split("[", 1)[0])  # per-level values are named like 'taper[2]'
     allowed = f" (allowed: {spec.range_text()})" if spec else ""
-    return ParamError(f"parameter {key!r}: {why}, got {value!r}{allowed}")
+    return ParamError(f"parameter {key!r}: {why}, got {value!r}{allowed}", key.split("[", 1)[0])
 
 
 def _coerce_scalar(spec: ParamSpec, value: Any, key: str) -> Any:
@@ -362,25 +369,29 @@ def _validate_dict(values: Mapping[str, Any]) -> dict[str, Any]:
     if out["scale"] + out["scaleV"] <= 0:
         raise ParamError(
             f"parameter 'scaleV': scale + scaleV must be positive (the tree's size), got "
-            f"scale={out['scale']!r}, scaleV={out['scaleV']!r}"
+            f"scale={out['scale']!r}, scaleV={out['scaleV']!r}",
+            "scaleV",
         )
     stems, leaves, verts = _estimate_load(out)
     if stems > MAX_STEMS:
         raise ParamError(
             f"parameter 'branches': the tree would have about {stems:.3g} stems "
             f"(levels={out['levels']}, branches={list(out['branches'])}, baseSplits={out['baseSplits']}); "
-            f"the limit is {MAX_STEMS}"
+            f"the limit is {MAX_STEMS}",
+            "branches",
         )
     if leaves > MAX_LEAVES:
         raise ParamError(
             f"parameter 'leaves': the tree would have about {leaves:.3g} leaves "
-            f"(leaves={out['leaves']}, branches={list(out['branches'])}); the limit is {MAX_LEAVES}"
+            f"(leaves={out['leaves']}, branches={list(out['branches'])}); the limit is {MAX_LEAVES}",
+            "leaves",
         )
     if verts > MAX_TUBE_VERTICES:
         raise ParamError(
             f"parameter 'curveRes': the branch mesh would have about {verts:.3g} vertices "
             f"(curveRes={list(out['curveRes'])}, resU={out['resU']}, bevelRes={out['bevelRes']}); "
-            f"the limit is {MAX_TUBE_VERTICES}"
+            f"the limit is {MAX_TUBE_VERTICES}",
+            "curveRes",
         )
     return out
 
