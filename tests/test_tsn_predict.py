@@ -51,6 +51,30 @@ def test_predict_rendered_sketch(model: tp.TSNModel, sketch: np.ndarray) -> None
     assert len(model.predict_batch([sketch, big])) == 2
 
 
+def test_mirror_averaging(model: tp.TSNModel, sketch: np.ndarray) -> None:
+    """flip=True (the default) is the mean of the network outputs for the prepared sketch
+    and its mirror image."""
+    import torch
+
+    from tsn import encoding
+
+    assert model.flip is True and "flip=True" in repr(model)
+    both = model.raw_batch([sketch])[0]
+    x = torch.from_numpy(tp.preprocess(sketch, model.size))[None, None]
+    with torch.no_grad():
+        outs = [model.net(t) for t in (x, torch.flip(x, dims=[3]))]
+    alone, mirrored = (encoding.join_heads({h: v.numpy() for h, v in o.items()})[0] for o in outs)
+    assert not np.allclose(alone, mirrored, atol=1e-6)  # the mirror is a different input
+    np.testing.assert_allclose(both, 0.5 * (alone + mirrored), atol=1e-5)
+    model.flip = False
+    try:
+        np.testing.assert_allclose(model.raw_batch([sketch])[0], alone, atol=1e-5)
+    finally:
+        model.flip = True
+    # the mirrored drawing gives (nearly) the same averaged output: same tree, either hand
+    np.testing.assert_allclose(model.raw_batch([sketch[:, ::-1].copy()])[0], both, atol=0.05)
+
+
 def test_preprocess_crops_and_pads(sketch: np.ndarray) -> None:
     x = tp.preprocess(sketch, 64)
     assert x.shape == (64, 64) and x.dtype == np.float32 and 0 <= x.min() < 0.5 <= x.max() <= 1

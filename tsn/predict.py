@@ -6,7 +6,10 @@ the path in ``$TREESKETCH_TSN_CHECKPOINT``); ``model.predict(image)`` (or the mo
 RGB, or RGBA composited on white) and returns a :class:`Prediction`:
 
 * ``raw``: the network's six head outputs (normalised ``(4, n)`` arrays, the paper's
-  output, what 1-RMSE scores);
+  output, what 1-RMSE scores); with ``flip=True`` (the default) the mean of the outputs for
+  the sketch and its mirror image (test-time averaging: a mirrored tree sketch is an
+  equally plausible drawing of a tree with the same parameters; measured on the test split
+  in ``benchmarks/RESULTS.md``);
 * ``species``: Algorithm 1 on the denormalised output (``tsn.species_id``);
 * ``decoded``: the output decoded to a valid dictionary (``tsn.encoding.decode``: rounded,
   thresholded, snapped, clamped to the training range);
@@ -64,8 +67,9 @@ class Prediction:
 class TSNModel:
     """A loaded checkpoint: network, normaliser, species identifier, input size."""
 
-    def __init__(self, loaded: Loaded) -> None:
+    def __init__(self, loaded: Loaded, flip: bool = True) -> None:
         self.loaded = loaded
+        self.flip = bool(flip)
         self.net = loaded.model
         self.normaliser = loaded.normaliser
         self.species_id = loaded.species_id
@@ -74,18 +78,29 @@ class TSNModel:
         self.device = next(self.net.parameters()).device
 
     def __repr__(self) -> str:
-        return f"TSNModel({self.loaded.path}, backbone={self.net.backbone_name}, size={self.size})"
+        return (
+            f"TSNModel({self.loaded.path}, backbone={self.net.backbone_name}, size={self.size}, "
+            f"flip={self.flip})"
+        )
 
     def preprocess(self, image: Any) -> np.ndarray:
         return tdata.preprocess(image, self.size)
 
     @torch.no_grad()
     def raw_batch(self, images: Any) -> np.ndarray:
-        """Normalised network output ``(N, 4, 62)`` for a sequence of images."""
-        x = np.stack([self.preprocess(im) for im in images])
+        """Normalised network output ``(N, 4, 62)`` for a sequence of images.
+
+        With ``self.flip`` the output is the mean over each image and its left-right mirror
+        (one batch of 2N).
+        """
+        x = torch.from_numpy(np.stack([self.preprocess(im) for im in images]))[:, None]
+        n = len(x)
+        if self.flip:
+            x = torch.cat([x, torch.flip(x, dims=[3])])
         self.net.eval()
-        out = self.net(torch.from_numpy(x)[:, None].to(self.device))
-        return encoding.join_heads({h: v.cpu().numpy() for h, v in out.items()})
+        out = self.net(x.to(self.device))
+        mats = encoding.join_heads({h: v.float().cpu().numpy() for h, v in out.items()})
+        return 0.5 * (mats[:n] + mats[n:]) if self.flip else mats
 
     def from_raw(self, raw: np.ndarray) -> Prediction:
         """Decode one normalised ``(4, 62)`` network output."""
@@ -105,12 +120,17 @@ class TSNModel:
         return self.predict(image)
 
 
-def load_model(path: str | os.PathLike[str] | None = None, device: str | None = None) -> TSNModel:
-    """Load a checkpoint (default: ``$TREESKETCH_TSN_CHECKPOINT`` or the shipped one)."""
+def load_model(
+    path: str | os.PathLike[str] | None = None, device: str | None = None, flip: bool = True
+) -> TSNModel:
+    """Load a checkpoint (default: ``$TREESKETCH_TSN_CHECKPOINT`` or the shipped one).
+
+    ``flip`` averages each output with that of the mirrored sketch (see the module text).
+    """
     if path is None:
         path = os.environ.get(ENV_CHECKPOINT) or DEFAULT_CHECKPOINT
     dev = device or ("cuda" if torch.cuda.is_available() else "cpu")
-    return TSNModel(load_checkpoint(path, dev))
+    return TSNModel(load_checkpoint(path, dev), flip=flip)
 
 
 def predict(model: TSNModel, image: Any) -> Prediction:
