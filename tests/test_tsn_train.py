@@ -137,3 +137,38 @@ def test_bad_settings(tiny: Path, tmp_path: Path) -> None:
         app, ["eval", "tsn", "--data", str(tiny), "--checkpoint", str(tmp_path / "missing.pt")]
     )
     assert r.exit_code == 2 and "no such checkpoint" in r.output
+
+
+def test_more_data_adds_training_trees_and_refuses_leaks(tiny: Path, tmp_path: Path) -> None:
+    from render.dataset import DatasetConfig, build_dataset
+
+    more = tmp_path / "more"
+    build_dataset(
+        DatasetConfig(out=str(more), trees_per_species=1, views=("front",), size=64, seed=7),
+        progress=False,
+    )
+    lines: list[str] = []
+    common = dict(size=64, batch=8, copies=1, epochs=1, threads=2)
+    res = train(
+        TrainConfig(str(tiny), str(tmp_path / "m.pt"), more_data=(str(more),), **common),
+        log=lines.append,
+    )
+    n_first = len(load_split(tiny, "train").images)
+    n_more = len(load_split(more, None).images)
+    assert n_more == 5  # every split of the extra dataset: one tree per species, one view
+    assert any(f"{n_first + n_more} train ({n_first} from" in s for s in lines), lines
+    from tsn.predict import load_model
+
+    assert load_model(res["out"]).info["n_train"] == n_first + n_more
+    # the same seed means the same trees: tiny's val/test trees would leak into training
+    twin = tmp_path / "twin"
+    build_dataset(
+        DatasetConfig(out=str(twin), trees_per_species=4, views=("front",), size=64, seed=0),
+        progress=False,
+    )
+    with pytest.raises(TrainError, match="validation/test trees"):
+        train(TrainConfig(str(tiny), str(tmp_path / "x.pt"), more_data=(str(twin),)))
+    with pytest.raises(TrainError, match="dataset itself"):
+        train(TrainConfig(str(tiny), str(tmp_path / "x.pt"), more_data=(str(tiny) + "/",)))
+    with pytest.raises(TrainError, match="no such dataset"):
+        train(TrainConfig(str(tiny), str(tmp_path / "y.pt"), more_data=(str(tmp_path / "no"),)))

@@ -35,6 +35,12 @@ def train_cmd(
         None, "--max-sketches", help="Use only the first N sketches of each split (quick runs)."
     ),
     resume: bool = typer.Option(False, "--resume", help="Continue an interrupted run."),
+    more_data: list[Path] = typer.Option(
+        [],
+        "--more-data",
+        help="Another dataset (built with another --seed) whose every split is added to the "
+        "training trees; repeatable. Validation stays --data's val split.",
+    ),
     loss: str = typer.Option(
         "mse", "--loss", help="mse: sum of per-head MSE (paper); rmse: sum of per-head RMSE."
     ),
@@ -58,6 +64,7 @@ def train_cmd(
         max_sketches=max_sketches,
         resume=resume,
         loss=loss,
+        more_data=tuple(str(d) for d in more_data),
     )
     try:
         res = train(cfg, log=lambda s: typer.echo(s))

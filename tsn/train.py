@@ -67,6 +67,7 @@ class TrainConfig:
     resume: bool = False
     pretrained: bool = True
     loss: str = "mse"  # "mse": sum of per-head MSE (paper); "rmse": sum of per-head RMSE
+    more_data: tuple[str, ...] = ()  # datasets whose every split is added to the training set
     extra: dict[str, Any] = field(default_factory=dict)
 
     def check(self) -> None:
@@ -99,9 +100,21 @@ class Split:
     mats: np.ndarray  # (N, 4, 62) un-normalised targets
     species: list[str]
     tree_ids: list[str]
+    tree_seeds: list[int] = field(default_factory=list)
+
+    @staticmethod
+    def concat(parts: list[Split]) -> Split:
+        return Split(
+            [im for p in parts for im in p.images],
+            np.concatenate([p.mats for p in parts]),
+            [s for p in parts for s in p.species],
+            [t for p in parts for t in p.tree_ids],
+            [t for p in parts for t in p.tree_seeds],
+        )
 
 
-def load_split(data: Path, split: str, limit: int | None = None) -> Split:
+def load_split(data: Path, split: str | None, limit: int | None = None) -> Split:
+    """The sketches and targets of ``split`` of a dataset (``None``: every split)."""
     from render.dataset import DatasetError, read_manifest
 
     try:
@@ -111,7 +124,8 @@ def load_split(data: Path, split: str, limit: int | None = None) -> Split:
     if limit is not None:
         rows = rows[:limit]
     if not rows:
-        raise TrainError(f"{data}: the {split!r} split is empty")
+        what = "it has no sketches" if split is None else f"the {split!r} split is empty"
+        raise TrainError(f"{data}: {what}")
     images, mats, cache = [], [], {}
     for r in rows:
         images.append(tdata.to_grey(data / r["sketch"]))
@@ -119,7 +133,39 @@ def load_split(data: Path, split: str, limit: int | None = None) -> Split:
             p = TreeParams(json.loads((data / r["params"]).read_text(encoding="utf-8")))
             cache[r["params"]] = encoding.encode(p)
         mats.append(cache[r["params"]])
-    return Split(images, np.stack(mats), [r["species"] for r in rows], [r["tree_id"] for r in rows])
+    return Split(
+        images,
+        np.stack(mats),
+        [r["species"] for r in rows],
+        [r["tree_id"] for r in rows],
+        [int(r["tree_seed"]) for r in rows],
+    )
+
+
+def load_more(cfg: TrainConfig, data: Path) -> list[tuple[Path, Split]]:
+    """The ``more_data`` datasets (every split), refused where one shares a tree (same
+    ``tree_seed``) with the validation or test split of ``data``: that would leak."""
+    from render.dataset import read_manifest
+
+    if not cfg.more_data:
+        return []
+    held = {int(r["tree_seed"]) for r in read_manifest(data) if r["split"] in ("val", "test")}
+    out = []
+    for d in cfg.more_data:
+        path = Path(d)
+        if not path.is_dir():
+            raise TrainError(f"--more-data {path}: no such dataset folder")
+        if path.resolve() == data.resolve():
+            raise TrainError(f"--more-data {path} is the --data dataset itself")
+        part = load_split(path, None, cfg.max_sketches)
+        shared = held.intersection(part.tree_seeds)
+        if shared:
+            raise TrainError(
+                f"--more-data {path}: {len(shared)} of its trees are validation/test trees of "
+                f"{data} (same tree_seed; build it with another --seed)"
+            )
+        out.append((path, part))
+    return out
 
 
 def fit_species_id(split: Split, normaliser: encoding.Normaliser) -> SpeciesIdentifier:
@@ -130,7 +176,7 @@ def fit_species_id(split: Split, normaliser: encoding.Normaliser) -> SpeciesIden
 
 
 # ----------------------------------------------------------------------------- cache
-def _cache_key(cfg: TrainConfig, cut: int, split: Split, tag: str) -> str:
+def _cache_key(cfg: TrainConfig, cut: int, split: Split, tag: str, data: str | None) -> str:
     h = hashlib.sha1()
     h.update(
         json.dumps(
@@ -138,7 +184,7 @@ def _cache_key(cfg: TrainConfig, cut: int, split: Split, tag: str) -> str:
             sort_keys=True,
         ).encode()
     )
-    h.update(str(Path(cfg.data).resolve()).encode())
+    h.update(str(Path(data or cfg.data).resolve()).encode())
     h.update("|".join(split.tree_ids).encode())
     return h.hexdigest()[:16]
 
@@ -167,9 +213,12 @@ def build_cache(
     copies: int,
     tag: str,
     log: Callable[[str], None],
+    data: str | None = None,
+    part: int = 0,
 ) -> torch.Tensor:
-    """``(copies + 1, N, ...)`` fp16: version 0 clean, 1.. augmented (seeded per image)."""
-    path = cfg.work_dir / f"cache_{tag}_{_cache_key(cfg, cut, split, tag)}.pt"
+    """``(copies + 1, N, ...)`` fp16: version 0 clean, 1.. augmented (seeded per image;
+    ``part`` > 0 for the ``more_data`` datasets, so their augmentations differ)."""
+    path = cfg.work_dir / f"cache_{tag}_{_cache_key(cfg, cut, split, tag, data)}.pt"
     if path.is_file():
         try:
             t = torch.load(path, map_location="cpu", weights_only=True)
@@ -185,7 +234,9 @@ def build_cache(
             imgs = split.images
         else:
             imgs = [
-                tdata.augment(im, np.random.default_rng([cfg.seed, v, i]))
+                tdata.augment(
+                    im, np.random.default_rng([cfg.seed, v, i] + ([part] if part else []))
+                )
                 for i, im in enumerate(split.images)
             ]
         versions.append(compute_features(model, imgs, cut, cfg.size, device))
@@ -320,14 +371,20 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
             f"{state_path} exists: pass --resume to continue that run, or remove {work}"
         )
 
-    trn = load_split(data, "train", cfg.max_sketches)
+    first = load_split(data, "train", cfg.max_sketches)
+    more = load_more(cfg, data)
+    trn = Split.concat([first] + [m for _, m in more])
     val = load_split(data, "val", cfg.max_sketches)
     normaliser = encoding.Normaliser.fit(trn.mats)
     species_id = fit_species_id(trn, normaliser)
     y_trn = head_targets(normaliser.normalise(trn.mats))
     y_val_norm = normaliser.normalise(val.mats)
     y_val = head_targets(y_val_norm)
-    log(f"[train] {len(trn.images)} train / {len(val.images)} val sketches, device {device}")
+    log(
+        f"[train] {len(trn.images)} train ({len(first.images)} from {data}"
+        + "".join(f", {len(m.images)} from {p}" for p, m in more)
+        + f") / {len(val.images)} val sketches, device {device}"
+    )
 
     try:
         model = TSN(cfg.backbone, pretrained=cfg.pretrained).to(device)
@@ -336,7 +393,14 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
     cut = BACKBONES[cfg.backbone][1] if cfg.cut is None else int(cfg.cut)
     if not 0 <= cut < model.n_stages:
         raise TrainError(f"--cut must be in [0, {model.n_stages - 1}], got {cut}")
-    f_trn = build_cache(model, trn, cut, cfg, device, cfg.copies, "train", log)
+    f_trn = torch.cat(
+        [build_cache(model, first, cut, cfg, device, cfg.copies, "train", log)]
+        + [
+            build_cache(model, m, cut, cfg, device, cfg.copies, "train", log, str(p), i)
+            for i, (p, m) in enumerate(more, start=1)
+        ],
+        dim=1,
+    )
     f_val = build_cache(model, val, cut, cfg, device, 0, "val", log)[0]
     params = set_trainable(model, cut)
     opt = torch.optim.Adam(params, lr=cfg.lr)
