@@ -55,12 +55,6 @@ def pick_rows(data: Path, per_species: int) -> list[dict]:
     return out
 
 
-def searchable(name: str, params, hold: set[str]) -> list[str]:
-    """The species' searched labels minus those whose key is in ``hold``."""
-    sp = SearchSpace.create(name, params, search_yaw=False)
-    return [u.label for u in sp.dims if u.key not in hold]
-
-
 def perturbed(name: str, gt, shift: float, seed: int):
     sp = SearchSpace.create(name, gt, search_yaw=False)
     x = sp.from_params(gt)
@@ -80,10 +74,17 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="give refinement the sketch's true view yaw (an oracle; default: searched)",
     )
+    ap.add_argument(
+        "--all-dims",
+        action="store_true",
+        help="search every free value, also those that do not change the tree (live_only off)",
+    )
     ap.add_argument("--shift", type=float, default=0.25)
     ap.add_argument("--species", default=None, help="comma list (default: all five)")
     ap.add_argument(
-        "--hold", default=None, help="comma list of keys not searched (e.g. rotate,rLastAng)"
+        "--hold",
+        default=None,
+        help="comma list of keys not searched (default: refine.search.DEFAULT_HOLD; '' for none)",
     )
     ap.add_argument(
         "--markdown", type=Path, default=None, help="only print the tables of a --json file"
@@ -118,7 +119,7 @@ def main(argv: list[str] | None = None) -> int:
         nns = nns_backend(args.data, bar=False)
     records = []
     only = None if args.species is None else set(args.species.split(","))
-    hold = set() if args.hold is None else set(args.hold.split(","))
+    hold = None if args.hold is None else [k for k in args.hold.split(",") if k]
     for k, row in enumerate(pick_rows(args.data, args.per_species)):
         name = row["species"]
         if only is not None and name not in only:
@@ -144,7 +145,8 @@ def main(argv: list[str] | None = None) -> int:
             algorithm=args.algorithm,
             **({} if args.initial_step is None else {"initial_step": args.initial_step}),
             **({} if args.prior_weight is None else {"prior_weight": args.prior_weight}),
-            **({"keys": searchable(guessed, start, hold)} if hold else {}),
+            hold=hold,
+            live_only=not args.all_dims,
         )
         view_yaw = float(row["yaw"])
         m0 = build_mesh(grow(start), species=guessed)

@@ -275,6 +275,48 @@ class SearchSpace:
         base = species.project(self.species, base)
         return SearchSpace(self.species, base, self.dims, self.search_yaw, self.fixed_yaw)
 
+    def without(self, keys: Sequence[str]) -> SearchSpace:
+        """The same space minus the dimensions whose key (or label) is in ``keys``."""
+        drop = set(keys)
+        dims = tuple(u for u in self.dims if u.key not in drop and u.label not in drop)
+        return SearchSpace(self.species, self.base, dims, self.search_yaw, self.fixed_yaw)
+
+    def live(self, probe: float = 0.25) -> SearchSpace:
+        """The same space minus its dead dimensions: those that do not change the grown
+        tree at all when moved by ``probe`` (unit cube) either way from the base point.
+
+        Many unfixed values only act through a structure the base does not have (a
+        trunk-split rotation with ``baseSplits`` 0, the last-angle memory of a level whose
+        stems take another rule, a pine's whorl-placed branches); searching them costs
+        BOBYQA two start evaluations each and lets them drift without a signal.  Costs
+        ``2 n`` skeleton grows (no mesh, no render): well under a second.
+        """
+        from weberpenn import grow
+
+        def signature(params: TreeParams) -> tuple[np.ndarray, ...]:
+            sk = grow(params)
+            return (np.asarray(sk.points), np.asarray(sk.radii), np.asarray(sk.leaf_matrices))
+
+        def same(a: tuple[np.ndarray, ...], b: tuple[np.ndarray, ...]) -> bool:
+            return all(
+                x.shape == y.shape and np.allclose(x, y, rtol=0.0, atol=1e-9)
+                for x, y in zip(a, b, strict=True)
+            )
+
+        x0 = self.from_params(self.base)
+        ref = signature(self.to_params(x0))
+        keep = []
+        for i, u in enumerate(self.dims):
+            for t in (x0[i] + probe, x0[i] - probe):
+                if not 0.0 <= t <= 1.0:
+                    continue
+                x = x0.copy()
+                x[i] = t
+                if not same(signature(self.to_params(x)), ref):
+                    keep.append(u)
+                    break
+        return SearchSpace(self.species, self.base, tuple(keep), self.search_yaw, self.fixed_yaw)
+
 
 # --------------------------------------------------------------------------- objective
 

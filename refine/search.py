@@ -35,6 +35,12 @@ ALGORITHMS = {"bobyqa": "LN_BOBYQA", "sbplx": "LN_SBPLX", "cobyla": "LN_COBYLA"}
 START_YAWS = (0.0, 90.0, 180.0, 270.0, 45.0, 135.0, 225.0, 315.0)
 # objective penalty for a view turned from the front: 0.015 at 90 degrees, 0.06 at 180
 YAW_WEIGHT = 0.06
+# held at the first estimate unless asked for: the tree's absolute size variation.  Every
+# sketch is framed to its own tree, so a size change shows only as slightly thinner lines
+# and smaller leaves; per unit of sketch distance it moves the mesh more than any other
+# value in every species (benchmarks/key_sensitivity.py, RESULTS.md), so the search
+# would trade the estimator's size for pixel noise.
+DEFAULT_HOLD = ("scaleV",)
 
 Progress = Callable[[int, float], None]
 
@@ -118,12 +124,16 @@ def refine(
     xtol: float = 1e-3,
     prior_weight: float = 0.0,
     yaw_weight: float = YAW_WEIGHT,
+    hold: Sequence[str] | None = None,
+    live_only: bool = True,
 ) -> RefineResult:
     """Refine ``initial_params`` so its sketch matches ``sketch`` (see the module text).
 
     ``budget`` caps the tree evaluations (grow + mesh + sketch; the start views count),
     ``time_limit`` the seconds; ``yaw`` fixes the view instead of searching it; ``keys``
-    restricts the searched values; ``global_evals`` > 0 runs GN_CRS2_LM first;
+    restricts the searched values and ``hold`` (default :data:`DEFAULT_HOLD`; ``()`` for
+    none) keeps some at their first estimate; ``live_only`` drops the values that do not
+    change this tree at all (``SearchSpace.live``); ``global_evals`` > 0 runs GN_CRS2_LM first;
     ``prior_weight`` > 0 adds ``prior_weight * |x - x_start|^2`` (unit cube, yaw excluded)
     to what is minimised; ``yaw_weight`` (when the yaw is searched) adds
     ``yaw_weight * (turn from the front view / 180)^2``, so the front view is kept unless
@@ -148,6 +158,9 @@ def refine(
     deadline = None if time_limit is None else t0 + float(time_limit)
 
     space = SearchSpace.create(name, initial_params, keys, search_yaw=yaw is None, yaw=yaw or 0.0)
+    space = space.without(DEFAULT_HOLD if hold is None else [str(k) for k in hold])
+    if live_only:
+        space = space.live()
     for label, w in (("prior_weight", prior_weight), ("yaw_weight", yaw_weight)):
         if not (math.isfinite(w) and w >= 0):
             raise ValueError(f"{label} must be >= 0, got {w!r}")
@@ -216,7 +229,8 @@ def refine(
         local = getattr(nlopt, ALGORITHMS[alg_name])
         if local == nlopt.LN_BOBYQA and space.n < 2:
             local = nlopt.LN_COBYLA
-        stages.append((local, budget))
+        if space.n > 0:  # nothing to search: the start point is the answer
+            stages.append((local, budget))
         for alg, cap in stages:
             if out_of_budget() is not None:
                 stopped[0] = out_of_budget() or stopped[0]

@@ -62,6 +62,31 @@ def test_search_space_round_trip_and_projection() -> None:
         SearchSpace.create("bonsai", gt, keys=["nosuchkey"])
 
 
+def test_live_drops_exactly_the_values_that_do_not_change_the_tree() -> None:
+    gt = species.sample("palm", 1)
+    sp = SearchSpace.create("palm", gt)
+    live = sp.live()
+    assert live.search_yaw and live.labels[-1] == "yaw"
+    dropped = set(sp.labels) - set(live.labels)
+    # a palm has no trunk splits (rSplits2, rotate[0]) and its stems ignore rLastAng
+    assert {"rSplits2", "rotate[0]"} <= dropped and "curve[0]" in live.labels
+
+    def points(params) -> np.ndarray:  # stems, radii and leaves
+        sk = grow(params)
+        return np.concatenate([np.ravel(a) for a in (sk.points, sk.radii, sk.leaf_matrices)])
+
+    x0 = sp.from_params(gt, 0.0)
+    for i, u in enumerate(sp.dims):
+        x = x0.copy()
+        x[i] = 1.0 - x[i] if abs(0.5 - x[i]) > 0.05 else 0.0
+        moved = points(sp.to_params(x))
+        same = moved.shape == points(gt).shape and np.allclose(moved, points(gt), atol=1e-9)
+        assert same == (u.label in dropped), u.label
+    smaller = live.without(["scaleV", "curve[0]"])
+    assert "scaleV" not in smaller.labels and "curve[0]" not in smaller.labels
+    assert smaller.n == live.n - 2
+
+
 def test_objective_deterministic_cached_and_zero_at_truth() -> None:
     from render.sketch import SketchRenderer
 

@@ -36,10 +36,19 @@ def test_refine_improves_on_perturbed_truth() -> None:
     assert r.species == "palm"
     assert r.loss_after <= r.loss_before
     assert r.loss_after < 0.9 * r.loss_before, (r.loss_before, r.loss_after)
+    assert r.params["scaleV"] == start["scaleV"]  # DEFAULT_HOLD: the size stays estimated
     assert r.evaluations <= 40
     assert seen and seen[-1][0] == r.evaluations
     assert all(b2 <= b1 for (_, b1), (_, b2) in zip(seen, seen[1:], strict=False))
     assert [t[0] for t in r.trace] == list(range(1, r.evaluations + 1))
+
+
+def test_hold_everything_returns_the_start() -> None:
+    img, _gt, start = _case(seed=5)
+    keys = [u.key for u in SearchSpace.create("palm", start).dims]
+    r = refine(img, start, budget=10, species="palm", yaw=0.0, hold=keys)
+    assert r.evaluations == 1 and r.loss_after == r.loss_before
+    assert r.params.to_dict() == species.project("palm", start).to_dict()
 
 
 def test_start_point_at_truth_stays_at_zero() -> None:
