@@ -137,7 +137,7 @@ def test_shipped_checkpoint_predicts_species() -> None:
     from render.sketch import SketchRenderer
 
     model = tp.load_model()
-    assert model.size == 128 and model.net.backbone_name == "lite0"
+    assert model.size == 192 and model.net.backbone_name == "lite0"
     for name, seed, yaw in (("palm", 9001, 0.0), ("pine", 9002, 90.0), ("cherry", 9003, 180.0)):
         img = SketchRenderer(build_mesh(grow(species.sample(name, seed)), species=name)).sketch(
             yaw, 256
