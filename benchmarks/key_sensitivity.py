@@ -1,7 +1,7 @@
 """Which free values can refinement see?  Sketch distance vs mesh change, per value.
 
 For N test-split trees per species of a dataset built by ``render.dataset`` (one view per
-tree, cycling front/left/back/right): start from the ground truth, move ONE free unit-cube
+tree, cycling front/left/back/right: the sketches ``bench_refine.py`` uses): start from the ground truth, move ONE free unit-cube
 coordinate of ``refine.objective.SearchSpace`` by ``--step`` (up, or down near the top),
 and measure
 
@@ -30,72 +30,80 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from bench_refine import pick_rows  # noqa: E402
 
 from eval.hausdorff import bbox_diagonal, hausdorff  # noqa: E402
 from refine.objective import SearchSpace, SketchObjective, SketchTarget  # noqa: E402
-from render.dataset import read_manifest  # noqa: E402
 from render.sketch import SketchRenderer  # noqa: E402
 from treesketch.pipeline import SEARCH_SIZE  # noqa: E402
 from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
 
-VIEW_ORDER = ("front", "left", "back", "right")
-
 
 def measure(data: Path, per_species: int, step: float, samples: int) -> list[dict]:
-    rows = read_manifest(data, split="test")
     out = []
-    for name in species.SPECIES:
-        mine = [r for r in rows if r["species"] == name]
-        for k, tree in enumerate(sorted({r["tree_id"] for r in mine})[:per_species]):
-            view = VIEW_ORDER[k % 4]
-            row = next(r for r in mine if r["tree_id"] == tree and r["view"] == view)
-            gt = load_params(data / row["params"])
-            gt_mesh = build_mesh(grow(gt), species=name)
-            gt_c, diag = gt_mesh.combined(), bbox_diagonal(gt_mesh.bounds())
-            yaw = float(row["yaw"])
-            sketch = SketchRenderer(gt_mesh).sketch(yaw, SEARCH_SIZE)
-            space = SearchSpace.create(name, gt, search_yaw=False, yaw=yaw)
-            obj = SketchObjective(SketchTarget.from_image(sketch, SEARCH_SIZE), space)
-            x0 = space.from_params(gt)
-            for i, u in enumerate(space.dims):
-                x = x0.copy()
-                x[i] = x[i] + step if x[i] + step <= 1.0 else x[i] - step
-                moved = build_mesh(grow(space.to_params(x)), species=name)
-                h = hausdorff(moved.combined(), gt_c, samples, diag)
-                out.append(
-                    {
-                        "species": name,
-                        "tree_id": tree,
-                        "view": view,
-                        "value": u.label,
-                        "sketch": obj(x),
-                        "mesh_max": h.max_norm,
-                        "mesh_mean": h.mean_norm,
-                    }
-                )
-            print(f"  {tree} ({view}): {len(space.dims)} values", flush=True)
+    for row in pick_rows(data, per_species):
+        name, tree, view = row["species"], row["tree_id"], row["view"]
+        gt = load_params(data / row["params"])
+        gt_mesh = build_mesh(grow(gt), species=name)
+        gt_c, diag = gt_mesh.combined(), bbox_diagonal(gt_mesh.bounds())
+        yaw = float(row["yaw"])
+        sketch = SketchRenderer(gt_mesh).sketch(yaw, SEARCH_SIZE)
+        space = SearchSpace.create(name, gt, search_yaw=False, yaw=yaw)
+        obj = SketchObjective(SketchTarget.from_image(sketch, SEARCH_SIZE), space)
+        x0 = space.from_params(gt)
+        for i, u in enumerate(space.dims):
+            x = x0.copy()
+            x[i] = x[i] + step if x[i] + step <= 1.0 else x[i] - step
+            moved = build_mesh(grow(space.to_params(x)), species=name)
+            h = hausdorff(moved.combined(), gt_c, samples, diag)
+            out.append(
+                {
+                    "species": name,
+                    "tree_id": tree,
+                    "view": view,
+                    "value": u.label,
+                    "sketch": obj(x),
+                    "mesh_max": h.max_norm,
+                    "mesh_mean": h.mean_norm,
+                }
+            )
+        print(f"  {tree} ({view}): {len(space.dims)} values", flush=True)
     return out
 
 
-def markdown(records: list[dict]) -> str:
+def _ratios(records: list[dict]) -> dict[str, list[tuple[str, float, float, float]]]:
+    """Per species: (value, mean sketch distance, mean mesh max, mesh / sketch) per value."""
     by: dict[tuple[str, str], list[dict]] = defaultdict(list)
     for r in records:
         by[(r["species"], r["value"])].append(r)
+    out: dict[str, list[tuple[str, float, float, float]]] = defaultdict(list)
+    for (name, value), rs in by.items():
+        d = float(np.mean([r["sketch"] for r in rs]))
+        m = float(np.mean([r["mesh_max"] for r in rs]))
+        out[name].append((value, d, m, m / (d + 1e-3)))
+    return {k: sorted(v, key=lambda t: -t[3]) for k, v in out.items()}
+
+
+def markdown(records: list[dict]) -> str:
+    """Every value, and a summary: values with no effect, the four with most mesh change."""
+    ratios = _ratios(records)
     lines = [
         "| species | value | sketch distance | mesh max | mesh / sketch |",
         "|---|---|---:|---:|---:|",
     ]
-    for name in species.SPECIES:
-        stats = []
-        for (s, value), rs in by.items():
-            if s != name:
-                continue
-            d = float(np.mean([r["sketch"] for r in rs]))
-            m = float(np.mean([r["mesh_max"] for r in rs]))
-            stats.append((value, d, m, m / (d + 1e-3)))
-        for value, d, m, ratio in sorted(stats, key=lambda t: -t[3]):
-            lines.append(f"| {name} | {value} | {d:.4f} | {m:.4f} | {ratio:.2f} |")
-    return "\n".join(lines)
+    summary = [
+        "| species | free values | no effect at all | most mesh per sketch |",
+        "|---|---:|---|---|",
+    ]
+    for name in (s for s in species.SPECIES if s in ratios):
+        rows = ratios[name]
+        lines += [f"| {name} | {v} | {d:.4f} | {m:.4f} | {q:.2f} |" for v, d, m, q in rows]
+        dead = [v for v, d, m, _ in rows if d <= 1e-6 and m <= 1e-6]
+        top = [f"{v} {q:.2f}" for v, d, m, q in rows if v not in dead][:4]
+        summary.append(f"| {name} | {len(rows)} | {', '.join(dead) or '-'} | {', '.join(top)} |")
+    return "\n".join(lines + [""] + summary)
 
 
 def main() -> None:

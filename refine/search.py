@@ -38,8 +38,8 @@ YAW_WEIGHT = 0.06
 # held at the first estimate unless asked for: the tree's absolute size variation.  Every
 # sketch is framed to its own tree, so a size change shows only as slightly thinner lines
 # and smaller leaves; per unit of sketch distance it moves the mesh more than any other
-# value in every species (benchmarks/key_sensitivity.py, RESULTS.md), so the search
-# would trade the estimator's size for pixel noise.
+# value in every species where it is free (benchmarks/key_sensitivity.py, RESULTS.md), so
+# the search would trade the estimator's size for pixel noise.
 DEFAULT_HOLD = ("scaleV",)
 
 Progress = Callable[[int, float], None]
@@ -158,7 +158,13 @@ def refine(
     deadline = None if time_limit is None else t0 + float(time_limit)
 
     space = SearchSpace.create(name, initial_params, keys, search_yaw=yaw is None, yaw=yaw or 0.0)
-    space = space.without(DEFAULT_HOLD if hold is None else [str(k) for k in hold])
+    held = DEFAULT_HOLD if hold is None else [str(k) for k in hold]
+    unknown = [k for k in held if k.split("[")[0] not in SPECS]
+    if unknown:
+        raise ValueError(f"hold: not parameter names: {', '.join(unknown)}")
+    space = space.without(held)
+    # liveness is judged at the start's discrete values: their neighbours (baseSplits,
+    # nrings) change no value's liveness (checked on a sampled tree of each species)
     if live_only:
         space = space.live()
     for label, w in (("prior_weight", prior_weight), ("yaw_weight", yaw_weight)):

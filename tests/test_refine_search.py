@@ -49,6 +49,8 @@ def test_hold_everything_returns_the_start() -> None:
     r = refine(img, start, budget=10, species="palm", yaw=0.0, hold=keys)
     assert r.evaluations == 1 and r.loss_after == r.loss_before
     assert r.params.to_dict() == species.project("palm", start).to_dict()
+    with pytest.raises(ValueError, match="hold: not parameter names: scalev"):
+        refine(img, start, budget=5, species="palm", hold=["scalev"])
 
 
 def test_start_point_at_truth_stays_at_zero() -> None:

@@ -52,10 +52,8 @@ def evaluate(
     for s in _progress(starts, "eval tsn", len(starts), bar):
         chunk = rows[s : s + batch]
         imgs = [_load_sketch(data / r["sketch"]) for r in chunk]
-        model.flip = False
-        alone = model.raw_batch(imgs)
-        model.flip = True
-        out = model.raw_batch(imgs)
+        alone, mirror = model.raw_views(imgs)
+        out = 0.5 * (alone + mirror)  # what predict uses (flip=True)
         for r, a, o in zip(chunk, alone, out, strict=True):
             pred = model.from_raw(o)
             if r["params"] not in params:

@@ -87,20 +87,23 @@ class TSNModel:
         return tdata.preprocess(image, self.size)
 
     @torch.no_grad()
-    def raw_batch(self, images: Any) -> np.ndarray:
-        """Normalised network output ``(N, 4, 62)`` for a sequence of images.
-
-        With ``self.flip`` the output is the mean over each image and its left-right mirror
-        (one batch of 2N).
-        """
+    def raw_views(self, images: Any, mirrored: bool = True) -> tuple[np.ndarray, ...]:
+        """Normalised network outputs ``(N, 4, 62)`` for the images as given and, with
+        ``mirrored``, for their left-right mirrors (one batch of 2N)."""
         x = torch.from_numpy(np.stack([self.preprocess(im) for im in images]))[:, None]
         n = len(x)
-        if self.flip:
+        if mirrored:
             x = torch.cat([x, torch.flip(x, dims=[3])])
         self.net.eval()
         out = self.net(x.to(self.device))
         mats = encoding.join_heads({h: v.float().cpu().numpy() for h, v in out.items()})
-        return 0.5 * (mats[:n] + mats[n:]) if self.flip else mats
+        return (mats[:n], mats[n:]) if mirrored else (mats,)
+
+    def raw_batch(self, images: Any) -> np.ndarray:
+        """Normalised network output ``(N, 4, 62)`` for a sequence of images: with
+        ``self.flip`` the mean over each image and its mirror (:meth:`raw_views`)."""
+        views = self.raw_views(images, mirrored=self.flip)
+        return 0.5 * (views[0] + views[1]) if self.flip else views[0]
 
     def from_raw(self, raw: np.ndarray) -> Prediction:
         """Decode one normalised ``(4, 62)`` network output."""
