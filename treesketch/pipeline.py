@@ -24,10 +24,10 @@ from typing import Any
 
 import numpy as np
 
-from refine.objective import prepare_sketch, sketch_distance
+from refine.objective import sketch_distance
 from refine.search import Cancelled, RefineResult, RefineSettings
 from refine.search import refine as refine_search
-from render.reader import SketchError, check_ink, read_sketch
+from render.reader import SketchError, normalise_drawing, read_sketch
 from weberpenn import TreeParams, build_mesh, grow
 
 from .estimate import Estimate, Estimator
@@ -117,16 +117,10 @@ def load_sketch(source: Any) -> np.ndarray:
 
 
 def prepare_input(img: np.ndarray) -> np.ndarray:
-    """The sketch every stage sees: padded to a square (white) and area-resized to
-    :data:`SKETCH_SIZE`; blank and all-dark pages are refused."""
-    check_ink(img)
-    h, w = img.shape
-    n = max(h, w)
-    sq = np.full((n, n), 255, np.uint8)
-    sq[(n - h) // 2 : (n - h) // 2 + h, (n - w) // 2 : (n - w) // 2 + w] = img
-    out = np.round(prepare_sketch(sq, SKETCH_SIZE) * 255).astype(np.uint8)
-    check_ink(out)
-    return out
+    """The sketch every stage sees (the estimator and the refinement alike):
+    ``render.reader.normalise_drawing`` at :data:`SKETCH_SIZE` (paper flattened, ink
+    found, re-framed as the renderer frames a tree); blank and dark pages are refused."""
+    return normalise_drawing(img, SKETCH_SIZE)
 
 
 def check_height(height: float | None) -> float | None:
