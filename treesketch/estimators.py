@@ -56,7 +56,7 @@ class TSNEstimator:
     def estimate(self, sketch: np.ndarray) -> Estimate:
         pred = self.model.predict(sketch)
         scores = self.model.species_id.shares(pred.matrix)
-        return Estimate(pred.params, pred.species, scores, None)
+        return Estimate(pred.params, pred.species, scores, None, decoded=pred.decoded)
 
 
 def _scores_from_distances(best: dict[str, float]) -> dict[str, float]:
@@ -104,7 +104,8 @@ class TemplateEstimator:
         top = min(best, key=lambda s: best[s][0])
         scores = _scores_from_distances({s: v[0] for s, v in best.items()})
         _, seed, yaw = best[top]
-        return Estimate(species.sample(top, seed), top, scores, yaw)
+        others = {s: species.sample(s, v[1]) for s, v in best.items() if s != top}
+        return Estimate(species.sample(top, seed), top, scores, yaw, alternatives=others)
 
 
 class NNSEstimator:
