@@ -25,6 +25,7 @@ def test_preset_sapling_keys_only_and_no_limit(name, tmp_path):
     assert isinstance(d, dict)
     assert set(d) <= set(SAPLING_KEYS) | {"limitImport"}
     assert d["limitImport"] is False  # Sapling sets it before it checks it: all levels
+    assert next(iter(d)) == "limitImport"  # first: later keys re-arm Sapling's rebuild
     assert not set(d) & set(TSN_ONLY_NEUTRAL)
     assert -(2**31) <= d["seed"] < 2**31
     for key in ("shape", "shapeS", "leafDist", "leafShape", "handleType"):

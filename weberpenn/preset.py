@@ -3,7 +3,11 @@
 Sapling reads the first line that does not start with ``#`` (so no blank line may come
 first) as one dict literal and sets every key on its operator, in order, before it looks
 at its own *Limit Import* switch; the preset therefore carries ``limitImport: False`` and
-Sapling builds every level and the leaves without the user unticking anything.
+Sapling builds every level and the leaves without the user unticking anything.  The key
+comes FIRST: setting it also clears Sapling's "rebuild" flag (its update callback), and
+the geometry keys after it set the flag again (placed last, Sapling builds nothing).
+Callers of ``bpy.ops.curve.tree_add(**preset)`` must drop the key (keyword arguments are
+applied in Sapling's property order, so it would come last).
 
 Sapling's dictionary cannot hold all of ours (TreeSketchNet's realised draws are folded
 into Sapling's keys, see :func:`to_sapling`), so the preset also carries the full
@@ -119,7 +123,7 @@ def preset_text(params: TreeParams | Mapping[str, Any], *, yaw: float | None = N
     """The preset file's text: header comment, the Sapling line, the sealed full
     dictionary."""
     p = validate(params)
-    sapling = {**to_sapling(p), "limitImport": False}
+    sapling = {"limitImport": False, **to_sapling(p)}
     line = repr(sapling)
     if "\n" in line:  # pragma: no cover - repr of plain values never breaks lines
         raise ParamError("preset literal spans lines")
