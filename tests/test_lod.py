@@ -37,7 +37,12 @@ def test_small_budgets_thin_leaves_and_decimate(maple):
         assert m.n_faces <= budget
         assert len(m.leaves.faces) > 0 and len(m.branches.faces) > 0
         assert m.meta["lod"]["leaf_shape"] == "rect"
-    assert lod(maple, 1000).meta["lod"]["decimated"] is True
+    m = lod(maple, 1000)
+    assert m.meta["lod"]["stems_dropped"] > 0 and m.meta["lod"]["decimated"] is False
+    trunk = maple.skeleton.stem(0)[0]
+    assert m.branches.vertices[:, 2].max() >= trunk[:, 2].max() * 0.99  # trunk kept whole
+    tiny = lod(maple, MIN_FACES)  # below the trunk's own coarsest tube: decimation
+    assert tiny.n_faces <= MIN_FACES and tiny.meta["lod"]["decimated"] is True
     chain = lod_chain(maple, (None, 20000, 5000))
     assert chain[0] is maple and chain[1].n_faces > chain[2].n_faces
 

@@ -8,11 +8,15 @@ as the tree fits ``max_faces`` triangles (branches + leaves):
    pair that fits (the curves themselves are unchanged);
 2. lighter leaves: hexagonal leaves become rectangles (2 triangles instead of 4; with
    the alpha-masked leaf texture they look alike), then every k-th leaf is kept and
-   scaled up by sqrt(k) so the foliage covers about the same area; leaves get at most
-   half the budget when the tubes do not fit at their coarsest;
-3. decimation: when even the coarsest tubes exceed what is left, pymeshlab's quadric
-   edge collapse brings the branch mesh down; its UVs are taken from the nearest
-   vertex of the undecimated mesh.
+   scaled up by k ** 0.25 (some of the lost foliage area back without pushing leaves
+   out past the crown); leaves get at most half the budget when the tubes do not fit
+   at their coarsest;
+3. fewer twigs: when even the coarsest tubes exceed what is left, the thinnest stems
+   are left out (a tree of thousands of twigs cannot keep them all at a few triangles
+   each; quadric decimation there collapses whole twigs into far-off slivers);
+4. decimation: only when the kept stems still do not fit (budgets below the trunk's own
+   coarsest tube), pymeshlab's quadric edge collapse brings the branch mesh down; its
+   UVs are taken from the nearest vertex of the undecimated mesh.
 
 A TreeMesh without its skeleton (e.g. turned by ``eval``) skips step 1 and the
 rectangle switch.  :func:`lod_chain` makes a series of LODs (lod0 = the full tree).
@@ -21,7 +25,6 @@ rectangle switch.  :func:`lod_chain` makes a series of LODs (lod0 = the full tre
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -69,13 +72,45 @@ def _resolutions(sk: Skeleton) -> list[tuple[int, int, int]]:
     return sorted(out, reverse=True)
 
 
+def _thickest_stems(sk: Skeleton, budget: int, sides: int) -> Skeleton:
+    """The skeleton's thickest stems whose coarsest tubes (``sides`` around, one ring per
+    control point) fit ``budget`` triangles; at least the first (the trunk)."""
+    offsets = np.asarray(sk.offsets, dtype=np.int64)
+    counts = np.diff(offsets)
+    cost = np.where(counts >= 2, 2 * sides * (counts - 1), 0)
+    radius = np.maximum.reduceat(np.asarray(sk.radii), offsets[:-1]) if len(counts) else counts
+    order = np.argsort(-radius, kind="stable")
+    fits = np.cumsum(cost[order]) <= budget
+    fits[0] = True
+    keep = np.sort(order[fits])
+    idx = np.concatenate([np.arange(offsets[i], offsets[i + 1]) for i in keep])
+    new_index = np.full(len(counts), -1, dtype=np.int64)
+    new_index[keep] = np.arange(len(keep))
+    parents = np.asarray(sk.parents, dtype=np.int64)[keep]
+    return dataclasses.replace(
+        sk,
+        points=sk.points[idx],
+        radii=sk.radii[idx],
+        offsets=np.concatenate([[0], np.cumsum(counts[keep])]).astype(np.int64),
+        levels=np.asarray(sk.levels)[keep],
+        parents=np.where(parents >= 0, new_index[np.maximum(parents, 0)], -1),
+    )
+
+
+def _leaf_growth(n: int, keep: int) -> float:
+    """Scale of the kept leaves when ``keep`` of ``n`` remain: (n / keep) ** 0.25 gives
+    back half the lost foliage area (in log terms); the full sqrt would keep the area
+    but push big leaves out past the crown (measured: benchmarks/bench_lod.py)."""
+    return float((n / keep) ** 0.25)
+
+
 def _thin_leaves(sk: Skeleton, keep: int) -> Skeleton:
-    """Every k-th leaf, enlarged by sqrt(n / keep) so the foliage keeps its area."""
+    """Every k-th leaf, enlarged by :func:`_leaf_growth`."""
     n = sk.n_leaves
     if keep >= n:
         return sk
     idx = (np.arange(keep) * n) // keep
-    grow = math.sqrt(n / keep)
+    grow = _leaf_growth(n, keep)
     return dataclasses.replace(
         sk,
         leaf_positions=sk.leaf_positions[idx],
@@ -85,7 +120,7 @@ def _thin_leaves(sk: Skeleton, keep: int) -> Skeleton:
 
 def _thin_leaf_mesh(leaves: trimesh.Trimesh, per_leaf: int, keep: int) -> trimesh.Trimesh:
     """Leaf mesh without a skeleton: keep whole leaves (blocks of ``per_leaf`` vertices),
-    each scaled about its centroid."""
+    each scaled about its centroid by :func:`_leaf_growth`."""
     nv = len(leaves.vertices)
     n = nv // per_leaf
     if keep >= n or n * per_leaf != nv:
@@ -93,7 +128,7 @@ def _thin_leaf_mesh(leaves: trimesh.Trimesh, per_leaf: int, keep: int) -> trimes
     idx = (np.arange(keep) * n) // keep
     v = np.asarray(leaves.vertices).reshape(n, per_leaf, 3)[idx]
     c = v.mean(axis=1, keepdims=True)
-    v = c + (v - c) * math.sqrt(n / keep)
+    v = c + (v - c) * _leaf_growth(n, keep)
     nf = len(leaves.faces) // n
     f = np.asarray(leaves.faces).reshape(n, nf, 3)[:1] - 0  # same template for every leaf
     faces = (f + (np.arange(keep) * per_leaf)[:, None, None]).reshape(-1, 3)
@@ -158,7 +193,13 @@ def lod(tree_mesh: TreeMesh, max_faces: int) -> TreeMesh:
                 sk = _thin_leaves(sk, max(leaf_budget // per, 1))
             left = budget - _leaf_faces(sk.n_leaves, shape)
             fit = [r for r in res if r[0] <= left]
-            _, res_u, bevel = fit[0] if fit else res[-1]
+            if fit:
+                _, res_u, bevel = fit[0]
+            else:
+                _, res_u, bevel = res[-1]
+                n_stems = sk.n_stems
+                sk = _thickest_stems(sk, left, 4 + 2 * bevel)
+                info["stems_dropped"] = n_stems - sk.n_stems
         built = build_mesh(
             dataclasses.replace(sk, res_u=res_u, bevel_res=bevel), species=tree_mesh.species
         )
