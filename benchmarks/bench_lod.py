@@ -122,6 +122,11 @@ def markdown(rows: list[dict], args: argparse.Namespace, budgets: list[int]) -> 
             f"{med('glb_mb'):.2f} | {med('h_max'):.2f} | {med('h_mean'):.3f} | "
             f"{med('secs'):.2f} | {med('changed'):.2f} | {dec}/{len(sel)} |"
         )
+    out += [
+        "",
+        "Every LOD that drops detail changes the sketch (second-last column), so refinement "
+        "keeps rendering the full mesh; `--max-faces` / `lod()` are for what is exported.",
+    ]
     return "\n".join(out) + "\n"
 
 

@@ -186,7 +186,9 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
 
     bl_idname = "treesketch.predict"
     bl_label = "Sketch to Tree"
-    bl_options = {"REGISTER", "UNDO"}
+    # not REGISTER: Sapling's tree_add, run inside, stays the last operator, so the
+    # redo panel edits the Sapling tree (ours would re-run the whole prediction)
+    bl_options = {"UNDO"}
 
     wait: BoolProperty(
         name="Wait", description="Run in the foreground (scripts, background mode)", default=False
