@@ -64,18 +64,18 @@ def label(text, x, z, size):
 
 
 top = lo.z + side + 0.02 * side
-label("the drawing", cx, top, 0.07 * side)
-label(CAPTION, (lo.x + hi.x) / 2, top, 0.07 * side)
+label("the drawing", cx, top, 0.06 * side)
+label(CAPTION, (lo.x + hi.x) / 2, top, 0.06 * side)
 label(
     f"Blender {bpy.app.version_string}: glTF import, Workbench, texture colours;"
-    f" +Z up, base z = {lo.z:.2f} m, height {height:.2f} m",
+    f" +Z up, base z = {round(lo.z, 2) + 0.0:.2f} m, height {height:.2f} m",
     (cx - side / 2 + hi.x) / 2,
     lo.z - 0.1 * side,
     0.035 * side,
 )
 
 # front orthographic camera framing both
-left, right = cx - side / 2 - 0.05 * side, hi.x + 0.05 * side
+left, right = cx - side / 2 - 0.05 * side, max(hi.x, lo.x + 0.9 * side) + 0.05 * side
 bottom, top2 = lo.z - 0.15 * side, top + 0.12 * side
 cam_data = bpy.data.cameras.new("front")
 cam_data.type = "ORTHO"
@@ -90,7 +90,10 @@ scene.render.resolution_x = 1200
 scene.render.resolution_y = int(round(1200 / aspect))
 scene.render.engine = "BLENDER_WORKBENCH"
 shading = scene.display.shading
-shading.light = "STUDIO"
+shading.light = "FLAT"  # the drawing stays white; cavity gives the tree depth
+shading.show_cavity = True
+shading.cavity_type = "BOTH"
+shading.show_shadows = False
 shading.color_type = "TEXTURE"
 shading.show_object_outline = False
 scene.display.render_aa = "8"

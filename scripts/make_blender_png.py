@@ -32,7 +32,7 @@ def main() -> int:
     result = predict_then_refine(SKETCH, budget=args.budget)
     glb = export_mesh(result.tree_mesh, ROOT / "out" / "blender_demo.glb", yaw=result.yaw)
     print(f"{result.species}, yaw {result.yaw:.1f}: {glb}")
-    caption = f"predicted {result.species}, GLB turned to the drawn view (yaw {result.yaw:.0f})"
+    caption = f"its GLB: {result.species}, view yaw {result.yaw:.0f}"
     cmd = [args.blender, "-b", "--factory-startup", "--python-exit-code", "1"]
     cmd += ["--python", str(ROOT / "scripts" / "blender_render.py"), "--"]
     cmd += [str(SKETCH), str(glb), str(args.out), caption]
