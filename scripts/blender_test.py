@@ -23,6 +23,7 @@ import addon_utils  # type: ignore[import-not-found]  # noqa: E402
 import bpy  # type: ignore[import-not-found]  # noqa: E402
 
 ZIP, GLB, HEIGHT, CLI = sys.argv[sys.argv.index("--") + 1 :]
+OBJ = GLB[: -len(".glb")] + ".obj"
 HEIGHT = float(HEIGHT)
 T0 = time.time()
 
@@ -54,6 +55,14 @@ for o in meshes:
     assert o.data.uv_layers, f"{o.name}: no UVs"
     assert o.data.materials[0].node_tree.nodes.get("Image Texture"), f"{o.name}: no texture"
 step(f"GLB upright: z {lo:.3f}..{hi:.3f}, ours {HEIGHT:.3f} m; textured")
+
+# 1b. the OBJ through Blender's default OBJ importer (its default axes: up +Y, forward -Z)
+clear()
+bpy.ops.wm.obj_import(filepath=OBJ)
+meshes = [o for o in bpy.data.objects if o.type == "MESH"]
+lo, hi = world_z(meshes)
+assert abs(lo) < 0.01 * HEIGHT and abs(hi - lo - HEIGHT) < 0.01 * HEIGHT, (lo, hi, HEIGHT)
+step(f"OBJ upright: z {lo:.3f}..{hi:.3f}")
 
 # 2. install the add-on from its zip, enable, draw the panel
 bpy.ops.preferences.addon_install(filepath=ZIP, overwrite=True)
