@@ -98,3 +98,43 @@ def test_addon_zip(tmp_path):
     assert "treesketch_addon/drawing_maple.png" in names
     init = zipfile.ZipFile(tmp_path / "a.zip").read("treesketch_addon/__init__.py").decode()
     assert '"blender": (3, 4, 0)' in init
+
+
+def test_post_predict_against_a_local_service(backend, tmp_path):
+    """The service path: POST /predict (multipart 'sketch'), then GET the GLB it names."""
+    import json
+    import threading
+    from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+
+    seen = {}
+
+    class Handler(BaseHTTPRequestHandler):
+        def do_POST(self):  # noqa: N802 - http.server's name
+            body = self.rfile.read(int(self.headers["Content-Length"]))
+            seen["path"], seen["body"] = self.path, body
+            reply = json.dumps({"species": "maple", "yaw": 45.0, "glb": "/trees/abc.glb"})
+            self.send_response(200)
+            self.end_headers()
+            self.wfile.write(reply.encode())
+
+        def do_GET(self):  # noqa: N802
+            self.send_response(200 if self.path == "/trees/abc.glb" else 404)
+            self.end_headers()
+            self.wfile.write(b"glTF-bytes")
+
+        def log_message(self, *args):
+            pass
+
+    server = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        image = tmp_path / "d.png"
+        image.write_bytes(b"\x89PNG fake")
+        url = f"http://127.0.0.1:{server.server_address[1]}"
+        reply = backend.post_predict(url, image, tmp_path / "t.glb", budget=7)
+        assert reply["yaw"] == 45.0 and (tmp_path / "t.glb").read_bytes() == b"glTF-bytes"
+        assert seen["path"] == "/predict" and b'name="budget"\r\n\r\n7' in seen["body"]
+        with pytest.raises(backend.PredictError, match="service"):
+            backend.post_predict("http://127.0.0.1:1", image, tmp_path / "u.glb", timeout=5)
+    finally:
+        server.shutdown()
