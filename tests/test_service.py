@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
+from treesketch import Estimate
 from treesketch.service import create_app
 from weberpenn import build_mesh, grow, species
 
@@ -24,11 +25,14 @@ def _png(img: np.ndarray) -> bytes:
 def client() -> TestClient:
     calls = []
 
-    def estimate(img):
-        calls.append(1)
-        return species.sample("palm", 8), "palm"
+    class Palm:
+        name = "palm-8"
 
-    app = create_app(model=estimate, keep=2)
+        def estimate(self, img):
+            calls.append(1)
+            return Estimate(species.sample("palm", 8), "palm", {"palm": 1.0})
+
+    app = create_app(model=Palm(), keep=2)
     app.state.calls = calls
     return TestClient(app)
 
@@ -43,7 +47,7 @@ def palm_png() -> bytes:
 
 def test_health(client: TestClient) -> None:
     r = client.get("/health")
-    assert r.status_code == 200 and r.json() == {"status": "ok", "estimator": "tsn"}
+    assert r.status_code == 200 and r.json() == {"status": "ok", "estimator": "palm-8"}
 
 
 def test_predict_and_glb(client: TestClient, palm_png: bytes) -> None:

@@ -39,26 +39,26 @@ def _glb_bytes(tree_mesh: Any) -> bytes:
 
 
 def create_app(model: Any = None, keep: int = 16, default_budget: int | None = None) -> FastAPI:
-    """The FastAPI app.  ``model``: a loaded TSN model, an estimator function, the string
-    ``"template"``, or None to load the shipped checkpoint (template match without one)."""
-    from .pipeline import DEFAULT_BUDGET, DEFAULT_TIME_LIMIT, SketchError, _load_model
-    from .pipeline import predict_then_refine as run
+    """The FastAPI app.  ``model``: an estimator or its name (``load_estimator``), or None
+    for the shipped TSN checkpoint."""
+    from .estimators import load_estimator
+    from .pipeline import Pipeline, RefineSettings, SketchError
 
-    loaded = model if isinstance(model, str) else _load_model(model)
-    estimator_model: Any = "template" if loaded is None else loaded
-    budget_default = int(default_budget or DEFAULT_BUDGET)
+    estimator = load_estimator("tsn" if model is None else model)
+    defaults = RefineSettings()
+    budget_default = int(default_budget or defaults.budget)
     trees: OrderedDict[str, bytes] = OrderedDict()
     lock = threading.Lock()
 
     app = FastAPI(title="TreeSketch", description="A sketch of a tree -> a 3D Weber-Penn tree.")
-    app.state.model = estimator_model
+    app.state.model = estimator
     app.state.trees = trees
 
     @app.get("/health")
     def health() -> dict[str, str]:
         return {
             "status": "ok",
-            "estimator": "template" if estimator_model == "template" else "tsn",
+            "estimator": estimator.name,
         }
 
     @app.post("/predict")
@@ -77,23 +77,17 @@ def create_app(model: Any = None, keep: int = 16, default_budget: int | None = N
         n = budget_default if budget is None else int(budget)
         if not 1 <= n <= MAX_BUDGET:
             raise HTTPException(422, f"budget must be in 1..{MAX_BUDGET}, got {n}")
-        seconds = DEFAULT_TIME_LIMIT if time_limit is None else float(time_limit)
+        seconds = defaults.time_limit if time_limit is None else float(time_limit)
         if not 0 < seconds <= MAX_TIME_LIMIT:
             raise HTTPException(422, f"time_limit must be in (0, {MAX_TIME_LIMIT}], got {seconds}")
         if height is not None and not height > 0:
             raise HTTPException(422, f"height must be positive metres, got {height}")
         with lock:
             try:
-                result = run(
-                    data,
-                    refine=refine,
-                    budget=n,
-                    time_limit=seconds,
-                    height=height,
-                    model=estimator_model,
-                )
+                settings = defaults.replace(refine=refine, budget=n, time_limit=seconds)
+                result = Pipeline(estimator, settings).run(data, height=height)
             except SketchError as exc:
-                status = 400 if "cannot read" in str(exc) else 422
+                status = 400 if "not an image" in str(exc) or "damaged" in str(exc) else 422
                 raise HTTPException(status, str(exc)) from exc
             except ValueError as exc:
                 raise HTTPException(422, str(exc)) from exc

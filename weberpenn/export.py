@@ -30,7 +30,13 @@ from trimesh.visual.material import PBRMaterial
 from .fileio import write_together
 from .lod import lod
 from .orient import to_export_frame
-from .preset import SAPLING_KEYS, preset_text, save_sapling_preset, to_sapling
+from .preset import (
+    SAPLING_KEYS,
+    preset_text,
+    sapling_preset_text,
+    save_sapling_preset,
+    to_sapling,
+)
 from .textures import COLOURS, bark_texture, colours, leaf_texture
 from .treemesh import TreeMesh
 from .uv import close_seams
@@ -44,6 +50,7 @@ __all__ = [
     "glb_bytes",
     "obj_files",
     "preset_text",
+    "sapling_preset_text",
     "save_sapling_preset",
     "to_sapling",
 ]

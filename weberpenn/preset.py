@@ -31,7 +31,13 @@ from typing import Any
 from .fileio import atomic_write
 from .params import EMBEDDED_PREFIX, ParamError, TreeParams, validate
 
-__all__ = ["SAPLING_KEYS", "preset_text", "save_sapling_preset", "to_sapling"]
+__all__ = [
+    "SAPLING_KEYS",
+    "preset_text",
+    "sapling_preset_text",
+    "save_sapling_preset",
+    "to_sapling",
+]
 
 # Sapling's own operator keys that change geometry (the preset holds these and no others).
 SAPLING_KEYS: tuple[str, ...] = (
@@ -139,6 +145,10 @@ def preset_text(params: TreeParams | Mapping[str, Any], *, yaw: float | None = N
     seal = hashlib.sha256(line.encode()).hexdigest()
     full = json.dumps(p.to_dict(), separators=(",", ":"))
     return f"{head}\n{line}\n{EMBEDDED_PREFIX}sha256={seal} {full}\n"
+
+
+#: The name ``treesketch.outputs`` calls it by.
+sapling_preset_text = preset_text
 
 
 def save_sapling_preset(
