@@ -65,9 +65,19 @@ def _links(job_id: str) -> dict[str, str]:
 
 
 def _view(job: Job, position: int | None, live: dict[str, Any] | None) -> dict[str, Any]:
+    budget = job.options.get("budget")
     progress = live or job.progress
-    if progress is None and job.state == "queued":
-        progress = {"evaluations": 0, "budget": job.options.get("budget"), "best_loss": None}
+    if job.state == "queued" or progress is None:
+        progress = {"evaluations": 0, "budget": budget, "best_loss": None, "elapsed": 0.0}
+    if job.state == "running" and job.started is not None:
+        progress = {**progress, "elapsed": time.time() - job.started}
+    if job.state == "done" and job.summary:
+        progress = {
+            "evaluations": job.summary["evaluations"],
+            "budget": budget,
+            "best_loss": job.summary["losses"]["after"],
+            "elapsed": job.summary["timings"].get("job"),
+        }
     out: dict[str, Any] = {
         "id": job.id,
         "state": job.state,

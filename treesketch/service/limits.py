@@ -149,7 +149,11 @@ def check_image(data: bytes, limits: Limits) -> tuple[int, int]:
             w, h = im.size
     except Image.DecompressionBombError as exc:
         raise LimitError(413, f"the image is a decompression bomb: {exc}") from exc
-    except (UnidentifiedImageError, OSError) as exc:
+    except UnidentifiedImageError as exc:
+        raise LimitError(
+            400, "cannot read the sketch as an image (send a PNG, JPEG, WebP, GIF or BMP)"
+        ) from exc
+    except (OSError, SyntaxError, ValueError) as exc:
         raise LimitError(400, f"cannot read the sketch as an image: {exc}") from exc
     if min(w, h) < limits.min_side:
         raise LimitError(422, f"the sketch is {w}x{h} px; it must be at least {limits.min_side} px")

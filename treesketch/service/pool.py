@@ -83,6 +83,7 @@ class WorkerPool:
         if self._thread is not None:
             self._thread.join(timeout)
         for w in self._workers:
+            w.cancel.value = 1  # a running job stops at its next evaluation
             with contextlib.suppress(OSError):
                 w.conn.send(None)
         deadline = time.monotonic() + timeout
@@ -91,8 +92,6 @@ class WorkerPool:
             if w.process.is_alive():
                 w.process.kill()
                 w.process.join(1.0)
-            if w.job is not None:  # stopped mid-job: the next start fails it (store.recover)
-                pass
         self._workers = []
 
     def _spawn(self) -> _Worker:
