@@ -47,9 +47,7 @@ def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
 
 @pytest.fixture(scope="module")
 def done_job(client: TestClient, sketch: bytes) -> dict:
-    r = client.post(
-        "/jobs", files={"sketch": ("s.png", sketch, "image/png")}, data={"budget": "4"}
-    )
+    r = client.post("/jobs", files={"sketch": ("s.png", sketch, "image/png")}, data={"budget": "4"})
     assert r.status_code == 202, r.text
     body = r.json()
     assert body["state"] in ("queued", "running") and r.headers["location"] == body["links"]["self"]
@@ -91,9 +89,7 @@ def test_job_result_and_artefacts(client: TestClient, done_job: dict) -> None:
 
 
 def test_events_stream(client: TestClient, sketch: bytes) -> None:
-    r = client.post(
-        "/jobs", files={"sketch": ("s.png", sketch, "image/png")}, data={"budget": "3"}
-    )
+    r = client.post("/jobs", files={"sketch": ("s.png", sketch, "image/png")}, data={"budget": "3"})
     job_id = r.json()["id"]
     kinds, bodies = [], []
     with client.stream("GET", f"/jobs/{job_id}/events") as s:
@@ -118,9 +114,10 @@ def test_list_jobs(client: TestClient, done_job: dict) -> None:
 def _png_header(width: int, height: int) -> bytes:
     """A PNG whose header claims width x height (no pixel data worth decoding)."""
 
-
     def chunk(kind: bytes, data: bytes) -> bytes:
-        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+        return (
+            struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+        )
 
     ihdr = struct.pack(">IIBBBBB", width, height, 8, 0, 0, 0, 0)
     idat = zlib.compress(b"\0" * 1024)

@@ -136,6 +136,10 @@ def create_app(config: ServiceConfig) -> FastAPI:
 
     open_paths = ("/", "/health", "/favicon.ico")
 
+    @app.get("/favicon.ico", include_in_schema=False)
+    async def favicon() -> Response:
+        return Response(status_code=204)
+
     @app.middleware("http")
     async def check_token(
         request: Request, call_next: Callable[[Request], Awaitable[Response]]

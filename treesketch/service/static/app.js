@@ -264,6 +264,11 @@ function loadModel(url) {
   new GLTFLoader().load(url, (gltf) => {
     if (model) scene.remove(model);
     model = gltf.scene;
+    // glTF is Y-up with the tree's base at the origin.  A file left in the generator's
+    // Z-up frame has its base at z = 0 and is centred in y instead: stand it up.
+    const raw = new THREE.Box3().setFromObject(model);
+    const rawSize = raw.getSize(new THREE.Vector3());
+    if (Math.abs(raw.min.z) / rawSize.z < Math.abs(raw.min.y) / rawSize.y) model.rotation.x = -Math.PI / 2;
     scene.add(model);
     let meshes = 0;
     model.traverse((o) => { if (o.isMesh) { meshes++; o.material.side = THREE.DoubleSide; } });
