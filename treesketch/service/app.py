@@ -11,7 +11,7 @@ import asyncio
 import hmac
 import json
 import time
-from collections.abc import AsyncIterator, Awaitable, Callable
+from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -20,6 +20,7 @@ from typing import Any
 from fastapi import FastAPI, HTTPException, Request
 from fastapi.responses import FileResponse, JSONResponse, Response, StreamingResponse
 from starlette.concurrency import run_in_threadpool
+from starlette.types import ASGIApp, Receive, Scope, Send
 
 from .limits import LimitError, Limits, check_image, parse_options, read_form
 from .pool import WorkerPool, default_workers
@@ -55,6 +56,36 @@ class ServiceConfig:
     @property
     def allowed_estimators(self) -> tuple[str, ...]:
         return tuple(dict.fromkeys((self.estimator, *self.estimators)))
+
+
+class TokenGuard:
+    """Plain ASGI middleware: every path but the page, its files and ``/health`` needs the
+    token (``Authorization: Bearer`` or ``?token=``).  Not Starlette's ``BaseHTTPMiddleware``,
+    which hides a client's disconnect from the route (``/predict`` must see it)."""
+
+    def __init__(self, app: ASGIApp, token: str, open_paths: tuple[str, ...]) -> None:
+        self.app, self.token, self.open_paths = app, token.encode(), open_paths
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        path = scope.get("path", "")
+        if (
+            scope["type"] != "http"
+            or path in self.open_paths
+            or path.startswith(("/static/", "/vendor/"))
+        ):
+            await self.app(scope, receive, send)
+            return
+        request = Request(scope)
+        given = request.headers.get("authorization", "").removeprefix("Bearer ").strip()
+        given = given or request.query_params.get("token", "")
+        if hmac.compare_digest(given.encode(), self.token):
+            await self.app(scope, receive, send)
+            return
+        response = JSONResponse(
+            {"detail": "a token is needed: 'Authorization: Bearer TOKEN' or ?token="},
+            status_code=401,
+        )
+        await response(scope, receive, send)
 
 
 def _links(job_id: str) -> dict[str, str]:
@@ -140,20 +171,8 @@ def create_app(config: ServiceConfig) -> FastAPI:
     async def favicon() -> Response:
         return Response(status_code=204)
 
-    @app.middleware("http")
-    async def check_token(
-        request: Request, call_next: Callable[[Request], Awaitable[Response]]
-    ) -> Response:
-        path = request.url.path
-        if config.token and not (path in open_paths or path.startswith(("/static/", "/vendor/"))):
-            given = request.headers.get("authorization", "").removeprefix("Bearer ").strip()
-            given = given or request.query_params.get("token", "")
-            if not hmac.compare_digest(given.encode(), config.token.encode()):
-                return JSONResponse(
-                    {"detail": "a token is needed: 'Authorization: Bearer TOKEN' or ?token="},
-                    status_code=401,
-                )
-        return await call_next(request)
+    if config.token:
+        app.add_middleware(TokenGuard, token=config.token, open_paths=open_paths)
 
     async def get_job(job_id: str) -> Job:
         job = await run_in_threadpool(store.get, job_id)
