@@ -9,15 +9,17 @@ States: ``queued`` -> ``running`` -> ``done`` | ``failed`` | ``cancelled``; a fi
 job whose artefacts were removed by the retention limits becomes ``expired`` (the API
 answers 410 for its artefacts).
 
-Every method opens its own short connection, so the store may be used from any thread
-and from several processes; WAL lets readers (status pages) go on while a writer commits.
+Each thread keeps its own connection, so the store may be used from any thread and from
+several processes; WAL lets readers (status pages) go on while a writer commits.
 """
 
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import sqlite3
+import threading
 import time
 import uuid
 from collections.abc import Iterator
@@ -100,19 +102,27 @@ class JobStore:
         for d in (self.root, self.uploads, self.results):
             d.mkdir(parents=True, exist_ok=True)
         self.path = self.root / "jobs.sqlite"
+        self._local = threading.local()
         with self._db() as db:
             db.execute("PRAGMA journal_mode=WAL")
             db.executescript(_SCHEMA)
 
     @contextmanager
     def _db(self) -> Iterator[sqlite3.Connection]:
-        db = sqlite3.connect(self.path, timeout=30.0, isolation_level=None)
-        db.row_factory = sqlite3.Row
-        try:
+        """This thread's connection (opened once per thread and process: a status poll
+        then costs a query, not a connect)."""
+        db = getattr(self._local, "db", None)
+        if db is None or self._local.pid != os.getpid():
+            db = sqlite3.connect(self.path, timeout=30.0, isolation_level=None)
+            db.row_factory = sqlite3.Row
             db.execute("PRAGMA synchronous=NORMAL")
+            self._local.db, self._local.pid = db, os.getpid()
+        try:
             yield db
-        finally:
-            db.close()
+        except BaseException:
+            if db.in_transaction:
+                db.execute("ROLLBACK")
+            raise
 
     # -- paths -------------------------------------------------------------------------
     def upload_path(self, job_id: str) -> Path:

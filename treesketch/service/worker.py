@@ -22,6 +22,7 @@ from typing import Any
 
 __all__ = ["worker_main"]
 
+WORKER_NICE = 5
 PROGRESS_EVERY = 0.1  # seconds between progress messages (the pipe is cheap, the DB is not)
 
 
@@ -41,17 +42,19 @@ class _Reporter:
 
 def worker_main(spec: str, conn: Connection, cancel: Any, root: str) -> None:
     """Entry point of a spawned worker (``cancel``: a shared ``multiprocessing.Value``)."""
+    import os
+
     from weberpenn.fileio import write_together
 
     from .runner import Cancelled, JobOptions, Runner
 
+    # below the HTTP front: a status poll must not wait behind a refinement for a core
+    os.nice(WORKER_NICE)
     try:
         runner = Runner(spec)
     except Exception as exc:  # noqa: BLE001 - reported to the pool, which shows it
         conn.send(("broken", 0, f"cannot load the estimator {spec!r}: {exc}"))
         return
-    import os
-
     conn.send(("ready", os.getpid(), ""))
     results = Path(root) / "results"
     uploads = Path(root) / "uploads"
