@@ -7,8 +7,9 @@ tree is grown with the same seed, and its symmetric Hausdorff distance to the gr
 is measured (``eval.hausdorff``, combined branch+leaf mesh, normalised by the ground-truth
 bounding-box diagonal).
 
-``predict`` is any ``sketch (H, W uint8) -> TreeParams`` callable, so the sweep runs with a
-TSN checkpoint (:func:`tsn_predictor`) or with a stand-in in tests.
+The predictions come from a pipeline handed in (``treesketch.Pipeline``, or anything with
+``estimate(sketch)`` and ``run(sketch)``): with refining settings each view is estimated and
+refined (``run``), otherwise estimated only (``estimate``).
 """
 
 from __future__ import annotations
@@ -26,10 +27,10 @@ from typing import Any
 import numpy as np
 
 from weberpenn import TreeParams, build_mesh, grow
+from weberpenn.fileio import atomic_write
 
 from .hausdorff import DEFAULT_SAMPLES, hausdorff, rotate_about_trunk
 
-Predictor = Callable[[np.ndarray], Mapping[str, Any]]
 Progress = Callable[[int, int], None]
 
 CSV_FIELDS = (
@@ -117,20 +118,17 @@ def _params_key(p: Mapping[str, Any]) -> str:
 
 def rotation_sweep(
     gt_params: Mapping[str, Any],
-    predict: Predictor,
+    pipeline: Any,
     step: float = 5.0,
     size: int = 256,
-    refine_budget: int = 0,
     samples: int = DEFAULT_SAMPLES,
     seed: int = 0,
     progress: Progress | None = None,
-    refine_size: int = 128,
 ) -> SweepResult:
-    """Run the sweep; ``refine_budget`` > 0 refines each prediction with ``refine.search``."""
+    """Run the sweep (see the module text)."""
     gt = TreeParams(gt_params)
-    if int(refine_budget) < 0:
-        raise ValueError(f"refine_budget must be >= 0, got {refine_budget}")
     angles = yaw_angles(step)
+    refining = bool(pipeline.settings.refine)
     from render.sketch import SketchRenderer
 
     gt_mesh = build_mesh(grow(gt, seed=seed))
@@ -143,18 +141,15 @@ def rotation_sweep(
     for i, yaw in enumerate(angles):
         t0 = time.perf_counter()
         img = renderer.sketch(float(yaw), size=size)
-        pred = TreeParams(predict(img))
-        refined, lb, la = False, float("nan"), float("nan")
-        if refine_budget > 0:
-            from refine.search import refine
-
-            res = refine(img, pred, budget=int(refine_budget), seed=seed, size=refine_size)
-            pred, refined, lb, la = res.params, True, res.loss_before, res.loss_after
+        lb = la = float("nan")
+        if refining:
+            run = pipeline.run(img)
+            pred, lb, la = run.params, run.losses["before"], run.losses["after"]
             # the refined tree matches the sketch at the yaw it found: turn it into the
             # ground truth's frame before measuring
-            turn = (float(yaw) - res.yaw) % 360.0
+            turn = (float(yaw) - run.yaw) % 360.0
         else:
-            turn = 0.0
+            pred, turn = TreeParams(pipeline.estimate(img).params), 0.0
         key = f"{_params_key(pred)}@{turn:.6f}"
         if key not in cache:
             pm = build_mesh(grow(pred, seed=seed))
@@ -170,7 +165,7 @@ def rotation_sweep(
                 d.max_norm,
                 d.mean_norm,
                 d.status,
-                refined,
+                refining,
                 lb,
                 la,
                 time.perf_counter() - t0,
@@ -194,27 +189,13 @@ def rows_csv(rows: list[SweepRow]) -> str:
 
 
 def write_csv(rows: list[SweepRow], path: str | Path) -> Path:
-    from weberpenn.params import atomic_write_text
-
     path = Path(path)
-    atomic_write_text(path, rows_csv(rows))
+    atomic_write(path, rows_csv(rows))
     return path
 
 
 def _save_fig(fig, path: Path) -> Path:
-    import os
-    import tempfile
-
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(suffix=".png", dir=path.parent)
-    os.close(fd)
-    try:
-        fig.savefig(tmp, dpi=100)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-    return path
+    return atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=100, format="png"))
 
 
 def plot_sweep(
@@ -290,10 +271,3 @@ def plot_cases(
         return _save_fig(fig, Path(path))
     finally:
         plt.close(fig)
-
-
-def tsn_predictor(checkpoint: str | Path | None = None) -> Predictor:
-    """A ``sketch -> TreeParams`` callable backed by ``tsn.predict`` (model loaded once)."""
-    from tsn import predict as _p
-
-    return _p.Predictor(checkpoint) if checkpoint is not None else _p.Predictor()

@@ -49,7 +49,6 @@ import json
 import logging
 import os
 import sys
-import tempfile
 import time
 import traceback
 from collections.abc import Callable, Iterator, Sequence
@@ -59,6 +58,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from weberpenn.fileio import atomic_write
 
 from .camera import VIEWS, resolve_yaw
 
@@ -207,17 +208,7 @@ def plan(cfg: DatasetConfig) -> list[TreeJob]:
 
 # --------------------------------------------------------------------------- file helpers
 def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file in the same folder + rename."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-        os.chmod(tmp, 0o644)  # mkstemp makes 0600; data files are for everyone to read
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_write(path, data)
 
 
 def png_bytes(img: np.ndarray) -> bytes:
@@ -244,15 +235,9 @@ def paths_for(job: TreeJob, view: str) -> dict[str, str]:
 # --------------------------------------------------------------------------- one tree
 @functools.lru_cache(maxsize=1)
 def mesher_in_use() -> tuple[Callable[[Any], Any], str]:
-    """``weberpenn.build_mesh``, or (while it does not exist yet) the stand-in in
-    :mod:`render._fallback_mesh`; with the name recorded in every tree's marker."""
-    try:
-        from weberpenn import build_mesh
-    except ImportError:
-        from ._fallback_mesh import build_mesh as fallback
+    """The mesher and its name (recorded in every tree's marker)."""
+    from weberpenn import build_mesh
 
-        log.warning("weberpenn.build_mesh is not available; using render._fallback_mesh")
-        return fallback, "render._fallback_mesh"
     return build_mesh, "weberpenn.build_mesh"
 
 
@@ -595,12 +580,12 @@ def build_dataset(
 
 def _variant_name() -> str:
     """The variant the workers pick (same rule, without importing mitsuba here)."""
-    from .backend import LLVM_VARIANT, SCALAR_VARIANT, _choose_llvm_path
+    from .backend import LLVM_VARIANT, SCALAR_VARIANT, choose_llvm_path
 
     forced = os.environ.get("TREESKETCH_MI_VARIANT", "").strip()
     if forced:
         return forced
-    return LLVM_VARIANT if _choose_llvm_path() else SCALAR_VARIANT
+    return LLVM_VARIANT if choose_llvm_path() else SCALAR_VARIANT
 
 
 class _Progress:

@@ -6,10 +6,7 @@ from pathlib import Path
 
 import typer
 
-
-def _fail(msg: str) -> None:
-    typer.echo(f"error: {msg}", err=True)
-    raise typer.Exit(2)
+from .cli_common import fail
 
 
 def train_cmd(
@@ -69,7 +66,7 @@ def train_cmd(
     try:
         res = train(cfg, log=lambda s: typer.echo(s))
     except (TrainError, ValueError, OSError) as e:
-        _fail(str(e))
+        fail(str(e))
         return
     typer.echo(
         f"best val 1-RMSE {res['best_val_overall']:.4f} at epoch {res['best_epoch']}; "

@@ -26,7 +26,6 @@ import hashlib
 import io
 import json
 import math
-import os
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -36,11 +35,14 @@ from typing import Any
 import numpy as np
 import torch
 
+from render.reader import read_sketch
+from weberpenn.fileio import atomic_write
 from weberpenn.params import HEADS, TreeParams
 
 from . import data as tdata
 from . import encoding
 from .checkpoint import atomic_torch_save, save_checkpoint
+from .metrics import one_minus_rmse
 from .model import BACKBONES, TSN, ModelError
 from .species_id import SpeciesIdentifier
 
@@ -128,7 +130,7 @@ def load_split(data: Path, split: str | None, limit: int | None = None) -> Split
         raise TrainError(f"{data}: {what}")
     images, mats, cache = [], [], {}
     for r in rows:
-        images.append(tdata.to_grey(data / r["sketch"]))
+        images.append(read_sketch(data / r["sketch"]))
         if r["params"] not in cache:
             p = TreeParams(json.loads((data / r["params"]).read_text(encoding="utf-8")))
             cache[r["params"]] = encoding.encode(p)
@@ -272,13 +274,6 @@ def loss_fn(
 LOSSES = ("mse", "rmse")
 
 
-def one_minus_rmse(pred: np.ndarray, target: np.ndarray) -> dict[str, float]:
-    """Paper metric on normalised ``(N, 4, 62)`` matrices: per head and overall."""
-    sq = (np.asarray(pred) - np.asarray(target)) ** 2
-    heads = {h: float(1 - np.sqrt(sq[..., encoding.HEAD_COLUMNS[h]].mean())) for h in HEADS}
-    return {**heads, "overall": float(np.mean(list(heads.values())))}
-
-
 def _forward(model: TSN, f: torch.Tensor, cut: int) -> dict[str, torch.Tensor]:
     f = f.float()
     if cut == 0:
@@ -337,9 +332,7 @@ def _plot(rows: list[dict[str, Any]], path: Path, loss: str = "mse") -> None:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=100)
     plt.close(fig)
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_bytes(buf.getvalue())
-    os.replace(tmp, path)
+    atomic_write(path, buf.getvalue())
 
 
 def _write_csv(rows: list[dict[str, Any]], path: Path) -> None:
@@ -451,7 +444,8 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
                     y_val,
                 )
             )
-        scores = one_minus_rmse(pred, y_val_norm)
+        s = one_minus_rmse(pred, y_val_norm)
+        scores = {**s.heads, "overall": s.overall}
         sp = species_id.identify_many(normaliser.denormalise(pred))
         sp_acc = float(np.mean([a == b for a, b in zip(sp, val.species, strict=True)]))
         row = {

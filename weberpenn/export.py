@@ -26,6 +26,7 @@ import trimesh
 from trimesh.visual import TextureVisuals
 from trimesh.visual.material import PBRMaterial
 
+from .fileio import atomic_write
 from .params import ParamError, TreeParams, atomic_write_text, validate
 from .treemesh import TreeMesh
 
@@ -238,14 +239,16 @@ def to_sapling(params: TreeParams | Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
-def save_sapling_preset(
-    params: TreeParams | Mapping[str, Any], path: str | os.PathLike[str]
-) -> Path:
-    """Write a Sapling preset (``.py``): one line holding the whole dict literal."""
-    path = Path(path)
+def sapling_preset_text(params: TreeParams | Mapping[str, Any]) -> str:
+    """A Sapling preset's text: one line holding the whole dict literal."""
     text = repr(to_sapling(params))
     if "\n" in text:  # pragma: no cover - repr of plain values never breaks lines
         raise ParamError("preset literal spans lines")
-    atomic_write_text(path, text + "\n")
-    os.chmod(path, 0o644)
-    return path
+    return text + "\n"
+
+
+def save_sapling_preset(
+    params: TreeParams | Mapping[str, Any], path: str | os.PathLike[str]
+) -> Path:
+    """Write a Sapling preset (``.py``) atomically."""
+    return atomic_write(path, sapling_preset_text(params))
