@@ -9,12 +9,20 @@ from typing import Any
 
 import numpy as np
 
-from weberpenn import TreeParams, species
+from treesketch import Estimate
+from weberpenn import species
 
 
-def palm_estimator(img: Any) -> tuple[TreeParams, str]:
-    """A fixed palm: the first estimate without a network (fast to grow and render)."""
-    return species.sample("palm", 8), "palm"
+class PalmEstimator:
+    """A fixed palm as the first estimate: no network, fast to grow and render."""
+
+    name = "palm-8"
+
+    def estimate(self, sketch: np.ndarray) -> Estimate:
+        return Estimate(species.sample("palm", 8), "palm", {"palm": 1.0})
+
+
+palm_estimator = PalmEstimator()
 
 
 def png(img: np.ndarray) -> bytes:

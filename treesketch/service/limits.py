@@ -17,6 +17,9 @@ from dataclasses import dataclass
 
 from python_multipart.multipart import MultipartParser, parse_options_header
 
+from render import reader
+from treesketch.pipeline import MAX_HEIGHT
+
 from .runner import JobOptions
 
 __all__ = [
@@ -33,13 +36,15 @@ FORM_OVERHEAD = 64 * 1024  # boundaries, part headers and fields on top of the f
 
 @dataclass(frozen=True)
 class Limits:
-    max_upload_bytes: int = 10 * 1024 * 1024
-    max_pixels: int = 16_000_000
-    max_aspect: float = 8.0
-    min_side: int = 8
-    max_budget: int = 1000
+    """The service's limits; the image ones default to the sketch reader's own."""
+
+    max_upload_bytes: int = reader.MAX_BYTES
+    max_pixels: int = reader.MAX_PIXELS
+    max_aspect: float = reader.MAX_ASPECT
+    min_side: int = reader.MIN_SIDE
+    max_budget: int = 1000  # a job is one refinement, not a study
     max_time_limit: float = 600.0
-    max_height: float = 200.0
+    max_height: float = MAX_HEIGHT
 
 
 class LimitError(ValueError):
@@ -225,10 +230,15 @@ def parse_options(
         raise LimitError(
             422, f"estimator must be one of {', '.join(sorted(estimators))}, got {estimator!r}"
         )
-    return JobOptions(
+    options = JobOptions(
         refine=_flag(fields, "refine", True),
         budget=budget,
         time_limit=seconds,
         height=None if height is None else float(height),
         estimator=estimator,
     )
+    try:
+        options.settings()  # the pipeline's own check, before the job is queued
+    except ValueError as exc:
+        raise LimitError(422, str(exc)) from exc
+    return options

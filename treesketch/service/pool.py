@@ -183,7 +183,7 @@ class WorkerPool:
                         "budget": int(job.options.get("budget", 0)),
                         "best_loss": None,
                         "elapsed": 0.0,
-                        "stage": "estimate",
+                        "stage": "start",
                     }
                 # a dying process fails the send; _replace then fails the job
                 with contextlib.suppress(OSError):
@@ -208,7 +208,7 @@ class WorkerPool:
             with self._lock:
                 live = self._live.get(job_id)
                 if live is not None:
-                    live.update(payload, stage="refine")
+                    live.update(payload)
             if time.monotonic() - w.saved_at > SAVE_PROGRESS_EVERY:
                 w.saved_at = time.monotonic()
                 budget = live["budget"] if live else None

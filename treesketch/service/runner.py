@@ -1,38 +1,37 @@
 """What a worker does with one job: the pipeline run and the artefact files.
 
-This is the only module of the service that touches the pipeline.  ``load_runner(spec)``
-loads the estimator once per worker process; ``Runner.run`` turns a stored sketch and the
-job's options into artefact bytes and a JSON-able summary.
+This is the only module of the service that touches the pipeline, through the seam:
+``treesketch.Pipeline(estimator, settings).run(sketch, height, progress, cancel)`` and
+``treesketch.result_files``.  A :class:`Runner` loads its estimator once per worker
+process; ``Runner.run`` turns a stored sketch and the job's options into artefact bytes
+and the result's summary.
 
-The estimator ``spec`` is ``"tsn"`` (the shipped checkpoint), ``"template"`` (no network),
-a checkpoint path, or ``"package.module:name"`` naming a callable ``image -> (params,
-species)`` (how tests and researchers plug in their own without touching the service).
+An estimator ``spec`` is whatever ``treesketch.load_estimator`` takes (``"tsn"``,
+``"template"``, a checkpoint path) or ``"package.module:name"`` naming an estimator
+object or class (how tests and researchers plug in their own without touching the
+service).
 """
 
 from __future__ import annotations
 
 import importlib
-import tempfile
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-__all__ = ["ARTEFACTS", "Cancelled", "JobOptions", "Runner", "load_runner"]
+__all__ = ["ARTEFACTS", "JobOptions", "Runner", "load_estimator_spec"]
 
-# file name -> media type, in the order the page offers them
-ARTEFACTS: dict[str, str] = {
-    "tree.glb": "model/gltf-binary",
-    "tree.json": "application/json",
-    "tree_sapling.py": "text/x-python",
-    "compare.png": "image/png",
-    "sketch_before.png": "image/png",
-    "sketch_after.png": "image/png",
+# file name -> (output kind of treesketch.result_files, media type), in the page's order
+ARTEFACT_KINDS: dict[str, tuple[str, str]] = {
+    "tree.glb": ("glb", "model/gltf-binary"),
+    "tree.json": ("json", "application/json"),
+    "tree_sapling.py": ("preset", "text/x-python"),
+    "compare.png": ("compare", "image/png"),
+    "sketch_before.png": ("sketch_before", "image/png"),
+    "sketch_after.png": ("sketch_after", "image/png"),
 }
-
-
-class Cancelled(Exception):
-    """The job's cancel flag was raised; the run stopped."""
+ARTEFACTS: dict[str, str] = {name: media for name, (_, media) in ARTEFACT_KINDS.items()}
 
 
 @dataclass(frozen=True)
@@ -43,7 +42,7 @@ class JobOptions:
     budget: int = 100
     time_limit: float | None = 50.0
     height: float | None = None
-    estimator: str = "tsn"  # a spec the server allows (see ``Runner``)
+    estimator: str = "tsn"  # a spec the server allows
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -52,71 +51,30 @@ class JobOptions:
     def from_dict(cls, d: dict[str, Any]) -> JobOptions:
         return cls(**d)
 
+    def settings(self) -> Any:
+        """The pipeline's ``RefineSettings`` for these options (validated)."""
+        from treesketch import RefineSettings
 
-def _import(spec: str) -> Any:
-    module, _, name = spec.partition(":")
-    obj: Any = importlib.import_module(module)
-    for part in name.split("."):
-        obj = getattr(obj, part)
-    return obj
+        return RefineSettings().replace(
+            refine=self.refine, budget=self.budget, time_limit=self.time_limit
+        )
 
 
-def _estimator(spec: str) -> Any:
-    """The ``model`` argument of the pipeline for this spec, loaded once."""
-    if spec == "template":
-        return "template"
+def load_estimator_spec(spec: str) -> Any:
+    """An estimator from a spec (see the module text); ValueError when there is none."""
+    from treesketch import load_estimator
+
     if ":" in spec and not Path(spec).exists():
-        return _import(spec)
-    from tsn.predict import load_model
-
-    return load_model(None if spec == "tsn" else spec)
-
-
-def _png(img: Any) -> bytes:
-    import io
-
-    import numpy as np
-    from PIL import Image
-
-    buf = io.BytesIO()
-    Image.fromarray(np.asarray(img, dtype=np.uint8)).save(buf, format="PNG")
-    return buf.getvalue()
-
-
-def artefact_bytes(result: Any) -> dict[str, bytes]:
-    """Every artefact of a result, as bytes keyed by file name."""
-    from treesketch.cli_predict import compare_image
-    from weberpenn.export import export_mesh, save_sapling_preset
-    from weberpenn.params import save_params
-
-    with tempfile.TemporaryDirectory(prefix="treesketch-job-") as d:
-        tmp = Path(d)
-        export_mesh(result.tree_mesh, tmp / "tree.glb")
-        save_params(result.params, tmp / "tree.json")
-        save_sapling_preset(result.params, tmp / "tree_sapling.py")
-        files = {name: (tmp / name).read_bytes() for name in ARTEFACTS if (tmp / name).exists()}
-    files["compare.png"] = _png(compare_image(result))
-    files["sketch_before.png"] = _png(result.sketch_before)
-    files["sketch_after.png"] = _png(result.sketch_after)
-    return files
-
-
-def summary(result: Any) -> dict[str, Any]:
-    """The JSON-able description of a result that ``GET /jobs/{id}`` shows."""
-    r = result.refinement
-    scores = getattr(result, "species_scores", None) or result.extras.get("species_scores", {})
-    return {
-        "species": result.species,
-        "species_scores": {str(k): float(v) for k, v in dict(scores).items()},
-        "estimator": result.estimator,
-        "params": result.params.to_dict(),
-        "losses": {k: float(v) for k, v in result.losses.items()},
-        "yaw": float(result.yaw),
-        "confidence": float(result.confidence),
-        "warning": result.warning,
-        "timings": {k: float(v) for k, v in result.timings.items()},
-        "evaluations": 0 if r is None else int(r.evaluations),
-    }
+        module, _, name = spec.partition(":")
+        obj: Any = importlib.import_module(module)
+        for part in name.split("."):
+            obj = getattr(obj, part)
+        if isinstance(obj, type):
+            obj = obj()
+        if not hasattr(obj, "estimate"):
+            raise ValueError(f"{spec} is not an estimator (it has no estimate method)")
+        return obj
+    return load_estimator(spec)
 
 
 class Runner:
@@ -125,45 +83,27 @@ class Runner:
 
     def __init__(self, spec: str) -> None:
         self.spec = spec
-        self.models: dict[str, Any] = {spec: _estimator(spec)}
+        self.estimators: dict[str, Any] = {spec: load_estimator_spec(spec)}
 
-    def model(self, spec: str) -> Any:
-        if spec not in self.models:
-            self.models[spec] = _estimator(spec)
-        return self.models[spec]
+    def estimator(self, spec: str) -> Any:
+        if spec not in self.estimators:
+            self.estimators[spec] = load_estimator_spec(spec)
+        return self.estimators[spec]
 
     def run(
         self,
         sketch: bytes,
         options: JobOptions,
-        progress: Callable[[int, float], None],
+        progress: Callable[[Any], None],
         cancel: Callable[[], bool],
     ) -> tuple[dict[str, bytes], dict[str, Any]]:
-        """(artefacts, summary) of one job; raises ``Cancelled`` soon after ``cancel()``
-        turns True, ``ValueError`` (``SketchError``) for a sketch or option the pipeline
-        rejects."""
-        from treesketch.pipeline import predict_then_refine
+        """(artefacts by file name, summary) of one job.  Raises ``treesketch.Cancelled``
+        within one evaluation of ``cancel()`` turning True, ``ValueError``
+        (``SketchError``) for a sketch or option the pipeline rejects."""
+        from treesketch import Pipeline, result_files
 
-        def on_progress(evaluations: int, best: float) -> None:
-            if cancel():
-                raise Cancelled("cancelled")
-            progress(evaluations, best)
-
-        if cancel():
-            raise Cancelled("cancelled")
-        result = predict_then_refine(
-            sketch,
-            refine=options.refine,
-            budget=options.budget,
-            time_limit=options.time_limit,
-            height=options.height,
-            model=self.model(options.estimator),
-            progress=on_progress,
-        )
-        if cancel():
-            raise Cancelled("cancelled")
-        return artefact_bytes(result), summary(result)
-
-
-def load_runner(spec: str) -> Runner:
-    return Runner(spec)
+        pipeline = Pipeline(self.estimator(options.estimator), options.settings())
+        result = pipeline.run(sketch, height=options.height, progress=progress, cancel=cancel)
+        kinds = {kind: name for name, (kind, _) in ARTEFACT_KINDS.items()}
+        files = result_files(result, kinds)
+        return {kinds[k]: data for k, data in files.items() if k in kinds}, result.summary()

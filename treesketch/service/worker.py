@@ -14,6 +14,8 @@ artefacts itself (``results/<id>/``, all or nothing) so that no big bytes cross 
 from __future__ import annotations
 
 import gc
+import json
+import math
 import time
 import traceback
 from multiprocessing.connection import Connection
@@ -32,11 +34,20 @@ class _Reporter:
     def __init__(self, conn: Connection, job_id: str, t0: float) -> None:
         self.conn, self.job_id, self.t0, self.last = conn, job_id, t0, 0.0
 
-    def __call__(self, evaluations: int, best: float) -> None:
+        self.stage = ""
+
+    def __call__(self, p: Any) -> None:
+        """``p``: a ``treesketch.Progress``; a new stage is always told."""
         now = time.perf_counter()
-        if now - self.last >= PROGRESS_EVERY:
-            self.last = now
-            info = {"evaluations": evaluations, "best_loss": best, "elapsed": now - self.t0}
+        if p.stage != self.stage or now - self.last >= PROGRESS_EVERY:
+            self.last, self.stage = now, p.stage
+            best = p.best_loss if math.isfinite(p.best_loss) else None
+            info = {
+                "stage": p.stage,
+                "evaluations": p.evaluations,
+                "best_loss": best,
+                "elapsed": now - self.t0,
+            }
             self.conn.send(("progress", self.job_id, info))
 
 
@@ -44,9 +55,10 @@ def worker_main(spec: str, conn: Connection, cancel: Any, root: str) -> None:
     """Entry point of a spawned worker (``cancel``: a shared ``multiprocessing.Value``)."""
     import os
 
+    from treesketch import Cancelled
     from weberpenn.fileio import write_together
 
-    from .runner import Cancelled, JobOptions, Runner
+    from .runner import JobOptions, Runner
 
     # below the HTTP front: a status poll must not wait behind a refinement for a core
     os.nice(WORKER_NICE)
@@ -72,6 +84,7 @@ def worker_main(spec: str, conn: Connection, cancel: Any, root: str) -> None:
             opts = JobOptions.from_dict(options)
             sketch = (uploads / f"{job_id}.img").read_bytes()
             files, summary = runner.run(sketch, opts, progress, lambda: bool(cancel.value))
+            summary = json.loads(json.dumps(summary, default=float))  # plain JSON types
             out = results / job_id
             write_together({out / name: data for name, data in files.items()})
             summary["timings"]["job"] = time.perf_counter() - t0

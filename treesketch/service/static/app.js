@@ -180,13 +180,18 @@ function show(job) {
     bar.removeAttribute("value");
     say(job.position ? `Waiting: ${job.position} job(s) ahead.` : "Waiting for a worker...");
   } else if (job.state === "running") {
-    if (p.evaluations > 0 && p.budget) {
+    const secs = `${(p.elapsed || 0).toFixed(0)} s`;
+    if (p.stage === "refine" && p.evaluations > 0 && p.budget) {
       bar.max = p.budget;
       bar.value = Math.min(p.evaluations, p.budget);
-      say(`Refining: ${p.evaluations} of ${p.budget} trees, best distance ${p.best_loss.toFixed(3)}, ${p.elapsed.toFixed(0)} s`);
+      const best = p.best_loss == null ? "" : `, best distance ${p.best_loss.toFixed(3)}`;
+      say(`Refining: ${p.evaluations} of ${p.budget} trees${best}, ${secs}`);
+    } else if (p.stage === "render") {
+      bar.max = 1; bar.value = 1;
+      say(`Making the 3D tree and its pictures... ${secs}`);
     } else {
       bar.removeAttribute("value");
-      say(`First estimate... ${(p.elapsed || 0).toFixed(0)} s`);
+      say(`First estimate... ${secs}`);
     }
   } else if (job.state === "done") {
     bar.max = 1; bar.value = 1;
