@@ -175,14 +175,13 @@ def run_jobs(
 
 def reference(n: int, budget: int) -> float:
     """Seconds per job of the bare pipeline in this process (model loaded once)."""
-    from treesketch.pipeline import predict_then_refine
-    from tsn.predict import load_model
+    from treesketch import Pipeline, RefineSettings
 
-    model = load_model()
-    predict_then_refine(SKETCH, budget=2, model=model)  # warm-up
+    pipeline = Pipeline("tsn", RefineSettings(budget=budget))
+    pipeline.with_settings(budget=2).run(SKETCH)  # warm-up
     t0 = time.perf_counter()
     for _ in range(n):
-        predict_then_refine(SKETCH, budget=budget, model=model)
+        pipeline.run(SKETCH)
     return (time.perf_counter() - t0) / n
 
 
