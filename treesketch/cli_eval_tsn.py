@@ -29,8 +29,10 @@ def evaluate(
     batch: int = 32,
     max_sketches: int | None = None,
     bar: bool = True,
+    styles: tuple[str, ...] | None = None,
 ) -> dict[str, Any]:
-    """Scores of a checkpoint on ``split`` of the dataset at ``data``."""
+    """Scores of a checkpoint on ``split`` of the dataset at ``data`` (only its sketches
+    drawn in ``styles`` when given)."""
     from eval._tsn_adapter import backend as tsn_backend
     from eval.metrics import one_minus_rmse
     from eval.report import _load_sketch, _progress
@@ -38,11 +40,12 @@ def evaluate(
     from tsn import encoding
     from weberpenn import TreeParams
 
-    rows = read_manifest(data, split=split)
+    rows = read_manifest(data, split=split, styles=styles)
     if max_sketches is not None:
         rows = rows[:max_sketches]
     if not rows:
-        raise ValueError(f"{data}: the {split!r} split is empty")
+        what = f" in the styles {', '.join(styles)}" if styles else ""
+        raise ValueError(f"{data}: the {split!r} split is empty{what}")
     b = tsn_backend(checkpoint)
     model = b.tsn_model  # type: ignore[attr-defined]
     raw, flip, proj, tgt, sp_pred, sp_true = [], [], [], [], [], []
@@ -115,12 +118,19 @@ def eval_tsn(
         None, "--max-sketches", help="Score only the first N sketches."
     ),
     json_out: Path | None = typer.Option(None, "--json", help="Also write the numbers as JSON."),
+    styles: str | None = typer.Option(
+        None,
+        "--styles",
+        help="Score only sketches drawn in these comma-separated styles (e.g. sg); "
+        "default: every sketch of the split.",
+    ),
 ) -> None:
     """Paper-style table: 1-RMSE per head and overall, species-identification accuracy."""
     from weberpenn.params import atomic_write_text
 
     try:
-        res = evaluate(data, checkpoint, split, max_sketches=max_sketches)
+        keep = None if styles is None else tuple(s.strip() for s in styles.split(",") if s.strip())
+        res = evaluate(data, checkpoint, split, max_sketches=max_sketches, styles=keep)
     except (RuntimeError, ValueError, OSError) as e:  # DatasetError/CheckpointError too
         typer.secho(f"error: {e}", fg=typer.colors.RED, err=True)
         raise typer.Exit(2) from None

@@ -68,6 +68,8 @@ class TrainConfig:
     pretrained: bool = True
     loss: str = "mse"  # "mse": sum of per-head MSE (paper); "rmse": sum of per-head RMSE
     more_data: tuple[str, ...] = ()  # datasets whose every split is added to the training set
+    styles: tuple[str, ...] | None = None  # drawing styles kept (train and val); None = all
+    init: str | None = None  # checkpoint to fine-tune from (its weights and normaliser)
     extra: dict[str, Any] = field(default_factory=dict)
 
     def check(self) -> None:
@@ -87,6 +89,15 @@ class TrainConfig:
             raise TrainError(f"--loss must be one of {', '.join(LOSSES)}, got {self.loss!r}")
         if self.size % 32:
             raise TrainError(f"--size must be a multiple of 32, got {self.size}")
+        if self.styles is not None:
+            from render.styles import check_styles
+
+            try:
+                self.styles = check_styles(self.styles)
+            except ValueError as e:
+                raise TrainError(f"--styles: {e}") from None
+        if self.init is not None and not Path(self.init).is_file():
+            raise TrainError(f"--init {self.init}: no such checkpoint file")
 
     @property
     def work_dir(self) -> Path:
@@ -113,18 +124,26 @@ class Split:
         )
 
 
-def load_split(data: Path, split: str | None, limit: int | None = None) -> Split:
-    """The sketches and targets of ``split`` of a dataset (``None``: every split)."""
+def load_split(
+    data: Path,
+    split: str | None,
+    limit: int | None = None,
+    styles: tuple[str, ...] | None = None,
+) -> Split:
+    """The sketches and targets of ``split`` of a dataset (``None``: every split), only
+    those drawn in ``styles`` when given."""
     from render.dataset import DatasetError, read_manifest
 
     try:
-        rows = read_manifest(data, split=split)
+        rows = read_manifest(data, split=split, styles=styles)
     except DatasetError as e:
         raise TrainError(str(e)) from None
     if limit is not None:
         rows = rows[:limit]
     if not rows:
         what = "it has no sketches" if split is None else f"the {split!r} split is empty"
+        if styles is not None:
+            what += f" in the styles {', '.join(styles)}"
         raise TrainError(f"{data}: {what}")
     images, mats, cache = [], [], {}
     for r in rows:
@@ -157,7 +176,7 @@ def load_more(cfg: TrainConfig, data: Path) -> list[tuple[Path, Split]]:
             raise TrainError(f"--more-data {path}: no such dataset folder")
         if path.resolve() == data.resolve():
             raise TrainError(f"--more-data {path} is the --data dataset itself")
-        part = load_split(path, None, cfg.max_sketches)
+        part = load_split(path, None, cfg.max_sketches, cfg.styles)
         shared = held.intersection(part.tree_seeds)
         if shared:
             raise TrainError(
@@ -185,6 +204,10 @@ def _cache_key(cfg: TrainConfig, cut: int, split: Split, tag: str, data: str | N
         ).encode()
     )
     h.update(str(Path(data or cfg.data).resolve()).encode())
+    if cfg.styles is not None:  # another subset of the rows
+        h.update(("styles:" + ",".join(cfg.styles)).encode())
+    if cfg.init is not None:  # frozen stages come from that checkpoint
+        h.update(("init:" + str(Path(cfg.init).resolve())).encode())
     h.update("|".join(split.tree_ids).encode())
     return h.hexdigest()[:16]
 
@@ -352,6 +375,22 @@ def _write_csv(rows: list[dict[str, Any]], path: Path) -> None:
     atomic_write_text(path, buf.getvalue())
 
 
+def _load_init(cfg: TrainConfig) -> Any:
+    """The ``--init`` checkpoint, refused when its network or input size differ."""
+    from .checkpoint import CheckpointError, load_checkpoint
+
+    try:
+        start = load_checkpoint(str(cfg.init))
+    except CheckpointError as e:
+        raise TrainError(f"--init: {e}") from None
+    if start.model.backbone_name != cfg.backbone or start.size != cfg.size:
+        raise TrainError(
+            f"--init {cfg.init} is a {start.model.backbone_name} network at {start.size} px; "
+            f"this run asks for --backbone {cfg.backbone} --size {cfg.size}"
+        )
+    return start
+
+
 def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any]:
     """Train (or resume) and return a summary; the best checkpoint is at ``cfg.out``."""
     cfg.check()
@@ -371,11 +410,13 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
             f"{state_path} exists: pass --resume to continue that run, or remove {work}"
         )
 
-    first = load_split(data, "train", cfg.max_sketches)
+    first = load_split(data, "train", cfg.max_sketches, cfg.styles)
     more = load_more(cfg, data)
     trn = Split.concat([first] + [m for _, m in more])
-    val = load_split(data, "val", cfg.max_sketches)
-    normaliser = encoding.Normaliser.fit(trn.mats)
+    val = load_split(data, "val", cfg.max_sketches, cfg.styles)
+    start = _load_init(cfg) if cfg.init else None
+    # a fine-tune keeps its checkpoint's target scale: the heads already speak it
+    normaliser = start.normaliser if start else encoding.Normaliser.fit(trn.mats)
     species_id = fit_species_id(trn, normaliser)
     y_trn = head_targets(normaliser.normalise(trn.mats))
     y_val_norm = normaliser.normalise(val.mats)
@@ -387,7 +428,7 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
     )
 
     try:
-        model = TSN(cfg.backbone, pretrained=cfg.pretrained).to(device)
+        model = (start.model if start else TSN(cfg.backbone, pretrained=cfg.pretrained)).to(device)
     except ModelError as e:
         raise TrainError(str(e)) from None
     cut = BACKBONES[cfg.backbone][1] if cfg.cut is None else int(cfg.cut)
