@@ -200,9 +200,29 @@ def test_styles_filter_and_fine_tune_from_a_checkpoint(tmp_path: Path) -> None:
         TrainConfig(str(ds), str(tmp_path / "a.pt"), styles=("sg", "pen"), **common),
         log=lines.append,
     )
-    assert any(s.startswith("[train] 8 train (8 from") and "/ 4 val" in s for s in lines), lines
+    assert any(
+        s.startswith("[train] 8 train (12 from") and "/ 4 val sketches in the styles sg, pen" in s
+        for s in lines
+    ), lines
     # fine-tune on every style from that checkpoint: its normaliser is kept
-    res = train(TrainConfig(str(ds), str(tmp_path / "b.pt"), init=first["out"], **common))
+    cache = tmp_path / "cache"
+    res = train(
+        TrainConfig(str(ds), str(tmp_path / "b.pt"), init=first["out"], cache=str(cache), **common)
+    )
+    # another run keeping other styles reuses the same caches
+    lines.clear()
+    train(
+        TrainConfig(
+            str(ds),
+            str(tmp_path / "d.pt"),
+            init=first["out"],
+            cache=str(cache),
+            styles=("sg", "felt"),
+            **common,
+        ),
+        log=lines.append,
+    )
+    assert sum("features from" in s for s in lines) == 2, lines
     from tsn.checkpoint import load_checkpoint
 
     a, b = load_checkpoint(first["out"]), load_checkpoint(res["out"])
@@ -214,7 +234,7 @@ def test_styles_filter_and_fine_tune_from_a_checkpoint(tmp_path: Path) -> None:
         train(TrainConfig(str(ds), str(tmp_path / "c.pt"), init=str(tmp_path / "none.pt")))
     with pytest.raises(TrainError, match="unknown drawing style 'crayon'"):
         train(TrainConfig(str(ds), str(tmp_path / "c.pt"), styles=("crayon",)))
-    with pytest.raises(TrainError, match="in the styles cloud"):
+    with pytest.raises(TrainError, match="no sketches in the styles cloud"):
         train(TrainConfig(str(ds), str(tmp_path / "c.pt"), styles=("cloud",)))
     r = CliRunner().invoke(
         app,

@@ -50,6 +50,12 @@ def train_cmd(
         help="Comma-separated drawing styles to train and validate on (default: every "
         "sketch of the dataset); leave one out to test on it.",
     ),
+    cache: Path | None = typer.Option(
+        None,
+        "--cache",
+        help="Folder of the feature caches (default: the work folder); runs on the same "
+        "dataset that keep other --styles can share it.",
+    ),
     init: Path | None = typer.Option(
         None,
         "--init",
@@ -80,6 +86,7 @@ def train_cmd(
         if styles is None
         else tuple(s.strip().lower() for s in styles.split(",") if s.strip()),
         init=str(init) if init else None,
+        cache=str(cache) if cache else None,
     )
     try:
         cfg.check()
