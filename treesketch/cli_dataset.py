@@ -34,6 +34,16 @@ def build(
         "maple,pine,bonsai,palm,cherry", "--species", help="Comma-separated species."
     ),
     size: int = typer.Option(256, "--size", min=32, max=2048, help="Sketch size in pixels."),
+    styles: str = typer.Option(
+        "sg",
+        "--styles",
+        help="Comma-separated drawing styles: sg (the paper's chain), pen, cloud, scribble, "
+        "pencil, felt. With sg and others, every view is drawn in sg and in "
+        "--styles-per-view of the others (a seeded choice per view).",
+    ),
+    styles_per_view: int = typer.Option(
+        1, "--styles-per-view", min=1, max=16, help="Other styles drawn per view besides sg."
+    ),
     workers: int = typer.Option(1, "--workers", min=1, max=64, help="Worker processes."),
     seed: int = typer.Option(0, "--seed", min=0, help="Dataset seed (same seed, same dataset)."),
     val_fraction: float = typer.Option(0.1, "--val-fraction", min=0.0, max=0.9),
@@ -61,6 +71,8 @@ def build(
             seed=seed,
             val_fraction=val_fraction,
             test_fraction=test_fraction,
+            styles=_csv(styles, "style"),
+            styles_per_view=styles_per_view,
             workers=workers,
         )
     except DatasetError as exc:
