@@ -34,7 +34,18 @@ def build(
         "maple,pine,bonsai,palm,cherry", "--species", help="Comma-separated species."
     ),
     size: int = typer.Option(256, "--size", min=32, max=2048, help="Sketch size in pixels."),
-    workers: int = typer.Option(1, "--workers", min=1, max=64, help="Worker processes."),
+    workers: int = typer.Option(
+        1, "--workers", min=1, max=64, help="Worker processes (local) or CPUs of a local Ray."
+    ),
+    executor: str = typer.Option(
+        "local", "--executor", help="Where trees are built: local (this machine) or ray."
+    ),
+    address: str | None = typer.Option(
+        None,
+        "--address",
+        help="Ray cluster to use (auto, HOST:PORT, ray://HOST:PORT); "
+        "without it --executor ray starts a local Ray for the run.",
+    ),
     seed: int = typer.Option(0, "--seed", min=0, help="Dataset seed (same seed, same dataset)."),
     val_fraction: float = typer.Option(0.1, "--val-fraction", min=0.0, max=0.9),
     test_fraction: float = typer.Option(0.1, "--test-fraction", min=0.0, max=0.9),
@@ -46,6 +57,8 @@ def build(
     """Sample, grow, mesh and render every tree; write sketches, parameters, renders and a
     manifest with a train/val/test split by tree.  Re-running resumes."""
     from render.dataset import DatasetConfig, DatasetError, build_dataset
+
+    from .executor import ExecutorError, from_options
 
     logging.basicConfig(
         level=logging.INFO if verbose else logging.WARNING,
@@ -61,15 +74,21 @@ def build(
             seed=seed,
             val_fraction=val_fraction,
             test_fraction=test_fraction,
-            workers=workers,
         )
     except DatasetError as exc:
         raise typer.BadParameter(str(exc)) from None
     try:
-        summary = build_dataset(cfg, progress=progress)
+        runner = from_options(executor, workers, address)
+    except ExecutorError as exc:
+        raise typer.BadParameter(str(exc)) from None
+    try:
+        summary = build_dataset(cfg, progress=progress, executor=runner)
     except DatasetError as exc:
         typer.echo(f"Error: {exc}", err=True)
         raise typer.Exit(2) from None
+    finally:
+        if runner is not None:
+            runner.close()
     typer.echo(summary.text())
 
 

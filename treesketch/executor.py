@@ -43,6 +43,7 @@ __all__ = [
     "LocalExecutor",
     "Outcome",
     "RayExecutor",
+    "from_options",
     "make_executor",
     "run_ordered",
 ]
@@ -383,6 +384,19 @@ def make_executor(
     if address is None and num_cpus is None and workers > 1:
         num_cpus = workers
     return RayExecutor(address=address, num_cpus=num_cpus)
+
+
+def from_options(
+    kind: str, workers: int = 1, address: str | None = None
+) -> LocalExecutor | RayExecutor | None:
+    """The executor of the CLI's ``--executor/--workers/--address``; None for one local
+    process (the caller then runs the pieces in-process, with every core to itself)."""
+    kind = kind.strip().lower()
+    if kind == "local" and workers == 1 and address is None:
+        return None
+    if kind == "ray" and address is not None and workers != 1:
+        raise ExecutorError("--workers is for a local run; a Ray cluster has its own CPUs")
+    return make_executor(kind, workers=workers, address=address)
 
 
 def describe(outcomes: Iterable[Outcome[Any]]) -> dict[str, int]:
