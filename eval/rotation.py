@@ -115,32 +115,32 @@ def _params_key(p: Mapping[str, Any]) -> str:
     return json.dumps(TreeParams(p).to_dict(), sort_keys=True, default=str)
 
 
-def rotation_sweep(
-    gt_params: Mapping[str, Any],
+@dataclass(frozen=True)
+class AngleResult:
+    """One angle of the sweep: its row, the (refined) prediction and the input sketch."""
+
+    row: SweepRow
+    prediction: TreeParams | None
+    sketch: np.ndarray | None
+
+
+def _angle_fn(
+    gt_mesh: Any,
     predict: Predictor,
-    step: float = 5.0,
-    size: int = 256,
-    refine_budget: int = 0,
-    samples: int = DEFAULT_SAMPLES,
-    seed: int = 0,
-    progress: Progress | None = None,
-    refine_size: int = 128,
-) -> SweepResult:
-    """Run the sweep; ``refine_budget`` > 0 refines each prediction with ``refine.search``."""
-    gt = TreeParams(gt_params)
-    if int(refine_budget) < 0:
-        raise ValueError(f"refine_budget must be >= 0, got {refine_budget}")
-    angles = yaw_angles(step)
+    size: int,
+    refine_budget: int,
+    samples: int,
+    seed: int,
+    refine_size: int,
+) -> Callable[[float], AngleResult]:
+    """The function that does one angle: sketch at that yaw, predict, refine, Hausdorff."""
     from render.sketch import SketchRenderer
 
-    gt_mesh = build_mesh(grow(gt, seed=seed))
-    if gt_mesh.is_empty:
-        raise ValueError("the ground-truth parameters grow an empty tree; nothing to compare")
     gt_combined = gt_mesh.combined()
     renderer = SketchRenderer(gt_mesh)
     cache: dict[str, Any] = {}  # identical predictions share one mesh and distance
-    result = SweepResult([], gt, seed=int(seed), size=int(size))
-    for i, yaw in enumerate(angles):
+
+    def one(yaw: float) -> AngleResult:
         t0 = time.perf_counter()
         img = renderer.sketch(float(yaw), size=size)
         pred = TreeParams(predict(img))
@@ -162,24 +162,109 @@ def rotation_sweep(
                 pm = rotate_about_trunk(pm, turn)
             cache[key] = hausdorff(pm.combined(), gt_combined, samples)
         d = cache[key]
-        result.rows.append(
-            SweepRow(
-                float(yaw),
-                d.max,
-                d.mean,
-                d.max_norm,
-                d.mean_norm,
-                d.status,
-                refined,
-                lb,
-                la,
-                time.perf_counter() - t0,
-            )
+        row = SweepRow(
+            float(yaw),
+            d.max,
+            d.mean,
+            d.max_norm,
+            d.mean_norm,
+            d.status,
+            refined,
+            lb,
+            la,
+            time.perf_counter() - t0,
         )
-        result.predictions.append(pred)
-        result.sketches.append(img)
-        if progress is not None:
-            progress(i + 1, len(angles))
+        return AngleResult(row, pred, img)
+
+    return one
+
+
+@dataclass(frozen=True)
+class SweepWorker:
+    """Worker factory for an executor (picklable): each worker grows the ground truth and
+    builds its scene once, then does angles.  ``predict`` travels with it, so it must
+    pickle (a ``tsn.predict.Predictor``, a module-level function)."""
+
+    gt: TreeParams
+    predict: Predictor
+    size: int
+    refine_budget: int
+    samples: int
+    seed: int
+    refine_size: int
+
+    def __call__(self) -> Callable[[float], AngleResult]:
+        from render.backend import init_mitsuba
+
+        init_mitsuba(threads=1)
+        gt_mesh = build_mesh(grow(self.gt, seed=self.seed))
+        return _angle_fn(
+            gt_mesh,
+            self.predict,
+            self.size,
+            self.refine_budget,
+            self.samples,
+            self.seed,
+            self.refine_size,
+        )
+
+
+def _failed_row(yaw: float, error: str) -> SweepRow:
+    nan = float("nan")
+    first = error.splitlines()[0] if error else "lost"
+    return SweepRow(float(yaw), nan, nan, nan, nan, f"failed: {first}", False, nan, nan, 0.0)
+
+
+def rotation_sweep(
+    gt_params: Mapping[str, Any],
+    predict: Predictor,
+    step: float = 5.0,
+    size: int = 256,
+    refine_budget: int = 0,
+    samples: int = DEFAULT_SAMPLES,
+    seed: int = 0,
+    progress: Progress | None = None,
+    refine_size: int = 128,
+    executor: Any = None,
+) -> SweepResult:
+    """Run the sweep; ``refine_budget`` > 0 refines each prediction with ``refine.search``.
+
+    ``executor`` (``treesketch.executor``: a local pool, Ray) spreads the angles; each is
+    deterministic, so the rows are the same values whichever runs them.  An angle that
+    fails there is reported as a row with status ``failed: ...`` and NaN distances (its
+    prediction and sketch are None); in this process an error propagates.
+    """
+    gt = TreeParams(gt_params)
+    if int(refine_budget) < 0:
+        raise ValueError(f"refine_budget must be >= 0, got {refine_budget}")
+    angles = yaw_angles(step)
+    gt_mesh = build_mesh(grow(gt, seed=seed))
+    if gt_mesh.is_empty:
+        raise ValueError("the ground-truth parameters grow an empty tree; nothing to compare")
+    result = SweepResult([], gt, seed=int(seed), size=int(size))
+    opts = (int(size), int(refine_budget), int(samples), int(seed), int(refine_size))
+    outs: list[AngleResult] = []
+    if executor is None:
+        one = _angle_fn(gt_mesh, predict, *opts)
+        for i, yaw in enumerate(angles):
+            outs.append(one(float(yaw)))
+            if progress is not None:
+                progress(i + 1, len(angles))
+    else:
+        from_worker = executor.run(SweepWorker(gt, predict, *opts), [float(a) for a in angles])
+        done: dict[int, AngleResult] = {}
+        for o in from_worker:
+            ok = o.error is None
+            done[o.index] = (
+                o.value if ok else AngleResult(_failed_row(angles[o.index], o.error), None, None)
+            )
+            if progress is not None:
+                progress(len(done), len(angles))
+        outs = [done[i] for i in range(len(angles))]
+    for a in outs:
+        result.rows.append(a.row)
+        result.predictions.append(a.prediction)  # type: ignore[arg-type]
+        result.sketches.append(a.sketch)  # type: ignore[arg-type]
     return result
 
 
