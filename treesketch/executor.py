@@ -125,7 +125,10 @@ class InlineExecutor:
     def run(self, factory: WorkerFactory, pieces: Sequence[Any]) -> Iterator[Outcome[Any]]:
         if not pieces:
             return
-        fn = factory()
+        try:
+            fn = factory()
+        except Exception as exc:
+            fn = _setup_failed(exc)
         host = socket.gethostname()
         for i, piece in enumerate(pieces):
             yield _call(fn, i, piece, host)
@@ -156,7 +159,19 @@ def _pool_init(parent_pid: int, factory: WorkerFactory) -> None:
             time.sleep(0.2)
 
     threading.Thread(target=watch, daemon=True).start()
-    _POOL_WORKER["fn"] = factory()
+    try:
+        _POOL_WORKER["fn"] = factory()
+    except Exception as exc:  # reported with every piece, not as a broken pool
+        _POOL_WORKER["fn"] = _setup_failed(exc)
+
+
+def _setup_failed(exc: Exception) -> Callable[[Any], Any]:
+    msg = f"worker setup failed: {type(exc).__name__}: {exc}"
+
+    def fail(piece: Any) -> Any:
+        raise RuntimeError(msg)
+
+    return fail
 
 
 def _pool_piece(index: int, piece: Any) -> Outcome[Any]:
@@ -233,7 +248,10 @@ def _ray_piece(factory_box: list[Any], index: int, piece: Any) -> Outcome[Any]:
     ref = factory_box[0]
     key = ref.hex()
     if key not in _RAY_WORKER:
-        fn = ray.get(ref)()
+        try:
+            fn = ray.get(ref)()
+        except Exception as exc:
+            fn = _setup_failed(exc)
         _RAY_WORKER.clear()  # one warm worker per process: a new run replaces the old one
         _RAY_WORKER[key] = fn
     node = ray.get_runtime_context().get_node_id()
