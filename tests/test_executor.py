@@ -81,3 +81,13 @@ def test_from_options_local():
     assert from_options("local") is None  # one process: the caller runs in-process
     ex = from_options("LOCAL", workers=3)
     assert isinstance(ex, LocalExecutor) and ex.workers == 3
+
+
+def test_parameters_pickle_for_worker_processes():
+    import pickle
+
+    from weberpenn import species
+
+    p = species.sample("palm", seed=1)
+    q = pickle.loads(pickle.dumps(p))
+    assert q == p and type(q) is type(p) and q.to_dict() == p.to_dict()
