@@ -377,6 +377,29 @@ def plot_cases(
         plt.close(fig)
 
 
+class CheckpointPredictor:
+    """A picklable ``sketch -> TreeParams`` callable over a TSN checkpoint: the model is
+    loaded on first use in the process that calls it (an executor's worker), once."""
+
+    def __init__(self, checkpoint: str | Path | None = None) -> None:
+        self.checkpoint = None if checkpoint is None else str(checkpoint)
+        self._model: Any = None
+
+    def __call__(self, img: np.ndarray) -> TreeParams:
+        if self._model is None:
+            from tsn.predict import load_model
+
+            self._model = load_model(self.checkpoint)
+        return self._model.predict(img).params
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {"checkpoint": self.checkpoint}  # workers load their own model
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.checkpoint = state["checkpoint"]
+        self._model = None
+
+
 def tsn_predictor(checkpoint: str | Path | None = None) -> Predictor:
     """A ``sketch -> TreeParams`` callable backed by ``tsn.predict`` (model loaded once)."""
     from tsn import predict as _p

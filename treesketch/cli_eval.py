@@ -40,12 +40,23 @@ def rotation(
     size: int = typer.Option(256, "--size", help="Sketch size in pixels."),
     samples: int = typer.Option(10_000, "--samples", help="Hausdorff samples per direction."),
     seed: int = typer.Option(0, "--seed", help="Growth seed for both trees."),
+    executor: str = typer.Option(
+        "local", "--executor", help="Where the angles run: local (this machine) or ray."
+    ),
+    workers: int = typer.Option(
+        1, "--workers", min=1, max=64, help="Worker processes (local) or CPUs of a local Ray."
+    ),
+    address: str | None = typer.Option(
+        None, "--address", help="Ray cluster (auto, HOST:PORT); default: a local Ray."
+    ),
 ) -> None:
     """Turn a tree about its trunk, predict from each view's sketch, Hausdorff at each angle."""
     from tqdm.auto import tqdm
 
     from eval.rotation import plot_cases, plot_sweep, rotation_sweep, write_csv, yaw_angles
     from weberpenn import ParamError, load_params
+
+    from .executor import ExecutorError, from_options
 
     try:
         gt = load_params(params)
@@ -57,20 +68,35 @@ def rotation(
     from eval.report import tsn_backend
 
     try:
-        backend = tsn_backend(checkpoint)
+        backend = tsn_backend(checkpoint)  # a bad checkpoint fails here, before any work
     except (RuntimeError, FileNotFoundError, ValueError) as e:
         _fail(str(e))
-    with tqdm(total=n, desc="rotation sweep", dynamic_ncols=True) as bar:
-        res = rotation_sweep(
-            gt,
-            backend.predict,
-            step=step,
-            size=size,
-            refine_budget=budget if refine else 0,
-            samples=samples,
-            seed=seed,
-            progress=lambda i, total: bar.update(1),
-        )
+    try:
+        runner = from_options(executor, workers, address)
+    except ExecutorError as e:
+        _fail(str(e))
+    if runner is None:
+        predict = backend.predict
+    else:  # workers load the checkpoint themselves
+        from eval.rotation import CheckpointPredictor
+
+        predict = CheckpointPredictor(backend.info["checkpoint"])
+    try:
+        with tqdm(total=n, desc="rotation sweep", dynamic_ncols=True) as bar:
+            res = rotation_sweep(
+                gt,
+                predict,
+                step=step,
+                size=size,
+                refine_budget=budget if refine else 0,
+                samples=samples,
+                seed=seed,
+                progress=lambda i, total: bar.update(i - bar.n),
+                executor=runner,
+            )
+    finally:
+        if runner is not None:
+            runner.close()
     out.mkdir(parents=True, exist_ok=True)
     write_csv(res.rows, out / "rotation.csv")
     plot_sweep(res, out / "rotation.png")
