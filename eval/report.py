@@ -267,8 +267,14 @@ def build_report(
     max_sketches: int | None = None,
     bar: bool = True,
     command: str = "",
+    executor: Any = None,
+    sweep_predict: Callable[[np.ndarray], Mapping[str, Any]] | None = None,
 ) -> Path:
-    """Compute everything and write ``OUT/README.md`` (+ PNG/CSV files); returns its path."""
+    """Compute everything and write ``OUT/README.md`` (+ PNG/CSV files); returns its path.
+
+    ``executor`` (``treesketch.executor``) spreads the rotation sweeps' angles; its workers
+    predict with ``sweep_predict`` (picklable, e.g. ``eval.rotation.CheckpointPredictor``;
+    default ``backend.predict``)."""
     t_start = time.perf_counter()
     data, out = Path(data), Path(out)
     if not data.is_dir():
@@ -304,12 +310,13 @@ def build_report(
 
         res = rotation_sweep(
             _params(data, r),
-            backend.predict,
+            sweep_predict or backend.predict,
             step=rotation_step,
             size=rotation_size,
             refine_budget=rotation_refine_budget,
             samples=samples,
             progress=tick,
+            executor=executor,
         )
         if hasattr(pbar, "close"):
             pbar.close()

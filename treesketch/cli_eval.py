@@ -146,14 +146,29 @@ def all_(
     nns: bool = typer.Option(
         True, "--nns/--no-nns", help="With --model tsn: add the nearest-neighbour baseline row."
     ),
+    executor: str = typer.Option(
+        "local", "--executor", help="Where the rotation sweeps' angles run: local or ray."
+    ),
+    workers: int = typer.Option(
+        1, "--workers", min=1, max=64, help="Worker processes (local) or CPUs of a local Ray."
+    ),
+    address: str | None = typer.Option(
+        None, "--address", help="Ray cluster (auto, HOST:PORT); default: a local Ray."
+    ),
 ) -> None:
     """Write the full evaluation report (markdown + PNGs) to --out."""
     from eval.baseline import nns_backend
     from eval.report import build_report, tsn_backend
+    from eval.rotation import CheckpointPredictor
+
+    from .executor import ExecutorError, from_options
 
     extras = []
     if model not in ("tsn", "nns"):
         _fail(f"--model must be 'tsn' or 'nns', got {model!r}")
+    spread = executor.strip().lower() != "local" or workers != 1 or address is not None
+    if spread and model != "tsn":
+        _fail("--executor/--workers/--address spread the sweeps of --model tsn only")
     try:
         if model == "tsn":
             main = tsn_backend(checkpoint)
@@ -175,6 +190,13 @@ def all_(
     else:
         rot = [s.strip() for s in rotation_species.split(",") if s.strip()]
     try:
+        runner = from_options(executor, workers, address)
+    except ExecutorError as e:
+        _fail(str(e))
+    sweep_predict = None
+    if runner is not None:  # workers load the checkpoint themselves
+        sweep_predict = CheckpointPredictor(main.info["checkpoint"])
+    try:
         path = build_report(
             data,
             out,
@@ -188,9 +210,14 @@ def all_(
             samples=samples,
             max_sketches=max_sketches,
             command="treesketch " + " ".join(shlex.quote(a) for a in sys.argv[1:]),
+            executor=runner,
+            sweep_predict=sweep_predict,
         )
     except ValueError as e:
         _fail(str(e))
+    finally:
+        if runner is not None:
+            runner.close()
     typer.echo(f"wrote {path}")
 
 
