@@ -61,17 +61,17 @@ import json
 import logging
 import os
 import sys
+import tempfile
 import time
 import traceback
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
-from weberpenn.fileio import atomic_write
+from weberpenn.fileio import atomic_write, write_together
 
 from .camera import VIEWS, resolve_yaw
 
@@ -378,22 +378,82 @@ def _draw_view(
     return out
 
 
-def _worker_init(parent_pid: int) -> None:
-    """Each worker process starts mitsuba itself, one Dr.Jit thread per worker, and
-    exits on its own if the builder is killed (so no orphan keeps writing files)."""
-    import threading
+@dataclass(frozen=True)
+class TreeFiles:
+    """One finished piece: the tree's record (its marker, or a failure record) and every
+    file it made, by path relative to ``OUT``.  Pieces return bytes, the builder writes
+    them, so workers on other machines need no shared disk."""
 
-    from .backend import init_mitsuba
+    record: dict[str, Any]
+    files: dict[str, bytes]
 
-    def watch() -> None:
-        while True:
-            if os.getppid() != parent_pid:
-                os._exit(3)
-            time.sleep(0.2)
 
-    threading.Thread(target=watch, daemon=True).start()
-    logging.basicConfig(level=logging.WARNING)
-    init_mitsuba(threads=1)
+def build_tree_files(job: TreeJob, settings: dict[str, Any]) -> TreeFiles:
+    """:func:`build_tree` into a scratch folder; the files come back as bytes."""
+    with tempfile.TemporaryDirectory(prefix=f"treesketch_{job.tree_id}_") as tmp:
+        record = build_tree(job, settings, tmp)
+        base = Path(tmp)
+        files = {
+            f.relative_to(base).as_posix(): f.read_bytes()
+            for f in sorted(base.rglob("*"))
+            if f.is_file() and not f.name.endswith(".tmp")
+        }
+    return TreeFiles(record, files)
+
+
+@dataclass(frozen=True)
+class TreeWorker:
+    """The worker factory the executor runs (picklable): called once per worker process,
+    it starts mitsuba (``threads`` Dr.Jit threads; None = all cores) and returns the
+    function that builds one tree."""
+
+    settings: dict[str, Any]
+    threads: int | None = 1
+
+    def __call__(self) -> Callable[[TreeJob], TreeFiles]:
+        from .backend import init_mitsuba
+
+        init_mitsuba(threads=self.threads)
+        return functools.partial(build_tree_files, settings=self.settings)
+
+
+class PieceRunner(Protocol):
+    """What :func:`build_dataset` needs of an executor (``treesketch.executor`` has them):
+    run ``factory()``'s function over ``pieces`` and yield outcomes with ``index``,
+    ``value`` and ``error`` (a string when the piece or its worker was lost)."""
+
+    def run(self, factory: Callable[[], Callable[[Any], Any]], pieces: Sequence[Any]) -> Any: ...
+
+
+def _store(root: Path, job: TreeJob, tf: TreeFiles) -> dict[str, Any]:
+    """Write a built tree: its files all together, then its marker (the tree is finished
+    only once the marker is there, so a kill at any moment leaves it to be redone)."""
+    marker = f"done/{job.tree_id}.json"
+    failed = root / "failed" / f"{job.tree_id}.json"
+    if tf.record.get("status") == "done":
+        write_together({root / k: v for k, v in tf.files.items() if k != marker})
+        atomic_write(root / marker, tf.files.get(marker) or _json_bytes(tf.record))
+        failed.unlink(missing_ok=True)
+    else:
+        name = f"failed/{job.tree_id}.json"
+        with contextlib.suppress(OSError):  # disk trouble: still report the failure
+            atomic_write(failed, tf.files.get(name) or _json_bytes(tf.record))
+    return tf.record
+
+
+def _lost(job: TreeJob, error: str) -> TreeFiles:
+    """The record of a tree whose worker was lost more often than the executor retries."""
+    record = {
+        "tree_id": job.tree_id,
+        "status": "failed",
+        "species": job.species,
+        "index": job.index,
+        "tree_seed": job.tree_seed,
+        "error": error.splitlines()[0] if error else "lost",
+        "traceback": error,
+        "params": None,
+    }
+    return TreeFiles(record, {})
 
 
 # --------------------------------------------------------------------------- the build
@@ -563,51 +623,40 @@ def read_manifest(
 
 
 def _run_jobs(
-    cfg: DatasetConfig, jobs: list[TreeJob], settings: dict[str, Any]
+    cfg: DatasetConfig,
+    jobs: list[TreeJob],
+    settings: dict[str, Any],
+    executor: PieceRunner | None,
 ) -> Iterator[dict[str, Any]]:
-    out = str(cfg.out_dir)
-    if int(cfg.workers) <= 1:
-        _worker_init_main()
+    root = cfg.out_dir
+    if executor is None:  # in this process, mitsuba on every core
+        build = TreeWorker(settings, threads=None)()
         for job in jobs:
-            yield build_tree(job, settings, out)
+            yield _store(root, job, build(job))
         return
-    import multiprocessing as mp
-
-    ctx = mp.get_context("spawn")  # a fresh interpreter: mitsuba/Dr.Jit start cleanly
-    with ProcessPoolExecutor(
-        max_workers=int(cfg.workers),
-        mp_context=ctx,
-        initializer=_worker_init,
-        initargs=(os.getpid(),),
-    ) as pool:
-        pending: set[Future[dict[str, Any]]] = set()
-        it = iter(jobs)
-        limit = 4 * int(cfg.workers)  # bounded queue keeps memory flat
-        for job in it:
-            pending.add(pool.submit(build_tree, job, settings, out))
-            if len(pending) >= limit:
-                break
-        while pending:
-            done, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for fut in done:
-                yield fut.result()
-                nxt = next(it, None)
-                if nxt is not None:
-                    pending.add(pool.submit(build_tree, nxt, settings, out))
-
-
-def _worker_init_main() -> None:
-    from .backend import init_mitsuba
-
-    init_mitsuba()
+    for o in executor.run(TreeWorker(settings, threads=1), jobs):
+        job = jobs[o.index]
+        yield _store(root, job, o.value if o.error is None else _lost(job, o.error))
 
 
 def build_dataset(
     cfg: DatasetConfig,
     progress: bool | None = None,
     on_tree: Callable[[dict[str, Any]], None] | None = None,
+    executor: PieceRunner | None = None,
 ) -> BuildSummary:
-    """Build (or resume) the dataset described by ``cfg``; see the module docstring."""
+    """Build (or resume) the dataset described by ``cfg``; see the module docstring.
+
+    ``executor`` spreads the trees (``treesketch.executor``: a local process pool, Ray);
+    None builds them in this process.  Whichever runs them, the files are the same bytes.
+    """
+    if executor is None and int(cfg.workers) > 1:
+        raise DatasetError(
+            f"workers={cfg.workers} needs an executor: pass "
+            f"executor=treesketch.executor.LocalExecutor({cfg.workers}) (the CLI does)"
+        )
+    if executor is not None and int(cfg.workers) > 1:
+        raise DatasetError("give either workers or an executor, not both")
     root = cfg.out_dir
     if root.exists() and not root.is_dir():
         raise DatasetError(f"--out {root} exists and is not a folder")
@@ -632,7 +681,7 @@ def build_dataset(
         built = 0
         variant = "n/a"
         with _Progress(len(todo), enabled=progress) as bar:
-            for rec in _run_jobs(cfg, todo, settings):
+            for rec in _run_jobs(cfg, todo, settings, executor):
                 if rec["status"] == "done":
                     built += 1
                 else:
@@ -649,7 +698,7 @@ def build_dataset(
         if todo:
             from .backend import init_mitsuba
 
-            variant = init_mitsuba().variant if int(cfg.workers) <= 1 else _variant_name()
+            variant = init_mitsuba().variant if executor is None else _variant_name()
         n_rows = write_manifest(root, jobs)
         summary = BuildSummary(
             out=str(root),

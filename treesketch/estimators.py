@@ -44,6 +44,10 @@ class TSNEstimator:
     def __init__(self, model: Any) -> None:
         self.model = model  # tsn.predict.TSNModel
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        # an executor's worker loads the checkpoint itself instead of receiving the weights
+        return (TSNEstimator.load, (str(self.model.loaded.path),))
+
     @classmethod
     def load(cls, checkpoint: str | os.PathLike[str] | None = None) -> TSNEstimator:
         from tsn.predict import CheckpointError, load_model
@@ -76,6 +80,9 @@ class TemplateEstimator:
             raise ValueError(f"seeds must be >= 1, got {seeds}")
         self.seeds = int(seeds)
         self._templates: list[tuple[str, int, float, Any]] | None = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {"seeds": self.seeds, "_templates": None}  # a worker builds its own
 
     def _build(self) -> list[tuple[str, int, float, Any]]:
         from refine.objective import SketchTarget
