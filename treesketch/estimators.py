@@ -85,7 +85,7 @@ class TemplateEstimator:
         return {"seeds": self.seeds, "_templates": None}  # a worker builds its own
 
     def _build(self) -> list[tuple[str, int, float, Any]]:
-        from refine.objective import SketchTarget
+        from refine.objective import framed, make_target
         from render.sketch import SketchRenderer
 
         out = []
@@ -94,18 +94,19 @@ class TemplateEstimator:
                 r = SketchRenderer(build_mesh(grow(species.sample(name, seed)), species=name))
                 for yaw in TEMPLATE_YAWS:
                     img = r.sketch(yaw, TEMPLATE_SIZE)
-                    out.append((name, seed, yaw, SketchTarget.from_image(img, TEMPLATE_SIZE)))
+                    target = make_target(framed(img, TEMPLATE_SIZE), TEMPLATE_SIZE)
+                    out.append((name, seed, yaw, target))
         return out
 
     def estimate(self, sketch: np.ndarray) -> Estimate:
-        from refine.objective import SketchTarget, target_distance
+        from refine.objective import framed, make_target
 
         if self._templates is None:
             self._templates = self._build()
-        target = SketchTarget.from_image(sketch, TEMPLATE_SIZE)
+        target = make_target(framed(sketch, TEMPLATE_SIZE), TEMPLATE_SIZE)
         best: dict[str, tuple[float, int, float]] = {}
         for name, seed, yaw, cand in self._templates:
-            d = target_distance(target, cand)
+            d = target.distance(cand)
             if name not in best or d < best[name][0]:
                 best[name] = (d, seed, yaw)
         top = min(best, key=lambda s: best[s][0])
