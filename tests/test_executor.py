@@ -91,3 +91,14 @@ def test_parameters_pickle_for_worker_processes():
     p = species.sample("palm", seed=1)
     q = pickle.loads(pickle.dumps(p))
     assert q == p and type(q) is type(p) and q.to_dict() == p.to_dict()
+
+
+@pytest.mark.parametrize(
+    ("address", "match"), [("127.0.0.1:1", "no Ray cluster answers"), ("nowhere", "HOST:PORT")]
+)
+def test_an_unreachable_cluster_fails_fast(address, match):
+    pytest.importorskip("ray")
+    from treesketch.executor import RayExecutor
+
+    with pytest.raises(ExecutorError, match=match):
+        RayExecutor(address=address)
