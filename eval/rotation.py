@@ -379,18 +379,30 @@ def plot_cases(
 
 class CheckpointPredictor:
     """A picklable ``sketch -> TreeParams`` callable over a TSN checkpoint: the model is
-    loaded on first use in the process that calls it (an executor's worker), once."""
+    loaded on first use in the process that calls it (an executor's worker), once.
+
+    The network runs on one torch thread: a sum split over threads is added in another
+    order (Ray gives its workers one thread, this process has all cores), which moves the
+    last digits of a prediction; with one thread every executor gives the same values.
+    """
 
     def __init__(self, checkpoint: str | Path | None = None) -> None:
         self.checkpoint = None if checkpoint is None else str(checkpoint)
         self._model: Any = None
 
     def __call__(self, img: np.ndarray) -> TreeParams:
+        import torch
+
         if self._model is None:
             from tsn.predict import load_model
 
             self._model = load_model(self.checkpoint)
-        return self._model.predict(img).params
+        threads = torch.get_num_threads()
+        torch.set_num_threads(1)
+        try:
+            return self._model.predict(img).params
+        finally:
+            torch.set_num_threads(threads)
 
     def __getstate__(self) -> dict[str, Any]:
         return {"checkpoint": self.checkpoint}  # workers load their own model

@@ -75,12 +75,11 @@ def rotation(
         runner = from_options(executor, workers, address)
     except ExecutorError as e:
         _fail(str(e))
-    if runner is None:
-        predict = backend.predict
-    else:  # workers load the checkpoint themselves
-        from eval.rotation import CheckpointPredictor
+    from eval.rotation import CheckpointPredictor
 
-        predict = CheckpointPredictor(backend.info["checkpoint"])
+    # workers load the checkpoint themselves; one predictor for every executor, so the
+    # values are the same whichever runs the angles
+    predict = CheckpointPredictor(backend.info["checkpoint"])
     try:
         with tqdm(total=n, desc="rotation sweep", dynamic_ncols=True) as bar:
             res = rotation_sweep(
@@ -194,7 +193,7 @@ def all_(
     except ExecutorError as e:
         _fail(str(e))
     sweep_predict = None
-    if runner is not None:  # workers load the checkpoint themselves
+    if model == "tsn":  # the same predictor whichever executor runs the sweeps
         sweep_predict = CheckpointPredictor(main.info["checkpoint"])
     try:
         path = build_report(
