@@ -41,9 +41,9 @@ from eval.hausdorff import (  # noqa: E402
     rotate_about_trunk,
 )
 from refine.objective import SearchSpace  # noqa: E402
-from refine.search import guess_species, refine  # noqa: E402
 from render.dataset import read_manifest  # noqa: E402
-from treesketch.pipeline import DEFAULT_BUDGET, DEFAULT_TIME_LIMIT, SEARCH_SIZE  # noqa: E402
+from render.reader import read_sketch  # noqa: E402
+from treesketch import Estimate, Pipeline, RefineSettings, load_estimator  # noqa: E402
 from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
 
 VIEW_ORDER = ("front", "left", "back", "right")
@@ -67,12 +67,26 @@ def perturbed(name: str, gt, shift: float, seed: int):
     return sp.to_params(np.clip(x + rng.choice([-shift, shift], size=x.shape), 0.0, 1.0))
 
 
+class KnownStart:
+    """An estimator that answers with a given tree (and, with the oracle, its view)."""
+
+    def __init__(self, inner, tree=None, species_name: str = "", yaw: float | None = None):
+        self.inner, self.tree, self.species_name, self.yaw = inner, tree, species_name, yaw
+        self.name = "perturbed" if inner is None else inner.name
+
+    def estimate(self, sketch: np.ndarray) -> Estimate:
+        if self.inner is not None:
+            e = self.inner.estimate(sketch)
+            return Estimate(e.params, e.species, e.species_scores, self.yaw)
+        return Estimate(self.tree, self.species_name, {self.species_name: 1.0}, self.yaw)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=Path("/work/data/ds_v1"))
     ap.add_argument("--per-species", type=int, default=5)
-    ap.add_argument("--budget", type=int, default=DEFAULT_BUDGET)
-    ap.add_argument("--time-limit", type=float, default=DEFAULT_TIME_LIMIT)
+    ap.add_argument("--budget", type=int, default=RefineSettings().budget)
+    ap.add_argument("--time-limit", type=float, default=RefineSettings().time_limit)
     ap.add_argument("--estimator", choices=("tsn", "nns", "perturbed"), default="tsn")
     ap.add_argument(
         "--known-yaw",
@@ -110,49 +124,38 @@ def main(argv: list[str] | None = None) -> int:
         print(markdown(recs, summarise(recs)))
         return 0
 
-    from PIL import Image
-
-    model = nns = None
-    if args.estimator == "tsn":
-        from treesketch.pipeline import _tsn_estimate
-        from tsn import predict as tsn_predict  # type: ignore[attr-defined]
-
-        model = tsn_predict.load_model()
-    elif args.estimator == "nns":
-        from eval.baseline import nns_backend
-
-        nns = nns_backend(args.data, bar=False)
+    inner = None
+    if args.estimator in ("tsn", "nns"):
+        inner = load_estimator(args.estimator, data=args.data)
+    settings = RefineSettings(
+        budget=args.budget,
+        time_limit=args.time_limit,
+        algorithm=args.algorithm,
+        search_yaw=not args.known_yaw,
+        live_only=not args.all_dims,
+    )
+    if args.initial_step is not None:
+        settings = settings.replace(initial_step=args.initial_step)
+    if args.prior_weight is not None:
+        settings = settings.replace(prior_weight=args.prior_weight)
+    if args.hold is not None:
+        settings = settings.replace(hold=tuple(k for k in args.hold.split(",") if k))
     records = []
     only = None if args.species is None else set(args.species.split(","))
-    hold = None if args.hold is None else [k for k in args.hold.split(",") if k]
     for k, row in enumerate(pick_rows(args.data, args.per_species)):
         name = row["species"]
         if only is not None and name not in only:
             continue
-        img = np.asarray(Image.open(args.data / row["sketch"]).convert("L"))
+        img = read_sketch(args.data / row["sketch"])
         gt = load_params(args.data / row["params"])
         gt_mesh = build_mesh(grow(gt), species=name)
-        if model is not None:
-            start, guessed = _tsn_estimate(model, img)
-        elif nns is not None:
-            start = nns.predict(img)
-            guessed = guess_species(start)
+        known = float(row["yaw"]) if args.known_yaw else None
+        if inner is None:
+            est = KnownStart(None, perturbed(name, gt, args.shift, k), name, known)
         else:
-            start, guessed = perturbed(name, gt, args.shift, k), name
-        r = refine(
-            img,
-            start,
-            budget=args.budget,
-            time_limit=args.time_limit,
-            species=guessed,
-            size=SEARCH_SIZE,
-            yaw=float(row["yaw"]) if args.known_yaw else None,
-            algorithm=args.algorithm,
-            **({} if args.initial_step is None else {"initial_step": args.initial_step}),
-            **({} if args.prior_weight is None else {"prior_weight": args.prior_weight}),
-            hold=hold,
-            live_only=not args.all_dims,
-        )
+            est = KnownStart(inner, yaw=known)
+        run = Pipeline(est, settings).run(img)
+        r, start, guessed = run.refinement, run.estimate.params, run.species
         view_yaw = float(row["yaw"])
         m0 = build_mesh(grow(start), species=guessed)
         m1 = rotate_about_trunk(build_mesh(grow(r.params), species=guessed), view_yaw - r.yaw)

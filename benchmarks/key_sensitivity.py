@@ -36,8 +36,8 @@ from bench_refine import pick_rows  # noqa: E402
 
 from eval.hausdorff import bbox_diagonal, hausdorff  # noqa: E402
 from refine.objective import SearchSpace, SketchObjective, SketchTarget  # noqa: E402
+from refine.search import RefineSettings  # noqa: E402
 from render.sketch import SketchRenderer  # noqa: E402
-from treesketch.pipeline import SEARCH_SIZE  # noqa: E402
 from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
 
 
@@ -49,9 +49,9 @@ def measure(data: Path, per_species: int, step: float, samples: int) -> list[dic
         gt_mesh = build_mesh(grow(gt), species=name)
         gt_c, diag = gt_mesh.combined(), bbox_diagonal(gt_mesh.bounds())
         yaw = float(row["yaw"])
-        sketch = SketchRenderer(gt_mesh).sketch(yaw, SEARCH_SIZE)
+        sketch = SketchRenderer(gt_mesh).sketch(yaw, RefineSettings().size)
         space = SearchSpace.create(name, gt, search_yaw=False, yaw=yaw)
-        obj = SketchObjective(SketchTarget.from_image(sketch, SEARCH_SIZE), space)
+        obj = SketchObjective(SketchTarget.from_image(sketch, RefineSettings().size), space)
         x0 = space.from_params(gt)
         for i, u in enumerate(space.dims):
             x = x0.copy()

@@ -1,4 +1,4 @@
-"""Nearest-neighbour sketch search (NNS) baseline, as a :class:`eval.report.Backend`.
+"""Nearest-neighbour sketch search (NNS) baseline: :class:`NNSIndex`.
 
 Predicts the parameters of the indexed training sketch closest to the input (cosine
 similarity between 32x32 area-downsized, blurred ink images).  It needs no network, so it
@@ -16,16 +16,14 @@ from __future__ import annotations
 import json
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from weberpenn import TreeParams
 
-if TYPE_CHECKING:  # pragma: no cover
-    from .report import Backend
+from .scoring import Scorer, dataset_sketch, progress_bar
 
-__all__ = ["FEATURE", "NNS_NAME", "features", "nns_backend"]
+__all__ = ["FEATURE", "NNS_NAME", "NNSIndex", "features"]
 
 FEATURE = 32
 NNS_NAME = "NNS baseline"
@@ -58,67 +56,75 @@ def features(img: np.ndarray) -> np.ndarray:
     return (a / (np.linalg.norm(a) + 1e-6)).ravel()
 
 
-def nns_backend(
-    data: str | Path,
-    split: str = "train",
-    max_rows: int | None = 2000,
-    bar: bool = True,
-    reference: Normaliser | None = None,
-) -> Backend:
-    """Fit the NNS baseline on (up to ``max_rows`` evenly spaced rows of) ``split`` of the
-    dataset at ``data``; ``reference`` as in the module text."""
-    from render.dataset import read_manifest
+class NNSIndex:
+    """Ink descriptors of a dataset's sketches and the parameters each was drawn from."""
 
-    from .report import Backend, _load_sketch, _progress
+    def __init__(
+        self, index: np.ndarray, owners: Sequence[str], params: Mapping[str, TreeParams], info: str
+    ) -> None:
+        self.index = index
+        self.owners = list(owners)
+        self.params = dict(params)
+        self.info = info
 
-    data = Path(data)
-    rows = read_manifest(data, split=split)
-    if not rows:
-        raise ValueError(f"{data}: the {split!r} split is empty")
-    if max_rows is not None and len(rows) > max_rows:
-        rows = [rows[i] for i in np.linspace(0, len(rows) - 1, max_rows).round().astype(int)]
-    params: dict[str, TreeParams] = {}
-    feats, owners = [], []
-    for r in _progress(rows, "NNS index", len(rows), bar):
-        if r["params"] not in params:
-            params[r["params"]] = TreeParams(
-                json.loads((data / r["params"]).read_text(encoding="utf-8"))
-            )
-        feats.append(features(_load_sketch(data / r["sketch"])))
-        owners.append(r["params"])
-    index = np.stack(feats)
+    @classmethod
+    def fit(
+        cls,
+        data: str | Path,
+        split: str = "train",
+        max_rows: int | None = 2000,
+        bar: bool = True,
+    ) -> NNSIndex:
+        """Index (up to ``max_rows`` evenly spaced rows of) ``split`` of the dataset."""
+        from render.dataset import read_manifest
 
-    if reference is None:
-        from tsn.encoding import encode_many
+        data = Path(data)
+        rows = read_manifest(data, split=split)
+        if not rows:
+            raise ValueError(f"{data}: the {split!r} split is empty")
+        if max_rows is not None and len(rows) > max_rows:
+            pick = np.linspace(0, len(rows) - 1, max_rows).round().astype(int)
+            rows = [rows[i] for i in pick]
+        params: dict[str, TreeParams] = {}
+        feats, owners = [], []
+        for r in progress_bar(rows, "NNS index", len(rows), bar):
+            if r["params"] not in params:
+                params[r["params"]] = TreeParams(
+                    json.loads((data / r["params"]).read_text(encoding="utf-8"))
+                )
+            feats.append(features(dataset_sketch(data / r["sketch"])))
+            owners.append(r["params"])
+        info = f"{len(rows)} {split} sketches of {len(params)} trees"
+        return cls(np.stack(feats), owners, params, info)
 
-        scale = np.abs(encode_many(params.values())).max(axis=(0, 1))
-        scale = np.where(scale > 0, scale, 1.0)
+    def nearest(self, img: np.ndarray) -> str:
+        return self.owners[int(np.argmax(self.index @ features(img)))]
 
-        def normalise_targets(ps: Sequence[Mapping]) -> np.ndarray:
-            return encode_many(ps) / scale
+    def predict(self, img: np.ndarray) -> TreeParams:
+        return self.params[self.nearest(img)]
 
-        norm_info = "own max-abs scale over the indexed trees"
-    else:
-        normalise_targets = reference
-        norm_info = "the reference model's normaliser"
+    def scorer(self, reference: Normaliser | None = None) -> Scorer:
+        """A 1-RMSE scorer (see the module text for ``reference``)."""
+        if reference is None:
+            from tsn.encoding import encode_many
 
-    def nearest(img: np.ndarray) -> str:
-        return owners[int(np.argmax(index @ features(img)))]
+            scale = np.abs(encode_many(self.params.values())).max(axis=(0, 1))
+            scale = np.where(scale > 0, scale, 1.0)
 
-    def predict(img: np.ndarray) -> TreeParams:
-        return params[nearest(img)]
+            def normalise_targets(ps: Sequence[Mapping]) -> np.ndarray:
+                return encode_many(ps) / scale
 
-    def predict_normalised(imgs: np.ndarray) -> np.ndarray:
-        return np.asarray(normalise_targets([params[nearest(i)] for i in imgs]))
+            norm_info = "own max-abs scale over the indexed trees"
+        else:
+            normalise_targets = reference
+            norm_info = "the reference model's normaliser"
 
-    return Backend(
-        name=NNS_NAME,
-        predict=predict,
-        predict_normalised=predict_normalised,
-        normalise_targets=normalise_targets,
-        info={
-            "kind": "baseline",
-            "index": f"{len(rows)} {split} sketches of {len(params)} trees",
-            "normalisation": norm_info,
-        },
-    )
+        def predict_normalised(imgs: np.ndarray) -> np.ndarray:
+            return np.asarray(normalise_targets([self.predict(i) for i in imgs]))
+
+        return Scorer(
+            name=NNS_NAME,
+            predict_normalised=predict_normalised,
+            normalise_targets=normalise_targets,
+            info={"kind": "baseline", "index": self.info, "normalisation": norm_info},
+        )

@@ -8,18 +8,24 @@ the score is ``1 - RMSE``.  "Overall" is the plain mean of the six head scores
 
 Inputs here are normalised target matrices, shape ``(N, 4, 62)`` with columns in
 ``weberpenn.params.PREDICTED_KEYS`` order (scalars repeated in the four rows) -- exactly
-what ``tsn.encoding`` produces.  Use :func:`params_matrices` to get them from parameter
-dictionaries.
+what ``tsn.encoding`` produces.  :class:`Scores` and :func:`one_minus_rmse` live in
+``tsn.metrics`` (training validates with the same function) and are re-exported here.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping
 
-import numpy as np
+from tsn.metrics import Scores, one_minus_rmse
 
-from weberpenn.params import HEAD_KEYS, HEADS, PREDICTED_KEYS
+__all__ = [
+    "HEAD_LABELS",
+    "PAPER_ONE_MINUS_RMSE",
+    "Scores",
+    "format_hardest",
+    "format_table",
+    "one_minus_rmse",
+]
 
 # the paper's SG test-set numbers for EfficientNet-B7 (Table "Core net comparisons of SG sketches")
 PAPER_ONE_MINUS_RMSE: dict[str, float] = {
@@ -39,69 +45,6 @@ HEAD_LABELS: dict[str, str] = {
     "angle": "angles [-360,360]",
     "-1_1": "[-1,1]",
 }
-_COLUMN = {k: i for i, k in enumerate(PREDICTED_KEYS)}
-
-
-@dataclass(frozen=True)
-class Scores:
-    """1-RMSE per head and overall, plus the per-key RMSE (normalised units)."""
-
-    heads: dict[str, float]
-    overall: float
-    key_rmse: dict[str, float]
-    n: int
-
-    def hardest(self, k: int = 10) -> list[tuple[str, str, float]]:
-        """The ``k`` keys with the largest RMSE: (key, head, rmse)."""
-        head_of = {key: h for h in HEADS for key in HEAD_KEYS[h]}
-        ranked = sorted(self.key_rmse.items(), key=lambda kv: -kv[1])
-        return [(key, head_of[key], v) for key, v in ranked[:k]]
-
-
-def _check(name: str, a: np.ndarray) -> np.ndarray:
-    a = np.asarray(a, dtype=np.float64)
-    if a.ndim == 2:
-        a = a[None]
-    if a.ndim != 3 or a.shape[1:] != (4, len(PREDICTED_KEYS)):
-        raise ValueError(
-            f"{name}: expected normalised target matrices of shape (N, 4, {len(PREDICTED_KEYS)}),"
-            f" got {a.shape}"
-        )
-    if not np.isfinite(a).all():
-        raise ValueError(f"{name}: contains NaN or infinity")
-    return a
-
-
-def one_minus_rmse(pred: np.ndarray, target: np.ndarray) -> Scores:
-    """Score normalised predictions against normalised targets (both ``(N, 4, 62)``)."""
-    p, t = _check("pred", pred), _check("target", target)
-    if p.shape != t.shape:
-        raise ValueError(f"pred has shape {p.shape} but target has {t.shape}")
-    if not len(p):
-        raise ValueError("no samples to score")
-    sq = (p - t) ** 2
-    heads = {}
-    for h in HEADS:
-        cols = [_COLUMN[k] for k in HEAD_KEYS[h]]
-        heads[h] = float(1.0 - np.sqrt(sq[:, :, cols].mean()))
-    key_rmse = {k: float(np.sqrt(sq[:, :, _COLUMN[k]].mean())) for k in PREDICTED_KEYS}
-    return Scores(heads, float(np.mean([heads[h] for h in HEADS])), key_rmse, len(p))
-
-
-def params_matrices(params: Sequence[Mapping], normaliser) -> np.ndarray:
-    """Encode and normalise parameter dictionaries with ``tsn.encoding`` -> ``(N, 4, 62)``.
-
-    ``normaliser`` is the checkpoint's per-key max-abs scale: anything ``tsn.encoding``
-    accepts, or a plain ``(62,)`` / ``(4, 62)`` array of divisors.
-    """
-    from tsn import encoding
-
-    mats = np.stack([np.asarray(encoding.encode(p), dtype=np.float64) for p in params])
-    if hasattr(encoding, "normalise") and not isinstance(normaliser, np.ndarray):
-        return np.stack([np.asarray(encoding.normalise(m, normaliser)) for m in mats])
-    scale = np.asarray(normaliser, dtype=np.float64)
-    scale = np.where(scale == 0, 1.0, scale)
-    return mats / scale
 
 
 def format_table(rows: Mapping[str, Scores | Mapping[str, float]], digits: int = 4) -> str:

@@ -5,9 +5,10 @@ TSN alone vs TSN + refinement per species (front-view sketch of ``per_species`` 
 trees each), the seed floor, species identification accuracy, the rotation sweep for one
 held-out tree per species, and the paper's published numbers.
 
-The model is reached through a small :class:`Backend` (``predict`` a sketch to parameters,
-``normalised`` output and targets for 1-RMSE, ``species_of`` parameters), so the report is
-tested with a stand-in and run with a TSN checkpoint (:func:`tsn_backend`).
+The first estimates and refinements come from a pipeline handed in (``treesketch.Pipeline``
+or anything with ``estimate(sketch)``, ``run(sketch)`` and ``with_settings(**changes)``);
+the 1-RMSE table from :class:`eval.scoring.Scorer` objects.  So the report is tested with
+stand-ins and run with a TSN checkpoint.
 """
 
 from __future__ import annotations
@@ -15,8 +16,8 @@ from __future__ import annotations
 import json
 import math
 import time
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -35,6 +36,7 @@ from .hausdorff import (
 )
 from .metrics import PAPER_ONE_MINUS_RMSE, Scores, format_hardest, format_table, one_minus_rmse
 from .rotation import plot_cases, plot_sweep, rotation_sweep, write_csv
+from .scoring import Scorer, dataset_sketch, progress_bar
 
 PAPER_HAUSDORFF_MEAN = 0.031  # EfficientNet-B7, 15 SG test trees
 PAPER_ROTATION_RANGE = (0.029, 0.040)
@@ -51,42 +53,6 @@ HAUSDORFF_DEFINITION = (
     "branches and leaves as one mesh. The paper does not state its normalisation; its 0.031 "
     "is the Metro/HDD value from MeshLab, which we read as the normalised maximum."
 )
-
-
-@dataclass
-class Backend:
-    """What the report needs from a model."""
-
-    name: str
-    predict: Callable[[np.ndarray], TreeParams]
-    # (sketches (N,H,W) uint8) -> normalised network output (N, 4, 62)
-    predict_normalised: Callable[[np.ndarray], np.ndarray]
-    # parameter dictionaries -> normalised targets (N, 4, 62)
-    normalise_targets: Callable[[Sequence[Mapping]], np.ndarray]
-    species_of: Callable[[Mapping], str] | None = None
-    info: dict = field(default_factory=dict)
-
-
-def tsn_backend(checkpoint: str | Path | None = None, name: str | None = None) -> Backend:
-    """A :class:`Backend` over a TSN checkpoint (``tsn.predict``, ``tsn.encoding``)."""
-    from . import _tsn_adapter
-
-    return _tsn_adapter.backend(checkpoint, name)
-
-
-def _progress(iterable, desc: str, total: int | None = None, enabled: bool = True):
-    if not enabled:
-        return iterable
-    from tqdm.auto import tqdm
-
-    return tqdm(iterable, desc=desc, total=total, leave=False, dynamic_ncols=True)
-
-
-def _load_sketch(path: Path) -> np.ndarray:
-    from PIL import Image
-
-    with Image.open(path) as im:
-        return np.asarray(im.convert("L"), dtype=np.uint8)
 
 
 def _test_trees(data: Path, split: str) -> tuple[list[dict], dict[str, list[dict]]]:
@@ -111,15 +77,15 @@ def _params(data: Path, row: Mapping) -> TreeParams:
 
 
 def score_backend(
-    backend: Backend, data: Path, rows: Sequence[Mapping], batch: int = 32, bar: bool = True
+    backend: Scorer, data: Path, rows: Sequence[Mapping], batch: int = 32, bar: bool = True
 ) -> Scores:
     """1-RMSE of ``backend`` over the given manifest rows (all their sketches)."""
     preds, targets = [], []
     cache: dict[str, TreeParams] = {}
     starts = range(0, len(rows), batch)
-    for s in _progress(starts, f"1-RMSE {backend.name}", len(starts), bar):
+    for s in progress_bar(starts, f"1-RMSE {backend.name}", len(starts), bar):
         chunk = rows[s : s + batch]
-        imgs = np.stack([_load_sketch(data / r["sketch"]) for r in chunk])
+        imgs = np.stack([dataset_sketch(data / r["sketch"]) for r in chunk])
         preds.append(np.asarray(backend.predict_normalised(imgs), dtype=np.float64))
         ps = [cache.setdefault(r["params"], _params(data, r)) for r in chunk]
         targets.append(np.asarray(backend.normalise_targets(ps), dtype=np.float64))
@@ -141,61 +107,56 @@ class TreeResult:
 
 
 def hausdorff_trees(
-    backend: Backend,
+    pipeline: Any,
     data: Path,
     by_species: Mapping[str, list[dict]],
     per_species: int,
-    refine_budget: int,
     samples: int,
     bar: bool = True,
     aligned: bool = True,
+    name: str = "",
 ) -> list[TreeResult]:
-    """TSN alone and TSN + refinement on the front sketch of ``per_species`` trees each
-    (``aligned``: also the distance after the best turn about the trunk)."""
+    """The pipeline's first estimate alone and, when its settings refine, estimate +
+    refinement on the front sketch of ``per_species`` trees each (``aligned``: also the
+    distance after the best turn about the trunk)."""
     jobs = [r for sp in by_species for r in by_species[sp][:per_species]]
+    refining = bool(pipeline.settings.refine)
     out = []
-    for r in _progress(jobs, f"Hausdorff ({backend.name}, +refine)", len(jobs), bar):
+    for r in progress_bar(jobs, f"Hausdorff ({name}, +refine)", len(jobs), bar):
         gt = _params(data, r)
         gt_mesh = build_mesh(grow(gt))
-        img = _load_sketch(data / r["sketch"])
-        pred = backend.predict(img)
+        img = dataset_sketch(data / r["sketch"])
+        t0 = time.perf_counter()
+        run = pipeline.run(img) if refining else None
+        seconds = time.perf_counter() - t0
+        pred = run.estimate.params if run is not None else pipeline.estimate(img).params
         pred_mesh = build_mesh(grow(pred))
         tsn_d = tree_hausdorff(pred_mesh, gt_mesh, samples)
         res = TreeResult(r["species"], r["tree_id"], tsn_d, None)
         if aligned:
             res.tsn_aligned = aligned_tree_hausdorff(pred_mesh, gt_mesh, samples)[1].max_norm
-        if refine_budget > 0:
-            from refine.search import refine
-
-            t0 = time.perf_counter()
-            rr = refine(img, pred, budget=int(refine_budget))
-            res.refine_seconds = time.perf_counter() - t0
+        if run is not None:
+            res.refine_seconds = seconds
             # the refined tree matches the sketch at the yaw it found: turn it into the
             # ground truth's frame (the sketch was drawn at the row's yaw)
             turned = rotate_about_trunk(
-                build_mesh(grow(rr.params)), float(r.get("yaw", 0.0)) - rr.yaw
+                build_mesh(grow(run.params)), float(r.get("yaw", 0.0)) - run.yaw
             )
             res.refined = tree_hausdorff(turned, gt_mesh, samples)
             if aligned:
                 res.refined_aligned = aligned_tree_hausdorff(turned, gt_mesh, samples)[1].max_norm
-            res.loss_before, res.loss_after = rr.loss_before, rr.loss_after
+            res.loss_before, res.loss_after = run.losses["before"], run.losses["after"]
         out.append(res)
     return out
 
 
 def species_accuracy(
-    backend: Backend, data: Path, rows: Sequence[Mapping], bar: bool = True
+    pipeline: Any, data: Path, rows: Sequence[Mapping], bar: bool = True
 ) -> dict[str, Any]:
-    """Fraction of test sketches whose predicted parameters identify the right species."""
-    if backend.species_of is None:
-        from refine.search import guess_species
-
-        species_of: Callable[[Mapping], str] = guess_species
-    else:
-        species_of = backend.species_of
+    """Fraction of test sketches whose first estimate names the right species."""
     hits: dict[str, list[bool]] = {}
-    for r in _progress(rows, "species identification", len(rows), bar):
-        got = species_of(backend.predict(_load_sketch(data / r["sketch"])))
+    for r in progress_bar(rows, "species identification", len(rows), bar):
+        got = pipeline.estimate(dataset_sketch(data / r["sketch"])).species
         hits.setdefault(r["species"], []).append(got == r["species"])
     per = {sp: float(np.mean(v)) for sp, v in hits.items()}
     n = sum(len(v) for v in hits.values())
@@ -254,8 +215,9 @@ def hausdorff_table(
 def build_report(
     data: str | Path,
     out: str | Path,
-    backend: Backend,
-    extra_backends: Sequence[Backend] = (),
+    pipeline: Any,
+    backend: Scorer,
+    extra_backends: Sequence[Scorer] = (),
     per_species: int = 3,
     refine_budget: int = 40,
     rotation_step: float = 5.0,
@@ -268,13 +230,14 @@ def build_report(
     bar: bool = True,
     command: str = "",
     executor: Any = None,
-    sweep_predict: Callable[[np.ndarray], Mapping[str, Any]] | None = None,
 ) -> Path:
     """Compute everything and write ``OUT/README.md`` (+ PNG/CSV files); returns its path.
 
-    ``executor`` (``treesketch.executor``) spreads the rotation sweeps' angles; its workers
-    predict with ``sweep_predict`` (picklable, e.g. ``eval.rotation.CheckpointPredictor``;
-    default ``backend.predict``)."""
+    ``pipeline`` makes the first estimates and refinements (its settings, with the budgets
+    given here and no time limit, so the numbers do not depend on the machine's speed);
+    ``backend`` and ``extra_backends`` score the 1-RMSE table; ``executor``
+    (``treesketch.executor``) spreads the rotation sweeps' angles over workers, each with
+    its own copy of the pipeline."""
     t_start = time.perf_counter()
     data, out = Path(data), Path(out)
     if not data.is_dir():
@@ -290,11 +253,23 @@ def build_report(
     scores = {backend.name: score_backend(backend, data, rows, bar=bar)}
     for b in extra_backends:
         scores[b.name] = score_backend(b, data, rows, bar=bar)
-    trees = hausdorff_trees(backend, data, by_species, per_species, refine_budget, samples, bar)
+    if refine_budget > 0:
+        refining = pipeline.with_settings(refine=True, budget=int(refine_budget), time_limit=None)
+    else:
+        refining = pipeline.with_settings(refine=False)
+    trees = hausdorff_trees(
+        refining, data, by_species, per_species, samples, bar, name=backend.name
+    )
     floors = {}
-    for sp in _progress(list(by_species), "seed floor", len(by_species), bar):
+    for sp in progress_bar(list(by_species), "seed floor", len(by_species), bar):
         floors[sp] = seed_floor(_params(data, by_species[sp][0]), samples=samples)
-    acc = species_accuracy(backend, data, rows, bar)
+    acc = species_accuracy(pipeline, data, rows, bar)
+    if rotation_refine_budget > 0:
+        sweeping = pipeline.with_settings(
+            refine=True, budget=int(rotation_refine_budget), time_limit=None
+        )
+    else:
+        sweeping = pipeline.with_settings(refine=False)
 
     sweeps = {}
     for sp in rotation_species if rotation_species is not None else list(by_species):
@@ -302,7 +277,7 @@ def build_report(
             raise ValueError(f"no {split} tree of species {sp!r} for the rotation sweep")
         r = by_species[sp][0]
         n = int(round(360 / rotation_step))
-        pbar = _progress(range(n), f"rotation sweep {sp}", n, bar)
+        pbar = progress_bar(range(n), f"rotation sweep {sp}", n, bar)
         it = iter(pbar)
 
         def tick(i: int, total: int, it=it) -> None:
@@ -310,10 +285,9 @@ def build_report(
 
         res = rotation_sweep(
             _params(data, r),
-            sweep_predict or backend.predict,
+            sweeping,
             step=rotation_step,
             size=rotation_size,
-            refine_budget=rotation_refine_budget,
             samples=samples,
             progress=tick,
             executor=executor,
@@ -366,7 +340,7 @@ def build_report(
     return path
 
 
-def _comparison_note(backend: Backend, scores: Mapping[str, Scores]) -> str:
+def _comparison_note(backend: Scorer, scores: Mapping[str, Scores]) -> str:
     """What the rows of the 1-RMSE table are, said plainly (backbones vs baselines)."""
     others = [n for n in scores if n != backend.name]
     baselines = [n for n in others if n == "NNS baseline" or "baseline" in n.lower()]

@@ -7,8 +7,11 @@ tree is grown with the same seed, and its symmetric Hausdorff distance to the gr
 is measured (``eval.hausdorff``, combined branch+leaf mesh, normalised by the ground-truth
 bounding-box diagonal).
 
-``predict`` is any ``sketch (H, W uint8) -> TreeParams`` callable, so the sweep runs with a
-TSN checkpoint (:func:`tsn_predictor`) or with a stand-in in tests.
+The predictions come from a pipeline handed in (``treesketch.Pipeline``, or anything with
+``settings``, ``estimate(sketch)`` and ``run(sketch)``): with refining settings each view is
+estimated and refined (``run``), otherwise estimated only (``estimate``).  With an
+executor the pipeline travels to its workers, so it must pickle (a ``treesketch.Pipeline``
+does: a TSN estimator reloads its checkpoint in the worker).
 """
 
 from __future__ import annotations
@@ -26,10 +29,10 @@ from typing import Any
 import numpy as np
 
 from weberpenn import TreeParams, build_mesh, grow
+from weberpenn.fileio import atomic_write
 
 from .hausdorff import DEFAULT_SAMPLES, hausdorff, rotate_about_trunk
 
-Predictor = Callable[[np.ndarray], Mapping[str, Any]]
 Progress = Callable[[int, int], None]
 
 CSV_FIELDS = (
@@ -125,15 +128,10 @@ class AngleResult:
 
 
 def _angle_fn(
-    gt_mesh: Any,
-    predict: Predictor,
-    size: int,
-    refine_budget: int,
-    samples: int,
-    seed: int,
-    refine_size: int,
+    gt_mesh: Any, pipeline: Any, size: int, samples: int, seed: int
 ) -> Callable[[float], AngleResult]:
-    """The function that does one angle: sketch at that yaw, predict, refine, Hausdorff."""
+    """The function that does one angle: sketch at that yaw, estimate (and refine),
+    Hausdorff to the ground truth."""
     from render.sketch import SketchRenderer
 
     gt_combined = gt_mesh.combined()
@@ -143,18 +141,16 @@ def _angle_fn(
     def one(yaw: float) -> AngleResult:
         t0 = time.perf_counter()
         img = renderer.sketch(float(yaw), size=size)
-        pred = TreeParams(predict(img))
-        refined, lb, la = False, float("nan"), float("nan")
-        if refine_budget > 0:
-            from refine.search import refine
-
-            res = refine(img, pred, budget=int(refine_budget), seed=seed, size=refine_size)
-            pred, refined, lb, la = res.params, True, res.loss_before, res.loss_after
+        lb = la = float("nan")
+        refining = bool(pipeline.settings.refine)
+        if refining:
+            run = pipeline.run(img)
+            pred, lb, la = run.params, run.losses["before"], run.losses["after"]
             # the refined tree matches the sketch at the yaw it found: turn it into the
             # ground truth's frame before measuring
-            turn = (float(yaw) - res.yaw) % 360.0
+            turn = (float(yaw) - run.yaw) % 360.0
         else:
-            turn = 0.0
+            pred, turn = TreeParams(pipeline.estimate(img).params), 0.0
         key = f"{_params_key(pred)}@{turn:.6f}"
         if key not in cache:
             pm = build_mesh(grow(pred, seed=seed))
@@ -169,7 +165,7 @@ def _angle_fn(
             d.max_norm,
             d.mean_norm,
             d.status,
-            refined,
+            refining,
             lb,
             la,
             time.perf_counter() - t0,
@@ -182,31 +178,20 @@ def _angle_fn(
 @dataclass(frozen=True)
 class SweepWorker:
     """Worker factory for an executor (picklable): each worker grows the ground truth and
-    builds its scene once, then does angles.  ``predict`` travels with it, so it must
-    pickle (a ``tsn.predict.Predictor``, a module-level function)."""
+    builds its scene once, then does angles with its own copy of the pipeline."""
 
     gt: TreeParams
-    predict: Predictor
+    pipeline: Any
     size: int
-    refine_budget: int
     samples: int
     seed: int
-    refine_size: int
 
     def __call__(self) -> Callable[[float], AngleResult]:
         from render.backend import init_mitsuba
 
         init_mitsuba(threads=1)
         gt_mesh = build_mesh(grow(self.gt, seed=self.seed))
-        return _angle_fn(
-            gt_mesh,
-            self.predict,
-            self.size,
-            self.refine_budget,
-            self.samples,
-            self.seed,
-            self.refine_size,
-        )
+        return _angle_fn(gt_mesh, self.pipeline, self.size, self.samples, self.seed)
 
 
 def _failed_row(yaw: float, error: str) -> SweepRow:
@@ -217,17 +202,15 @@ def _failed_row(yaw: float, error: str) -> SweepRow:
 
 def rotation_sweep(
     gt_params: Mapping[str, Any],
-    predict: Predictor,
+    pipeline: Any,
     step: float = 5.0,
     size: int = 256,
-    refine_budget: int = 0,
     samples: int = DEFAULT_SAMPLES,
     seed: int = 0,
     progress: Progress | None = None,
-    refine_size: int = 128,
     executor: Any = None,
 ) -> SweepResult:
-    """Run the sweep; ``refine_budget`` > 0 refines each prediction with ``refine.search``.
+    """Run the sweep (see the module text).
 
     ``executor`` (``treesketch.executor``: a local pool, Ray) spreads the angles; each is
     deterministic, so the rows are the same values whichever runs them.  An angle that
@@ -235,23 +218,21 @@ def rotation_sweep(
     prediction and sketch are None); in this process an error propagates.
     """
     gt = TreeParams(gt_params)
-    if int(refine_budget) < 0:
-        raise ValueError(f"refine_budget must be >= 0, got {refine_budget}")
     angles = yaw_angles(step)
     gt_mesh = build_mesh(grow(gt, seed=seed))
     if gt_mesh.is_empty:
         raise ValueError("the ground-truth parameters grow an empty tree; nothing to compare")
     result = SweepResult([], gt, seed=int(seed), size=int(size))
-    opts = (int(size), int(refine_budget), int(samples), int(seed), int(refine_size))
+    opts = (int(size), int(samples), int(seed))
     outs: list[AngleResult] = []
     if executor is None:
-        one = _angle_fn(gt_mesh, predict, *opts)
+        one = _angle_fn(gt_mesh, pipeline, *opts)
         for i, yaw in enumerate(angles):
             outs.append(one(float(yaw)))
             if progress is not None:
                 progress(i + 1, len(angles))
     else:
-        from_worker = executor.run(SweepWorker(gt, predict, *opts), [float(a) for a in angles])
+        from_worker = executor.run(SweepWorker(gt, pipeline, *opts), [float(a) for a in angles])
         done: dict[int, AngleResult] = {}
         for o in from_worker:
             ok = o.error is None
@@ -279,27 +260,11 @@ def rows_csv(rows: list[SweepRow]) -> str:
 
 
 def write_csv(rows: list[SweepRow], path: str | Path) -> Path:
-    from weberpenn.params import atomic_write_text
-
-    path = Path(path)
-    atomic_write_text(path, rows_csv(rows))
-    return path
+    return atomic_write(Path(path), rows_csv(rows))
 
 
 def _save_fig(fig, path: Path) -> Path:
-    import os
-    import tempfile
-
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(suffix=".png", dir=path.parent)
-    os.close(fd)
-    try:
-        fig.savefig(tmp, dpi=100)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-    return path
+    return atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=100, format="png"))
 
 
 def plot_sweep(
@@ -375,45 +340,3 @@ def plot_cases(
         return _save_fig(fig, Path(path))
     finally:
         plt.close(fig)
-
-
-class CheckpointPredictor:
-    """A picklable ``sketch -> TreeParams`` callable over a TSN checkpoint: the model is
-    loaded on first use in the process that calls it (an executor's worker), once.
-
-    The network runs on one torch thread: a sum split over threads is added in another
-    order (Ray gives its workers one thread, this process has all cores), which moves the
-    last digits of a prediction; with one thread every executor gives the same values.
-    """
-
-    def __init__(self, checkpoint: str | Path | None = None) -> None:
-        self.checkpoint = None if checkpoint is None else str(checkpoint)
-        self._model: Any = None
-
-    def __call__(self, img: np.ndarray) -> TreeParams:
-        import torch
-
-        if self._model is None:
-            from tsn.predict import load_model
-
-            self._model = load_model(self.checkpoint)
-        threads = torch.get_num_threads()
-        torch.set_num_threads(1)
-        try:
-            return self._model.predict(img).params
-        finally:
-            torch.set_num_threads(threads)
-
-    def __getstate__(self) -> dict[str, Any]:
-        return {"checkpoint": self.checkpoint}  # workers load their own model
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        self.checkpoint = state["checkpoint"]
-        self._model = None
-
-
-def tsn_predictor(checkpoint: str | Path | None = None) -> Predictor:
-    """A ``sketch -> TreeParams`` callable backed by ``tsn.predict`` (model loaded once)."""
-    from tsn import predict as _p
-
-    return _p.Predictor(checkpoint) if checkpoint is not None else _p.Predictor()

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
+from render.reader import SketchError, read_sketch
 from weberpenn import TreeParams, build_mesh, grow, species
 from weberpenn.params import SPECS
 
@@ -50,26 +51,19 @@ _FILL_DENSITY = 0.15
 def prepare_sketch(img: Any, size: int) -> np.ndarray:
     """A sketch as a (size, size) float32 image in 0..1 (1 = white); area-resized.
 
-    Accepts uint8 (0..255) or float (0..1) greyscale or RGB(A) arrays.
+    A 2-D array (uint8 0..255 or float 0..1) is used as it is; anything else (colour,
+    alpha, a path, bytes) goes through the one sketch reader, ``render.reader``.
     """
-    a = np.asarray(img)
-    if a.ndim == 3:
-        if a.shape[2] == 4:
-            rgb = a[..., :3].astype(np.float32)
-            alpha = a[..., 3:4].astype(np.float32) / (255.0 if a.dtype == np.uint8 else 1.0)
-            white = 255.0 if a.dtype == np.uint8 else 1.0
-            a = rgb * alpha + white * (1.0 - alpha)
-        a = np.asarray(a, dtype=np.float32)[..., :3].mean(axis=2)
-        scale = 255.0 if np.asarray(img).dtype == np.uint8 else 1.0
-    elif a.ndim == 2:
-        scale = 255.0 if a.dtype == np.uint8 else 1.0
-    else:
-        raise ValueError(f"a sketch must be a 2-D (or RGB) image, got shape {a.shape}")
-    if min(a.shape[:2]) < 8:
-        raise ValueError(f"a sketch must be at least 8x8 pixels, got {a.shape[:2]}")
-    f = np.clip(np.asarray(a, dtype=np.float32) / scale, 0.0, 1.0)
+    a = np.asarray(img) if isinstance(img, np.ndarray) else None
+    if a is None or a.ndim != 2 or a.dtype.kind not in "uif":
+        a = read_sketch(img)
+    if min(a.shape) < 8:
+        raise SketchError(f"a sketch must be at least 8x8 pixels, got {a.shape}")
+    scale = 255.0 if a.dtype == np.uint8 else 1.0
+    f = np.asarray(a, dtype=np.float32) / scale
     if not np.all(np.isfinite(f)):
-        raise ValueError("the sketch holds non-finite values")
+        raise SketchError("the sketch holds non-finite values")
+    f = np.clip(f, 0.0, 1.0)
     if f.shape != (size, size):
         from PIL import Image
 
@@ -404,6 +398,14 @@ class SketchObjective:
         self._cache.clear()
         self._scene_key = None
         self._renderer = None
+
+    def cached(self, x: Sequence[float]) -> float | None:
+        """The loss already computed at ``x`` (same rounded point), or None."""
+        return self._cache.get(self.key(x))
+
+    @property
+    def cache_size(self) -> int:
+        return len(self._cache)
 
     def __call__(self, x: Sequence[float]) -> float:
         k = self.key(x)

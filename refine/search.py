@@ -11,6 +11,7 @@ the best point seen, so the loss after is never above the loss before.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -29,7 +30,18 @@ from .objective import (
     SketchTarget,
 )
 
-__all__ = ["ALGORITHMS", "RefineResult", "guess_species", "refine"]
+__all__ = [
+    "ALGORITHMS",
+    "DEFAULT_HOLD",
+    "MAX_BUDGET",
+    "MAX_TIME_LIMIT",
+    "START_YAWS",
+    "Cancelled",
+    "RefineResult",
+    "RefineSettings",
+    "guess_species",
+    "refine",
+]
 
 ALGORITHMS = {"bobyqa": "LN_BOBYQA", "sbplx": "LN_SBPLX", "cobyla": "LN_COBYLA"}
 START_YAWS = (0.0, 90.0, 180.0, 270.0, 45.0, 135.0, 225.0, 315.0)
@@ -41,6 +53,8 @@ YAW_WEIGHT = 0.06
 # value in every species where it is free (benchmarks/key_sensitivity.py, RESULTS.md), so
 # the search would trade the estimator's size for pixel noise.
 DEFAULT_HOLD = ("scaleV",)
+MAX_BUDGET = 10_000
+MAX_TIME_LIMIT = 3600.0
 
 Progress = Callable[[int, float], None]
 
@@ -105,78 +119,146 @@ def _discrete_candidates(name: str, params: TreeParams) -> list[TreeParams]:
     return out
 
 
+@dataclass(frozen=True)
+class RefineSettings:
+    """Everything that steers a refinement, with the project's one set of defaults.
+
+    ``refine`` False skips the search (the estimate is returned as it is); ``budget`` caps
+    the tree evaluations (grow + mesh + sketch; the start views count) and ``time_limit``
+    the seconds; ``search_yaw`` False keeps the estimator's view (or the front) instead of
+    searching it; ``keys`` restricts the searched values and ``hold`` (default
+    :data:`DEFAULT_HOLD`; ``()`` for none) keeps some at their first estimate;
+    ``live_only`` drops the values that do not change this tree at all
+    (``SearchSpace.live``); ``global_evals`` > 0 runs GN_CRS2_LM first; ``prior_weight`` > 0
+    adds ``prior_weight * |x - x_start|^2`` (unit cube, yaw excluded) to what is minimised;
+    ``yaw_weight`` (when the yaw is searched) adds ``yaw_weight * (turn from the front
+    view / 180)^2``, so the front view is kept unless another fits clearly better;
+    ``size`` is the side in pixels the search renders and compares at.
+
+    Species by synthesis (``treesketch.Pipeline``): up to ``species_tries`` species are
+    refined, the estimator's best and any other whose score is at least ``species_ratio``
+    times the best's (each other one with half the budget and half the time); the tree
+    whose sketch matches best wins.  ``species_tries`` 1 refines the estimator's species
+    only.
+    """
+
+    refine: bool = True
+    budget: int = 100
+    time_limit: float | None = 50.0
+    algorithm: str = "bobyqa"
+    seed: int = 0
+    size: int = 128
+    search_yaw: bool = True
+    keys: tuple[str, ...] | None = None
+    hold: tuple[str, ...] = DEFAULT_HOLD
+    live_only: bool = True
+    global_evals: int = 0
+    discrete_neighbours: bool = False
+    initial_step: float = 0.12
+    xtol: float = 1e-3
+    prior_weight: float = 0.0
+    yaw_weight: float = YAW_WEIGHT
+    species_tries: int = 2
+    species_ratio: float = 0.5
+
+    def replace(self, **changes: Any) -> RefineSettings:
+        return dataclasses.replace(self, **changes).validate()
+
+    def validate(self) -> RefineSettings:
+        """Check every option (before any work); returns self.  Raises ValueError naming
+        the option and the value."""
+        b = self.budget
+        if isinstance(b, bool) or not isinstance(b, int | np.integer) or not 1 <= b <= MAX_BUDGET:
+            raise ValueError(f"budget must be an integer in 1..{MAX_BUDGET}, got {b!r}")
+        t = self.time_limit
+        if t is not None and not (
+            isinstance(t, int | float) and math.isfinite(t) and 0 < t <= MAX_TIME_LIMIT
+        ):
+            raise ValueError(f"time_limit must be seconds in (0, {MAX_TIME_LIMIT:g}], got {t!r}")
+        if str(self.algorithm).lower() not in ALGORITHMS:
+            raise ValueError(
+                f"unknown algorithm {self.algorithm!r}; choose one of {', '.join(ALGORITHMS)}"
+            )
+        if (
+            isinstance(self.size, bool)
+            or not isinstance(self.size, int)
+            or not 32 <= self.size <= 512
+        ):
+            raise ValueError(f"size must be an integer in 32..512 pixels, got {self.size!r}")
+        if not isinstance(self.seed, int) or isinstance(self.seed, bool):
+            raise ValueError(f"seed must be an integer, got {self.seed!r}")
+        unknown = [k for k in self.hold if str(k).split("[")[0] not in SPECS]
+        if unknown:
+            raise ValueError(f"hold: not parameter names: {', '.join(map(str, unknown))}")
+        for label in ("prior_weight", "yaw_weight", "initial_step", "xtol"):
+            w = getattr(self, label)
+            if not (isinstance(w, int | float) and math.isfinite(w) and w >= 0):
+                raise ValueError(f"{label} must be a number >= 0, got {w!r}")
+        if not isinstance(self.species_tries, int) or not 1 <= self.species_tries <= 5:
+            raise ValueError(
+                f"species_tries must be an integer in 1..5, got {self.species_tries!r}"
+            )
+        if not (isinstance(self.species_ratio, int | float) and 0 <= self.species_ratio <= 1):
+            raise ValueError(f"species_ratio must be in [0, 1], got {self.species_ratio!r}")
+        if not isinstance(self.global_evals, int) or self.global_evals < 0:
+            raise ValueError(f"global_evals must be an integer >= 0, got {self.global_evals!r}")
+        return self
+
+
+class Cancelled(Exception):
+    """The caller's ``cancel()`` said stop; raised between two tree evaluations."""
+
+
 def refine(
     sketch: Any,
     initial_params: TreeParams,
-    budget: int = 60,
-    algorithm: str = "bobyqa",
-    time_limit: float | None = None,
-    seed: int = 0,
-    progress: Progress | None = None,
-    species: str | None = None,  # noqa: A002 - the issue's name
+    settings: RefineSettings | None = None,
     *,
-    size: int = 128,
+    species: str | None = None,  # noqa: A002 - the issue's name
     yaw: float | None = None,
-    keys: Sequence[str] | None = None,
-    global_evals: int = 0,
-    discrete_neighbours: bool = False,
-    initial_step: float = 0.12,
-    xtol: float = 1e-3,
-    prior_weight: float = 0.0,
-    yaw_weight: float = YAW_WEIGHT,
-    hold: Sequence[str] | None = None,
-    live_only: bool = True,
+    progress: Progress | None = None,
+    cancel: Callable[[], bool] | None = None,
 ) -> RefineResult:
-    """Refine ``initial_params`` so its sketch matches ``sketch`` (see the module text).
+    """Refine ``initial_params`` so its sketch matches ``sketch`` (see the module text and
+    :class:`RefineSettings`).
 
-    ``budget`` caps the tree evaluations (grow + mesh + sketch; the start views count),
-    ``time_limit`` the seconds; ``yaw`` fixes the view instead of searching it; ``keys``
-    restricts the searched values and ``hold`` (default :data:`DEFAULT_HOLD`; ``()`` for
-    none) keeps some at their first estimate; ``live_only`` drops the values that do not
-    change this tree at all (``SearchSpace.live``); ``global_evals`` > 0 runs GN_CRS2_LM first;
-    ``prior_weight`` > 0 adds ``prior_weight * |x - x_start|^2`` (unit cube, yaw excluded)
-    to what is minimised; ``yaw_weight`` (when the yaw is searched) adds
-    ``yaw_weight * (turn from the front view / 180)^2``, so the front view is kept unless
-    another fits clearly better.  ``loss_before``/``loss_after`` are the sketch distance.
+    ``yaw`` fixes the view (degrees) instead of searching it; ``progress(evaluations,
+    best_loss)`` is called after each new evaluation; ``cancel()`` is asked before each
+    one and raises :class:`Cancelled` when it returns True.  ``loss_before`` /
+    ``loss_after`` are the sketch distance; the start point is always evaluated, whatever
+    the time limit, so both are finite.
     """
     import nlopt
 
     t0 = time.perf_counter()
-    if isinstance(budget, bool) or not isinstance(budget, int | np.integer) or budget < 1:
-        raise ValueError(f"budget must be a positive integer, got {budget!r}")
-    if time_limit is not None and not (time_limit > 0):
-        raise ValueError(f"time_limit must be positive seconds, got {time_limit!r}")
-    alg_name = str(algorithm).lower()
-    if alg_name not in ALGORITHMS:
-        raise ValueError(f"unknown algorithm {algorithm!r}; choose one of {', '.join(ALGORITHMS)}")
+    cfg = (settings or RefineSettings()).validate()
+    budget = int(cfg.budget)
+    alg_name = str(cfg.algorithm).lower()
     if not isinstance(initial_params, TreeParams):
         initial_params = TreeParams(initial_params)
     from weberpenn import species as _species
 
     name = _species.canonical(species) if species else guess_species(initial_params)
-    target = SketchTarget.from_image(sketch, size)
-    deadline = None if time_limit is None else t0 + float(time_limit)
+    target = SketchTarget.from_image(sketch, cfg.size)
+    deadline = None if cfg.time_limit is None else t0 + float(cfg.time_limit)
+    if yaw is None and not cfg.search_yaw:
+        yaw = 0.0
 
-    space = SearchSpace.create(name, initial_params, keys, search_yaw=yaw is None, yaw=yaw or 0.0)
-    held = DEFAULT_HOLD if hold is None else [str(k) for k in hold]
-    unknown = [k for k in held if k.split("[")[0] not in SPECS]
-    if unknown:
-        raise ValueError(f"hold: not parameter names: {', '.join(unknown)}")
-    space = space.without(held)
+    space = SearchSpace.create(
+        name, initial_params, cfg.keys, search_yaw=yaw is None, yaw=yaw or 0.0
+    )
+    space = space.without([str(k) for k in cfg.hold])
     # liveness is judged at the start's discrete values: their neighbours (baseSplits,
     # nrings) change no value's liveness (checked on a sampled tree of each species)
-    if live_only:
+    if cfg.live_only:
         space = space.live()
-    for label, w in (("prior_weight", prior_weight), ("yaw_weight", yaw_weight)):
-        if not (math.isfinite(w) and w >= 0):
-            raise ValueError(f"{label} must be >= 0, got {w!r}")
     obj = SketchObjective(
         target,
         space,
         prior=space.from_params(initial_params, 0.0),
-        prior_weight=float(prior_weight),
+        prior_weight=float(cfg.prior_weight),
         yaw_prior=0.0,
-        yaw_weight=float(yaw_weight),
+        yaw_weight=float(cfg.yaw_weight),
     )
     stopped = ["tolerance"]
 
@@ -188,11 +270,13 @@ def refine(
         return None
 
     def evaluate(x: Sequence[float]) -> float:
-        why = out_of_budget()
+        hit = obj.cached(x)
+        if hit is not None:  # free: no new tree
+            return hit
+        if cancel is not None and cancel():
+            raise Cancelled("refinement cancelled")
+        why = out_of_budget() if obj.evaluations > 0 else None  # the start is always seen
         if why is not None:
-            k = obj.key(x)
-            if k in obj._cache:  # free: no new tree
-                return obj._cache[k]
             stopped[0] = why
             raise _Stop(why)
         n_before = obj.evaluations
@@ -208,7 +292,7 @@ def refine(
     yaws = START_YAWS if yaw is None else (float(yaw),)
     try:
         for i, y in enumerate(yaws):
-            if i > 0 and obj.evaluations >= max(1, budget // 3):
+            if i > 0 and (obj.evaluations >= max(1, budget // 3) or out_of_budget()):
                 break
             x = x0.copy()
             if space.search_yaw:
@@ -218,7 +302,7 @@ def refine(
                 start_total, start_yaw, x0 = loss, y, x
                 loss_before = loss - obj.penalty(obj.key(x))  # the sketch distance
         # 2. neighbouring discrete values
-        if discrete_neighbours:
+        if cfg.discrete_neighbours:
             for cand in _discrete_candidates(name, space.base):
                 alt = space.with_base(cand)
                 obj.rebase(alt)
@@ -228,10 +312,10 @@ def refine(
             space = obj.space
             x0 = obj.best_x if obj.best_x is not None else x0
         # 3. optional global stage, then 4. local search
-        nlopt.srand(int(seed))
+        nlopt.srand(int(cfg.seed))
         stages: list[tuple[int, int]] = []
-        if global_evals > 0 and space.n >= 2:
-            stages.append((nlopt.GN_CRS2_LM, int(global_evals)))
+        if cfg.global_evals > 0 and space.n >= 2:
+            stages.append((nlopt.GN_CRS2_LM, int(cfg.global_evals)))
         local = getattr(nlopt, ALGORITHMS[alg_name])
         if local == nlopt.LN_BOBYQA and space.n < 2:
             local = nlopt.LN_COBYLA
@@ -245,17 +329,19 @@ def refine(
             opt.set_lower_bounds(np.zeros(space.n))
             opt.set_upper_bounds(np.ones(space.n))
             opt.set_min_objective(lambda x, grad: evaluate(x))
-            opt.set_maxeval(int(min(cap, budget - obj.evaluations) + len(obj._cache) + 5))
+            opt.set_maxeval(int(min(cap, budget - obj.evaluations) + obj.cache_size + 5))
             if deadline is not None:
                 opt.set_maxtime(max(1e-3, deadline - time.perf_counter()))
             if alg != nlopt.GN_CRS2_LM:
-                opt.set_initial_step(np.full(space.n, initial_step))
-                opt.set_xtol_abs(np.full(space.n, xtol))
+                opt.set_initial_step(np.full(space.n, cfg.initial_step))
+                opt.set_xtol_abs(np.full(space.n, cfg.xtol))
                 opt.set_ftol_abs(1e-6)
             start = obj.best_x if obj.best_x is not None else x0
             try:
                 opt.optimize(np.clip(np.asarray(start, dtype=np.float64), 0.0, 1.0))
                 stopped[0] = _nlopt_reason(opt.last_optimize_result())
+            except Cancelled:
+                raise
             except _Stop:
                 pass
             except (nlopt.ForcedStop, nlopt.RoundoffLimited):
@@ -267,6 +353,8 @@ def refine(
                     stopped[0] = f"nlopt: {exc}"
     except _Stop:
         pass
+    if cancel is not None and stopped[0].startswith("nlopt") and cancel():
+        raise Cancelled("refinement cancelled")  # nlopt swallowed the exception
 
     if obj.best_params is None:  # not even the start point fitted the budget/time
         loss_after = loss_before

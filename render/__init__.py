@@ -7,6 +7,16 @@ when a renderer is built (see :mod:`render.backend`).  The dataset builder lives
 
 from .camera import VIEWS, Camera, Framing
 from .edges import EdgeConfig
+from .reader import SketchError, read_sketch
 from .sketch import SketchRenderer, sketch
 
-__all__ = ["VIEWS", "Camera", "EdgeConfig", "Framing", "SketchRenderer", "sketch"]
+__all__ = [
+    "VIEWS",
+    "Camera",
+    "EdgeConfig",
+    "Framing",
+    "SketchError",
+    "SketchRenderer",
+    "read_sketch",
+    "sketch",
+]

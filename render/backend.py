@@ -80,7 +80,7 @@ def find_libllvm(dirs: tuple[str, ...] = LIB_DIRS) -> str | None:
     return best[0]
 
 
-def _choose_llvm_path() -> str | None:
+def choose_llvm_path() -> str | None:
     env = os.environ.get("DRJIT_LIBLLVM_PATH")
     if env:
         ver = llvm_version(env)
@@ -112,7 +112,7 @@ def _init_once() -> tuple[str, str | None]:
         raise ValueError(
             f"TREESKETCH_MI_VARIANT={forced!r} is not one of {LLVM_VARIANT!r}, {SCALAR_VARIANT!r}"
         )
-    lib = None if forced == SCALAR_VARIANT else _choose_llvm_path()
+    lib = None if forced == SCALAR_VARIANT else choose_llvm_path()
     if lib is not None:
         if "drjit" in sys.modules and os.environ.get("DRJIT_LIBLLVM_PATH") != lib:
             log.warning("drjit was imported before render.backend; LLVM path may be ignored")

@@ -26,6 +26,18 @@ Manifest columns (JSONL: one JSON object per line; CSV: the same columns, header
 sorted by species (in ``weberpenn.species.SPECIES`` order), index, view order:
 
     species, tree_id, index, tree_seed, split, view, yaw, size, sketch, params, render
+    [, style]   (only in datasets drawn in other styles than the paper's SG chain)
+
+Drawing styles (``styles``, :mod:`render.styles`): with the default ``("sg",)`` every view
+is drawn once by the paper's chain and the files and manifest are exactly those of a build
+without styles.  Otherwise, when ``sg`` is listed every view is still drawn in SG (at the
+same path, the same bytes) and, besides, in ``styles_per_view`` of the other listed styles,
+chosen per view by a seeded draw (``numpy.random.default_rng([tree_seed, view_no, 83])``):
+the SG dataset stays inside the mixed one (its test split is the SG benchmark, unchanged)
+and SG is half of what the network sees, while every other style gets an equal share of
+the views.  Without ``sg`` in the list, ``styles_per_view`` of the listed styles are drawn
+per view.  Each styled sketch has its own seed (``[tree_seed, view_no, style_no]``) and
+lives at ``sketches/<species>/<tree_id>_<view>_<style>.png``; its row says its ``style``.
 
 ``split`` is ``train``/``val``/``test``, assigned per TREE (every view of a tree is in the
 same split), stratified per species: a seeded permutation of the indices, the first
@@ -80,6 +92,8 @@ MANIFEST_COLUMNS = (
     "render",
 )
 SPLITS = ("train", "val", "test")
+DEFAULT_STYLES = ("sg",)
+VIEW_CHOICE_KEY = 83  # the third word of the per-view style draw's seed
 
 
 class DatasetError(ValueError):
@@ -99,6 +113,8 @@ class DatasetConfig:
     val_fraction: float = 0.1
     test_fraction: float = 0.1
     render_size: int | None = None  # colour render size; None = ``size``
+    styles: tuple[str, ...] = DEFAULT_STYLES  # drawing styles (render.styles.STYLES)
+    styles_per_view: int = 1  # other styles drawn per view (besides SG)
     workers: int = field(default=1, compare=False)
 
     def __post_init__(self) -> None:
@@ -135,6 +151,15 @@ class DatasetConfig:
             raise DatasetError(
                 f"val_fraction and test_fraction must be in [0, 1) with a sum below 1, got {fr}"
             )
+        from .styles import check_styles
+
+        try:
+            check_styles(self.styles)
+        except ValueError as exc:
+            raise DatasetError(str(exc)) from None
+        spv = self.styles_per_view
+        if isinstance(spv, bool) or int(spv) != spv or not 1 <= int(spv) <= 16:
+            raise DatasetError(f"styles_per_view must be an integer in 1..16, got {spv!r}")
         if isinstance(self.workers, bool) or not 1 <= int(self.workers) <= 64:
             raise DatasetError(f"workers must be in 1..64, got {self.workers!r}")
 
@@ -150,6 +175,11 @@ class DatasetConfig:
         d["species"] = list(self.species)
         d["views"] = list(self.views)
         d["render_size"] = int(self.render_size or self.size)
+        if tuple(self.styles) == DEFAULT_STYLES:  # SG-only datasets keep their old record
+            d.pop("styles")
+            d.pop("styles_per_view")
+        else:
+            d["styles"] = list(self.styles)
         d["format_version"] = FORMAT_VERSION
         return d
 
@@ -208,17 +238,7 @@ def plan(cfg: DatasetConfig) -> list[TreeJob]:
 
 # --------------------------------------------------------------------------- file helpers
 def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file in the same folder + rename."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-        os.chmod(tmp, 0o644)  # mkstemp makes 0600; data files are for everyone to read
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_write(path, data)
 
 
 def png_bytes(img: np.ndarray) -> bytes:
@@ -234,9 +254,25 @@ def _json_bytes(obj: Any) -> bytes:
     return (json.dumps(obj, indent=1, sort_keys=False) + "\n").encode("utf-8")
 
 
-def paths_for(job: TreeJob, view: str) -> dict[str, str]:
+def view_styles(settings: dict[str, Any], tree_seed_: int, view_no: int) -> list[str]:
+    """The styles one view of one tree is drawn in (see the module docstring)."""
+    styles = list(settings.get("styles", DEFAULT_STYLES))
+    k = int(settings.get("styles_per_view", 1))
+    first = ["sg"] if "sg" in styles else []
+    others = [s for s in styles if s != "sg"]
+    if not others:
+        return first
+    if k >= len(others):
+        return first + others
+    rng = np.random.default_rng([int(tree_seed_), int(view_no), VIEW_CHOICE_KEY])
+    picked = set(rng.choice(len(others), size=k, replace=False).tolist())
+    return first + [s for i, s in enumerate(others) if i in picked]
+
+
+def paths_for(job: TreeJob, view: str, style: str = "sg") -> dict[str, str]:
+    tail = "" if style == "sg" else f"_{style}"
     return {
-        "sketch": f"sketches/{job.species}/{job.tree_id}_{view}.png",
+        "sketch": f"sketches/{job.species}/{job.tree_id}_{view}{tail}.png",
         "params": f"params/{job.species}/{job.tree_id}.json",
         "render": f"renders/{job.species}/{job.tree_id}.png",
     }
@@ -245,15 +281,9 @@ def paths_for(job: TreeJob, view: str) -> dict[str, str]:
 # --------------------------------------------------------------------------- one tree
 @functools.lru_cache(maxsize=1)
 def mesher_in_use() -> tuple[Callable[[Any], Any], str]:
-    """``weberpenn.build_mesh``, or (while it does not exist yet) the stand-in in
-    :mod:`render._fallback_mesh`; with the name recorded in every tree's marker."""
-    try:
-        from weberpenn import build_mesh
-    except ImportError:
-        from ._fallback_mesh import build_mesh as fallback
+    """The mesher and its name (recorded in every tree's marker)."""
+    from weberpenn import build_mesh
 
-        log.warning("weberpenn.build_mesh is not available; using render._fallback_mesh")
-        return fallback, "render._fallback_mesh"
     return build_mesh, "weberpenn.build_mesh"
 
 
@@ -275,13 +305,13 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
         t_mesh = time.perf_counter()
         renderer = SketchRenderer(tree, species=job.species)
         size = int(settings["size"])
+        styled = "styles" in settings
         rows = []
-        for view in settings["views"]:
-            img = renderer.sketch(view, size)
-            p = paths_for(job, view)
-            atomic_write_bytes(root / p["sketch"], png_bytes(img))
-            rows.append(
-                {
+        for view_no, view in enumerate(settings["views"]):
+            for style, img in _draw_view(renderer, view, view_no, job.tree_seed, settings):
+                p = paths_for(job, view, style)
+                atomic_write_bytes(root / p["sketch"], png_bytes(img))
+                row = {
                     "species": job.species,
                     "tree_id": job.tree_id,
                     "index": job.index,
@@ -292,7 +322,7 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
                     "size": size,
                     **p,
                 }
-            )
+                rows.append({**row, "style": style} if styled else row)
         colour = renderer.colour("front", int(settings["render_size"]), supersample=1)
         p = paths_for(job, settings["views"][0])
         atomic_write_bytes(root / p["render"], png_bytes(colour))
@@ -323,6 +353,29 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
         with contextlib.suppress(OSError):  # disk trouble: still report the failure
             atomic_write_bytes(root / "failed" / f"{job.tree_id}.json", _json_bytes(record))
         return record
+
+
+def _draw_view(
+    renderer: Any, view: str, view_no: int, tree_seed_: int, settings: dict[str, Any]
+) -> list[tuple[str, np.ndarray]]:
+    """One view in each of its styles, as (style, uint8 sketch); the SG one is exactly
+    ``renderer.sketch(view, size)``."""
+    size = int(settings["size"])
+    styles = view_styles(settings, tree_seed_, view_no)
+    if styles == ["sg"]:
+        return [("sg", renderer.sketch(view, size))]
+    from .styles import STYLES, Silhouettes, draw
+
+    parts = renderer.parts(view, size)
+    sil = Silhouettes.from_parts(parts)
+    out = []
+    for style in styles:
+        if style == "sg":
+            out.append((style, parts.sketch))
+        else:
+            rng = np.random.default_rng([int(tree_seed_), int(view_no), list(STYLES).index(style)])
+            out.append((style, draw(style, sil, rng, size)))
+    return out
 
 
 @dataclass(frozen=True)
@@ -486,7 +539,10 @@ def _load_marker(path: Path) -> dict[str, Any] | None:
 
 def _is_finished(root: Path, job: TreeJob, settings: dict[str, Any]) -> bool:
     m = _load_marker(root / "done" / f"{job.tree_id}.json")
-    if m is None or len(m.get("rows", [])) != len(settings["views"]):
+    n_rows = sum(
+        len(view_styles(settings, job.tree_seed, i)) for i in range(len(settings["views"]))
+    )
+    if m is None or len(m.get("rows", [])) != n_rows:
         return False
     p = paths_for(job, settings["views"][0])
     files = [root / r["sketch"] for r in m["rows"]] + [root / p["params"], root / p["render"]]
@@ -511,13 +567,14 @@ def write_manifest(root: Path, jobs: Sequence[TreeJob]) -> int:
         m = _load_marker(root / "done" / f"{job.tree_id}.json")
         if m is not None:
             rows.extend(m["rows"])
-    lines = "".join(json.dumps({k: r[k] for k in MANIFEST_COLUMNS}) + "\n" for r in rows)
+    cols = MANIFEST_COLUMNS + (("style",) if any("style" in r for r in rows) else ())
+    lines = "".join(json.dumps({k: r[k] for k in cols}) + "\n" for r in rows)
     atomic_write_bytes(root / "manifest.jsonl", lines.encode("utf-8"))
     buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(MANIFEST_COLUMNS), lineterminator="\n")
+    w = csv.DictWriter(buf, fieldnames=list(cols), lineterminator="\n")
     w.writeheader()
     for r in rows:
-        w.writerow({k: r[k] for k in MANIFEST_COLUMNS})
+        w.writerow({k: r[k] for k in cols})
     atomic_write_bytes(root / "manifest.csv", buf.getvalue().encode("utf-8"))
     return len(rows)
 
@@ -533,15 +590,36 @@ def _meshers(root: Path, jobs: Sequence[TreeJob]) -> dict[str, int]:
     return out
 
 
-def read_manifest(out: str | os.PathLike[str], split: str | None = None) -> list[dict[str, Any]]:
-    """The rows of ``OUT/manifest.jsonl`` (only those of ``split`` when given)."""
+def row_style(row: dict[str, Any]) -> str:
+    """A manifest row's drawing style (rows of SG-only datasets have no column: ``sg``)."""
+    return str(row.get("style", "sg"))
+
+
+def read_manifest(
+    out: str | os.PathLike[str],
+    split: str | None = None,
+    styles: Sequence[str] | None = None,
+) -> list[dict[str, Any]]:
+    """The rows of ``OUT/manifest.jsonl`` (only those of ``split`` and of ``styles`` when
+    given)."""
     if split is not None and split not in SPLITS:
         raise DatasetError(f"unknown split {split!r}: use one of {', '.join(SPLITS)}")
+    if styles is not None:
+        from .styles import check_styles
+
+        try:
+            styles = check_styles(styles)
+        except ValueError as exc:
+            raise DatasetError(str(exc)) from None
     f = Path(out) / "manifest.jsonl"
     if not f.is_file():
         raise DatasetError(f"{f}: no manifest (has the dataset been built?)")
     rows = [json.loads(line) for line in f.read_text(encoding="utf-8").splitlines() if line]
-    return rows if split is None else [r for r in rows if r["split"] == split]
+    if split is not None:
+        rows = [r for r in rows if r["split"] == split]
+    if styles is not None:
+        rows = [r for r in rows if row_style(r) in styles]
+    return rows
 
 
 def _run_jobs(
@@ -645,12 +723,12 @@ def build_dataset(
 
 def _variant_name() -> str:
     """The variant the workers pick (same rule, without importing mitsuba here)."""
-    from .backend import LLVM_VARIANT, SCALAR_VARIANT, _choose_llvm_path
+    from .backend import LLVM_VARIANT, SCALAR_VARIANT, choose_llvm_path
 
     forced = os.environ.get("TREESKETCH_MI_VARIANT", "").strip()
     if forced:
         return forced
-    return LLVM_VARIANT if _choose_llvm_path() else SCALAR_VARIANT
+    return LLVM_VARIANT if choose_llvm_path() else SCALAR_VARIANT
 
 
 class _Progress:

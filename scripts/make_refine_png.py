@@ -17,12 +17,17 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from bench_refine import perturbed, pick_rows  # noqa: E402
+from bench_refine import (  # noqa: E402
+    KnownStart,  # noqa: E402
+    perturbed,
+    pick_rows,
+)
 
-from refine.search import refine  # noqa: E402
+from render.reader import read_sketch  # noqa: E402
 from render.sketch import SketchRenderer  # noqa: E402
-from treesketch.pipeline import DEFAULT_BUDGET, DEFAULT_TIME_LIMIT, SEARCH_SIZE  # noqa: E402
+from treesketch import Pipeline, RefineSettings, load_estimator  # noqa: E402
 from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
+from weberpenn.fileio import atomic_write  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -32,17 +37,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--data", type=Path, default=Path("/work/data/ds_v1"))
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "refine.png")
     ap.add_argument("--estimator", choices=("tsn", "perturbed"), default="tsn")
-    ap.add_argument("--budget", type=int, default=DEFAULT_BUDGET)
+    ap.add_argument("--budget", type=int, default=RefineSettings().budget)
     ap.add_argument("--size", type=int, default=160)
     args = ap.parse_args(argv)
 
-    model = None
-    if args.estimator == "tsn":
-        from tsn import predict as tsn_predict  # type: ignore[attr-defined]
-
-        model = tsn_predict.load_model()
+    inner = load_estimator("tsn") if args.estimator == "tsn" else None
+    settings = RefineSettings(budget=args.budget)
     s = args.size
-    first = "TSN" if model is not None else "perturbed GT"
+    first = "TSN" if inner is not None else "perturbed GT"
     titles = ["input sketch", first, "refined", "ground truth", "GT render"]
     cap = 16
     sheet = Image.new("RGB", (s * len(titles), cap + s * len(species.SPECIES)), "white")
@@ -52,22 +54,14 @@ def main(argv: list[str] | None = None) -> int:
     rows = pick_rows(args.data, 1)
     for i, row in enumerate(rows):
         name = row["species"]
-        img = np.asarray(Image.open(args.data / row["sketch"]).convert("L"))
+        img = read_sketch(args.data / row["sketch"])
         gt = load_params(args.data / row["params"])
-        if model is not None:
-            from treesketch.pipeline import _tsn_estimate
-
-            start, guessed = _tsn_estimate(model, img)
+        if inner is None:
+            est = KnownStart(None, perturbed(name, gt, 0.25, i), name)
         else:
-            start, guessed = perturbed(name, gt, 0.25, i), name
-        r = refine(
-            img,
-            start,
-            budget=args.budget,
-            time_limit=DEFAULT_TIME_LIMIT,
-            species=guessed,
-            size=SEARCH_SIZE,
-        )
+            est = KnownStart(inner)
+        run = Pipeline(est, settings).run(img)
+        r, start, guessed = run.refinement, run.estimate.params, run.species
         gt_r = SketchRenderer(build_mesh(grow(gt), species=name))
         panels = [
             img,
@@ -84,10 +78,7 @@ def main(argv: list[str] | None = None) -> int:
         draw.text((s + 4, y + s - 12), f"loss {r.loss_before:.3f}", fill=(0, 0, 160))
         draw.text((2 * s + 4, y + s - 12), f"loss {r.loss_after:.3f}", fill=(0, 0, 160))
         print(f"{name}: {r.loss_before:.4f} -> {r.loss_after:.4f} ({r.evaluations} ev)", flush=True)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = args.out.with_suffix(".tmp.png")
-    sheet.save(tmp, optimize=True)
-    tmp.replace(args.out)
+    atomic_write(args.out, lambda tmp: sheet.save(tmp, format="PNG", optimize=True))
     print(f"wrote {args.out}")
     return 0
 

@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-import treesketch.pipeline as pl
-from treesketch import cli_predict
+import treesketch.outputs
 from treesketch.cli import app
 from weberpenn import build_mesh, grow, species
 
@@ -17,7 +16,7 @@ runner = CliRunner()
 
 
 @pytest.fixture()
-def sketch_png(tmp_path, monkeypatch):
+def sketch_png(tmp_path):
     from PIL import Image
 
     from render.sketch import SketchRenderer
@@ -25,9 +24,6 @@ def sketch_png(tmp_path, monkeypatch):
     img = SketchRenderer(build_mesh(grow(species.sample("palm", 3)), species="palm")).sketch(0, 256)
     p = tmp_path / "sketch.png"
     Image.fromarray(img).save(p)
-    monkeypatch.setattr(
-        pl, "_load_model", lambda model: lambda im: (species.sample("palm", 8), "palm")
-    )
     return p
 
 
@@ -73,22 +69,48 @@ def test_interrupted_run_writes_nothing(tmp_path, sketch_png, monkeypatch) -> No
     def boom(result, size=256):
         raise KeyboardInterrupt  # e.g. Ctrl-C while the last output is being made
 
-    monkeypatch.setattr(cli_predict, "compare_image", boom)
+    monkeypatch.setattr(treesketch.outputs, "compare_image", boom)
     res = runner.invoke(app, _args(tmp_path, sketch_png, "--no-refine"))
     assert res.exit_code != 0
     out = tmp_path / "out"
     assert not out.exists() or list(out.iterdir()) == []  # no files, no temp folders
 
 
-def test_failed_pipeline_writes_nothing(tmp_path, sketch_png, monkeypatch) -> None:
-    def fail(*a, **k):
-        raise RuntimeError("mid-run failure")
+def test_compare_into_an_existing_folder_fails_before_work(tmp_path, sketch_png) -> None:
+    folder = tmp_path / "out" / "compare.png"
+    folder.mkdir(parents=True)
+    args = _args(tmp_path, sketch_png)
+    res = runner.invoke(app, args)
+    assert res.exit_code == 2 and "folder" in res.output
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["compare.png"]
 
-    monkeypatch.setattr(pl, "refine_search", fail)
-    res = runner.invoke(app, _args(tmp_path, sketch_png))
-    assert res.exit_code != 0
-    out = tmp_path / "out"
-    assert not out.exists() or list(out.iterdir()) == []
+
+@pytest.mark.parametrize("height", ["inf", "1e308", "nan", "-3"])
+def test_bad_height_fails_before_work(tmp_path, sketch_png, height: str) -> None:
+    import time
+
+    t0 = time.perf_counter()
+    res = runner.invoke(app, _args(tmp_path, sketch_png, "--height", height))
+    assert res.exit_code == 2 and "--height" in res.output
+    assert time.perf_counter() - t0 < 5.0
+    assert not (tmp_path / "out").exists() or list((tmp_path / "out").iterdir()) == []
+
+
+def test_tiny_time_limit_still_returns_an_evaluated_tree(tmp_path, sketch_png) -> None:
+    res = runner.invoke(
+        app, _args(tmp_path, sketch_png, "--time-limit", "0.1", "--estimator", "tsn")
+    )
+    assert res.exit_code == 0, res.output
+    assert "inf" not in res.output.split("sketch distance")[1].splitlines()[0]
+    assert (tmp_path / "out" / "tree.glb").exists()
+
+
+def test_estimator_option(tmp_path, sketch_png) -> None:
+    res = runner.invoke(app, _args(tmp_path, sketch_png, "--estimator", "magic"))
+    assert res.exit_code == 2 and "--estimator" in res.output
+    res = runner.invoke(app, _args(tmp_path, sketch_png, "--checkpoint", str(tmp_path / "x.pt")))
+    assert res.exit_code == 2
+    assert not (tmp_path / "out").exists() or list((tmp_path / "out").iterdir()) == []
 
 
 def test_bad_inputs(tmp_path, sketch_png) -> None:

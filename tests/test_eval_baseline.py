@@ -9,7 +9,7 @@ import pytest
 from PIL import Image
 from typer.testing import CliRunner
 
-from eval.baseline import NNS_NAME, features, nns_backend
+from eval.baseline import NNS_NAME, NNSIndex, features
 from eval.metrics import one_minus_rmse
 from tsn.encoding import encode
 from weberpenn import build_mesh, grow, species
@@ -82,20 +82,21 @@ def test_features_are_unit_and_size_free() -> None:
 
 
 def test_nearest_neighbour_returns_indexed_trees(data) -> None:
-    b = nns_backend(data, bar=False)
+    idx = NNSIndex.fit(data, bar=False)
+    b = idx.scorer()
     assert b.name == NNS_NAME and b.info["kind"] == "baseline"
     assert "4 train sketches" in b.info["index"] or "8 train sketches" in b.info["index"]
     for sp in ("palm", "maple"):
         for i in (0, 1):
-            got = b.predict(_sketch(data, f"{sp}_{i:04d}_front.png"))
+            got = idx.predict(_sketch(data, f"{sp}_{i:04d}_front.png"))
             assert got.to_dict() == species.sample(sp, seed=20 + i).to_dict()
     # a held-out sketch gets a training tree of its own species
-    pred = b.predict(_sketch(data, "palm_0002_front.png"))
+    pred = idx.predict(_sketch(data, "palm_0002_front.png"))
     assert any(pred.to_dict() == species.sample("palm", seed=20 + i).to_dict() for i in (0, 1))
 
 
 def test_normalised_outputs_score_one_on_indexed_sketches(data) -> None:
-    b = nns_backend(data, bar=False)
+    b = NNSIndex.fit(data, bar=False).scorer()
     names = [f"{sp}_{i:04d}_left.png" for sp in ("palm", "maple") for i in (0, 1)]
     imgs = np.stack([_sketch(data, n) for n in names])
     truth = [species.sample(sp, seed=20 + i) for sp in ("palm", "maple") for i in (0, 1)]
@@ -112,19 +113,19 @@ def test_reference_normaliser_is_used(data) -> None:
         seen.append(len(ps))
         return np.full((len(ps), 4, 62), 0.5)
 
-    b = nns_backend(data, bar=False, reference=ref)
+    b = NNSIndex.fit(data, bar=False).scorer(reference=ref)
     out = b.predict_normalised(np.stack([_sketch(data, "palm_0000_front.png")] * 3))
     assert out.shape == (3, 4, 62) and np.all(out == 0.5) and seen == [3]
     assert b.normalise_targets is ref
 
 
 def test_subsampled_index_and_errors(data, tmp_path) -> None:
-    b = nns_backend(data, max_rows=2, bar=False)
+    b = NNSIndex.fit(data, max_rows=2, bar=False).scorer()
     assert b.info["index"].startswith("2 train sketches")
     with pytest.raises(ValueError, match="split is empty"):
-        nns_backend(data, split="val", bar=False)
+        NNSIndex.fit(data, split="val", bar=False)
     with pytest.raises(ValueError, match="manifest"):
-        nns_backend(tmp_path, bar=False)
+        NNSIndex.fit(tmp_path, bar=False)
 
 
 @pytest.mark.slow

@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from eval.report import Backend, build_report
+from eval.report import build_report
+from eval.scoring import Scorer
+from treesketch import Estimate, Pipeline
 from weberpenn import build_mesh, grow, species
 
 
@@ -38,19 +40,23 @@ def _tiny_dataset(root):
     (root / "manifest.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
 
 
-def _stand_in() -> Backend:
+class StandIn:
+    name = "stand-in"
     guess = {"palm": species.sample("palm", seed=99), "maple": species.sample("maple", seed=99)}
 
-    def predict(img):
+    def estimate(self, img: np.ndarray) -> Estimate:
         assert img.dtype == np.uint8
-        return guess["palm"] if (img < 128).mean() < 0.2 else guess["maple"]
+        sp = "palm" if (img < 128).mean() < 0.2 else "maple"
+        return Estimate(self.guess[sp], sp, {sp: 1.0})
 
-    return Backend(
+
+def _stand_in() -> tuple[Pipeline, Scorer]:
+    scorer = Scorer(
         name="stand-in",
-        predict=predict,
         predict_normalised=lambda imgs: np.full((len(imgs), 4, 62), 0.1),
         normalise_targets=lambda ps: np.zeros((len(ps), 4, 62)),
     )
+    return Pipeline(StandIn()), scorer
 
 
 @pytest.mark.slow
@@ -61,7 +67,7 @@ def test_report_on_tiny_dataset(tmp_path):
     out = build_report(
         data,
         tmp_path / "rep",
-        _stand_in(),
+        *_stand_in(),
         per_species=2,
         refine_budget=2,
         rotation_step=90,
@@ -86,4 +92,4 @@ def test_report_on_tiny_dataset(tmp_path):
 
 def test_report_errors(tmp_path):
     with pytest.raises(ValueError, match="no such dataset"):
-        build_report(tmp_path / "missing", tmp_path / "o", _stand_in())
+        build_report(tmp_path / "missing", tmp_path / "o", *_stand_in())

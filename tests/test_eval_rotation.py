@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from eval.rotation import plot_cases, plot_sweep, rotation_sweep, write_csv, yaw_angles
+from treesketch import Estimate, Pipeline, RefineSettings
 from weberpenn import species
 
 
@@ -27,14 +28,19 @@ def test_sweep_72_rows_csv_and_plots(tmp_path):
     other = species.sample("palm", seed=2)
     calls = []
 
-    def predict(img: np.ndarray):
-        assert img.dtype == np.uint8 and img.shape == (64, 64)
-        calls.append(1)
-        return gt if len(calls) % 2 else other  # two distinct predictions
+    class Alternating:
+        name = "alternating"
+
+        def estimate(self, img: np.ndarray) -> Estimate:
+            assert img.dtype == np.uint8 and img.shape == (256, 256)
+            calls.append(1)
+            tree = gt if len(calls) % 2 else other  # two distinct predictions
+            return Estimate(tree, "palm", {"palm": 1.0})
 
     ticks = []
+    pipeline = Pipeline(Alternating(), RefineSettings(refine=False))
     res = rotation_sweep(
-        gt, predict, step=5, size=64, samples=2000, progress=lambda i, n: ticks.append((i, n))
+        gt, pipeline, step=5, size=64, samples=2000, progress=lambda i, n: ticks.append((i, n))
     )
     assert len(res.rows) == 72 and len(calls) == 72 and ticks[-1] == (72, 72)
     assert [r.angle for r in res.rows] == list(np.arange(72) * 5.0)

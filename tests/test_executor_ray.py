@@ -14,6 +14,7 @@ ray = pytest.importorskip("ray", reason="the cluster extra (pip install .[cluste
 
 from eval.rotation import rotation_sweep  # noqa: E402
 from render.dataset import DatasetConfig, build_dataset  # noqa: E402
+from treesketch import Estimate, Pipeline, RefineSettings  # noqa: E402
 from treesketch.executor import RayExecutor, run_ordered  # noqa: E402
 from weberpenn import species  # noqa: E402
 
@@ -88,22 +89,27 @@ def test_dataset_same_bytes_as_local(rex, tmp_path):
 
 
 class InkSide:
-    """A picklable stand-in predictor: which half of the page holds more ink picks one of
+    """A picklable stand-in estimator: which half of the page holds more ink picks one of
     two dictionaries (deterministic in the sketch, as TSN is)."""
 
-    def __init__(self, a, b) -> None:
-        self.a, self.b = dict(a), dict(b)
+    name = "ink-side"
 
-    def __call__(self, img: np.ndarray):
+    def __init__(self, a, b) -> None:
+        self.a, self.b = a, b
+
+    def estimate(self, img: np.ndarray) -> Estimate:
         ink = img < 128
         half = img.shape[1] // 2
-        return self.a if ink[:, :half].sum() >= ink[:, half:].sum() else self.b
+        tree = self.a if ink[:, :half].sum() >= ink[:, half:].sum() else self.b
+        return Estimate(tree, "palm", {"palm": 1.0})
 
 
 def test_rotation_sweep_same_values_as_local(rex):
     gt = species.sample("palm", seed=1)
-    predict = InkSide(gt, species.sample("palm", seed=2))
-    kw = {"step": 120, "size": 64, "samples": 1500, "refine_budget": 3, "refine_size": 48}
+    predict = Pipeline(
+        InkSide(gt, species.sample("palm", seed=2)), RefineSettings(budget=3, size=48)
+    )
+    kw = {"step": 120, "size": 64, "samples": 1500}
     ticks: list[int] = []
     local = rotation_sweep(gt, predict, **kw)
     remote = rotation_sweep(gt, predict, executor=rex, progress=lambda i, n: ticks.append(i), **kw)

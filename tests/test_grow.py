@@ -2,17 +2,12 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
+from paths import GT_PARAM_FILES as REF_FILES
 
 from weberpenn import default_params, load_params, species
 from weberpenn.grow import Skeleton, grow
-
-REF_DIR = Path(__file__).resolve().parents[1].parent / "shared" / "reference"
-PARAM_DIR = REF_DIR / "treesketchnet_test_params"
-REF_FILES = sorted(PARAM_DIR.glob("*.json")) if PARAM_DIR.is_dir() else []
 
 
 def _plain(**changes):
@@ -208,7 +203,6 @@ def test_pruning_shrinks_tree():
     assert wp < wf
 
 
-@pytest.mark.skipif(not REF_FILES, reason="reference parameter files not available")
 @pytest.mark.parametrize("path", REF_FILES, ids=lambda p: p.stem)
 def test_reference_files_grow(path):
     p = load_params(path)

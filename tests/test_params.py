@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import pytest
+from paths import GT_PARAM_FILES as REF_FILES
 
 from weberpenn import ParamError, TreeParams, default_params, load_params, save_params
 from weberpenn.params import (
@@ -19,10 +19,6 @@ from weberpenn.params import (
     describe,
     validate,
 )
-
-REF_DIR = Path(__file__).resolve().parents[1].parent / "shared" / "reference"
-PARAM_DIR = REF_DIR / "treesketchnet_test_params"
-REF_FILES = sorted(PARAM_DIR.glob("*.json")) if PARAM_DIR.is_dir() else []
 
 
 def _d(**changes) -> dict:
@@ -230,7 +226,6 @@ def test_sapling_preset_with_unknown_key(tmp_path):
         load_params(path)
 
 
-@pytest.mark.skipif(not REF_FILES, reason="reference files not available")
 def test_all_reference_files_load():
     assert len(REF_FILES) == 15
     for f in REF_FILES:
@@ -244,3 +239,17 @@ def test_describe_lists_every_key():
     assert len(lines) == 71  # header + 70 keys
     listed = {line.split()[0] for line in lines[1:]}
     assert listed == set(KEYS)
+
+
+def test_deeply_nested_json_is_refused_plainly(tmp_path) -> None:
+    from weberpenn import load_params
+
+    for name, text in (("deep.json", "[" * 100_000), ("deep.py", "{'a': " + "[" * 100_000)):
+        f = tmp_path / name
+        f.write_text(text)
+        with pytest.raises(ParamError, match="nested"):
+            load_params(f)
+    huge = tmp_path / "huge.json"
+    huge.write_text(" " * 2_000_000)
+    with pytest.raises(ParamError, match="too large"):
+        load_params(huge)

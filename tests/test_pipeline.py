@@ -1,17 +1,24 @@
-"""treesketch.pipeline: predict_then_refine on synthetic sketches and non-trees."""
+"""treesketch.pipeline: the seam (Estimator, Pipeline, RefineSettings) on synthetic sketches."""
 
 from __future__ import annotations
+
+import time
 
 import numpy as np
 import pytest
 
-from treesketch.pipeline import (
+from treesketch import (
+    Cancelled,
+    Estimate,
+    Estimator,
+    Pipeline,
+    RefineSettings,
     SketchError,
+    load_estimator,
     load_sketch,
     predict_then_refine,
-    rescale_height,
-    tree_height,
 )
+from treesketch.pipeline import rescale_height, tree_height
 from weberpenn import build_mesh, grow, species
 
 
@@ -23,17 +30,31 @@ def _gt_sketch(name: str = "palm", seed: int = 3, yaw: float = 0.0) -> np.ndarra
     )
 
 
-def _estimator(name: str, seed: int):
-    def estimate(img: np.ndarray):
-        return species.sample(name, seed), name
+class Fixed:
+    """A stand-in estimator: always the same sampled tree."""
 
-    return estimate
+    def __init__(self, name: str, seed: int) -> None:
+        self.name = "fixed"
+        self.tree = species.sample(name, seed)
+        self.species = name
+        self.calls = 0
+
+    def estimate(self, sketch: np.ndarray) -> Estimate:
+        self.calls += 1
+        assert sketch.dtype == np.uint8 and sketch.shape == (256, 256)
+        return Estimate(self.tree, self.species, {self.species: 1.0})
+
+
+def test_fixed_is_an_estimator() -> None:
+    assert isinstance(Fixed("palm", 1), Estimator)
+    assert load_estimator(Fixed("palm", 1)).name == "fixed"
 
 
 def test_refine_improves_and_fields() -> None:
     img = _gt_sketch()
-    r = predict_then_refine(img, budget=25, model=_estimator("palm", 9))
-    assert r.species == "palm" and r.estimator == "tsn"
+    seen = []
+    r = Pipeline(Fixed("palm", 9), RefineSettings(budget=25)).run(img, progress=seen.append)
+    assert r.species == "palm" and r.estimator == "fixed"
     assert r.losses["after"] <= r.losses["before"]
     assert r.sketch_before.shape == r.sketch_after.shape == (256, 256)
     assert r.input_sketch is not None and r.input_sketch.dtype == np.uint8
@@ -41,11 +62,25 @@ def test_refine_improves_and_fields() -> None:
     assert len(r.tree_mesh.branches.faces) > 0
     assert {"prepare", "estimate", "refine", "total"} <= set(r.timings)
     assert 0.0 < r.confidence <= 1.0
+    assert [p.stage for p in seen][:3] == ["read", "estimate", "refine"]
+    refining = [p for p in seen if p.stage == "refine" and p.evaluations]
+    assert refining and refining[-1].evaluations == r.refinement.evaluations
+    assert all(p.budget == 25 for p in seen)
+    summary = r.summary()
+    assert summary["species"] == "palm" and summary["evaluations"] == r.refinement.evaluations
+    assert summary["species_scores"] == {"palm": 1.0}
+
+
+def test_predict_then_refine_is_the_pipeline() -> None:
+    img = _gt_sketch()
+    a = predict_then_refine(img, estimator=Fixed("palm", 9), budget=6)
+    b = Pipeline(Fixed("palm", 9), RefineSettings(budget=6)).run(img)
+    assert a.params == b.params and a.losses == b.losses and a.yaw == b.yaw
 
 
 def test_no_refine_and_height() -> None:
     img = _gt_sketch()
-    r = predict_then_refine(img, refine=False, height=7.5, model=_estimator("palm", 9))
+    r = Pipeline(Fixed("palm", 9), RefineSettings(refine=False)).run(img, height=7.5)
     assert r.refinement is None
     assert r.losses["after"] == r.losses["before"]
     lo, hi = r.tree_mesh.bounds()
@@ -55,18 +90,74 @@ def test_no_refine_and_height() -> None:
         rescale_height(species.sample("palm", 1), -2.0)
 
 
-def test_template_estimate_without_model(monkeypatch: pytest.MonkeyPatch) -> None:
-    import treesketch.pipeline as pl
+@pytest.mark.parametrize("height", [float("inf"), 1e308, float("nan"), 0.0, -1.0])
+def test_bad_height_is_refused_before_any_work(height: float) -> None:
+    est = Fixed("palm", 9)
+    t0 = time.perf_counter()
+    with pytest.raises(ValueError, match="height"):
+        Pipeline(est, RefineSettings(budget=50)).run(_gt_sketch(), height=height)
+    assert est.calls == 0 and time.perf_counter() - t0 < 1.0
 
-    monkeypatch.setattr(pl, "_load_model", lambda model: None)
-    r = predict_then_refine(_gt_sketch("pine", 2), budget=8)
+
+@pytest.mark.parametrize(
+    ("change", "match"),
+    [
+        ({"budget": 0}, "budget"),
+        ({"budget": True}, "budget"),
+        ({"time_limit": 0.0}, "time_limit"),
+        ({"time_limit": float("inf")}, "time_limit"),
+        ({"algorithm": "nope"}, "algorithm"),
+        ({"hold": ("notakey",)}, "hold"),
+        ({"prior_weight": -1.0}, "prior_weight"),
+    ],
+)
+def test_settings_are_validated(change: dict, match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        RefineSettings(**change).validate()
+    with pytest.raises(ValueError, match=match):
+        Pipeline(Fixed("palm", 1), RefineSettings(**change))
+
+
+def test_tiny_time_limit_still_evaluates_the_first_estimate() -> None:
+    r = Pipeline(Fixed("palm", 9), RefineSettings(time_limit=1e-6)).run(_gt_sketch())
+    assert r.refinement is not None and r.refinement.evaluations >= 1
+    assert np.isfinite(r.losses["before"]) and np.isfinite(r.losses["after"])
+    assert r.losses["after"] <= r.losses["before"]
+
+
+def test_cancel_stops_within_one_evaluation() -> None:
+    seen = []
+
+    def cancel() -> bool:
+        return len([p for p in seen if p.evaluations >= 2]) > 0
+
+    with pytest.raises(Cancelled):
+        Pipeline(Fixed("palm", 9), RefineSettings(budget=40)).run(
+            _gt_sketch(), progress=seen.append, cancel=cancel
+        )
+    assert max(p.evaluations for p in seen) <= 3
+
+
+def test_template_estimator() -> None:
+    r = Pipeline("template", RefineSettings(budget=8)).run(_gt_sketch("pine", 2))
     assert r.estimator == "template" and r.species in species.SPECIES
     assert r.losses["after"] <= r.losses["before"]
+    assert set(r.species_scores) == set(species.SPECIES)
+    assert max(r.species_scores, key=r.species_scores.get) == r.estimate.species
+
+
+def test_load_estimator_errors(tmp_path) -> None:
+    with pytest.raises(ValueError, match="unknown estimator"):
+        load_estimator("magic")
+    with pytest.raises(ValueError, match="dataset"):
+        load_estimator("nns")
+    with pytest.raises(ValueError):
+        load_estimator(tmp_path / "missing.pt")
 
 
 def test_blank_page_is_a_clear_error() -> None:
     with pytest.raises(SketchError, match="blank"):
-        predict_then_refine(np.full((200, 300), 255, np.uint8), model=_estimator("palm", 1))
+        Pipeline(Fixed("palm", 1)).run(np.full((200, 300), 255, np.uint8))
 
 
 @pytest.mark.parametrize("kind", ["circle", "noise"])
@@ -77,7 +168,7 @@ def test_non_trees_are_flagged(kind: str) -> None:
         img = np.where(np.abs(np.hypot(yy - n / 2, xx - n / 2) - 80) < 2, 0, 255)
     else:
         img = (np.random.default_rng(0).random((n, n)) > 0.5) * 255
-    r = predict_then_refine(img.astype(np.uint8), budget=6, model=_estimator("maple", 1))
+    r = Pipeline(Fixed("maple", 1), RefineSettings(budget=6)).run(img.astype(np.uint8))
     assert r.warning is not None and "low confidence" in r.warning
     assert r.low_confidence and r.confidence < 0.5
 
@@ -90,9 +181,39 @@ def test_load_sketch_inputs(tmp_path) -> None:
     Image.fromarray(img).convert("RGBA").save(p)
     assert np.array_equal(load_sketch(p), img)
     assert np.array_equal(load_sketch(p.read_bytes()), img)
+    assert np.array_equal(load_sketch(Image.open(p)), img)
     with pytest.raises(SketchError, match="not found"):
         load_sketch(tmp_path / "missing.png")
-    with pytest.raises(SketchError, match="cannot read"):
+    with pytest.raises(SketchError, match="not an image"):
         load_sketch(b"not an image")
-    with pytest.raises(SketchError, match="2-D"):
+    with pytest.raises(SketchError, match=r"\(H, W\)"):
         load_sketch(np.zeros(10))
+
+
+class Unsure:
+    """Says maple, nearly as sure of palm: species by synthesis must settle it."""
+
+    name = "unsure"
+
+    def estimate(self, sketch: np.ndarray) -> Estimate:
+        return Estimate(
+            species.sample("maple", 1),
+            "maple",
+            {"maple": 1.0, "palm": 0.9, "pine": 0.1},
+            alternatives={"palm": species.sample("palm", 9)},
+        )
+
+
+def test_species_by_synthesis_keeps_the_better_match() -> None:
+    seen = []
+    r = Pipeline(Unsure(), RefineSettings(budget=12)).run(
+        _gt_sketch("palm", 3), progress=seen.append
+    )
+    assert set(r.extras["tried"]) == {"maple", "palm"}  # pine scores too low to try
+    assert r.species == "palm" == min(r.extras["tried"], key=r.extras["tried"].get)
+    assert r.losses["after"] == r.extras["tried"]["palm"]
+    assert r.summary()["tried"] == r.extras["tried"]
+    evals = [p.evaluations for p in seen]
+    assert evals == sorted(evals)  # progress never runs backwards across candidates
+    one = Pipeline(Unsure(), RefineSettings(budget=12, species_tries=1)).run(_gt_sketch("palm", 3))
+    assert one.species == "maple" and set(one.extras["tried"]) == {"maple"}

@@ -40,7 +40,7 @@ def test_accepts_float_rgb_and_resizes() -> None:
     rgb = np.repeat(a[..., None], 3, axis=2)
     assert sketch_distance(a, rgb) == 0.0
     assert sketch_distance(a, a.astype(np.float32) / 255.0) == 0.0
-    with pytest.raises(ValueError, match="2-D"):
+    with pytest.raises(ValueError, match=r"\(H, W\)"):
         SketchTarget.from_image(np.zeros(5))
 
 

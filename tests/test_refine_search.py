@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from refine.objective import SearchSpace
-from refine.search import guess_species, refine
+from refine.search import RefineSettings, guess_species, refine
 from weberpenn import build_mesh, grow, species
 
 
@@ -32,7 +32,13 @@ def test_guess_species_from_params() -> None:
 def test_refine_improves_on_perturbed_truth() -> None:
     img, _gt, start = _case()
     seen: list[tuple[int, float]] = []
-    r = refine(img, start, budget=40, species="palm", progress=lambda n, b: seen.append((n, b)))
+    r = refine(
+        img,
+        start,
+        RefineSettings(budget=40),
+        species="palm",
+        progress=lambda n, b: seen.append((n, b)),
+    )
     assert r.species == "palm"
     assert r.loss_after <= r.loss_before
     assert r.loss_after < 0.9 * r.loss_before, (r.loss_before, r.loss_after)
@@ -46,16 +52,16 @@ def test_refine_improves_on_perturbed_truth() -> None:
 def test_hold_everything_returns_the_start() -> None:
     img, _gt, start = _case(seed=5)
     keys = [u.key for u in SearchSpace.create("palm", start).dims]
-    r = refine(img, start, budget=10, species="palm", yaw=0.0, hold=keys)
+    r = refine(img, start, RefineSettings(budget=10, hold=tuple(keys)), species="palm", yaw=0.0)
     assert r.evaluations == 1 and r.loss_after == r.loss_before
     assert r.params.to_dict() == species.project("palm", start).to_dict()
     with pytest.raises(ValueError, match="hold: not parameter names: scalev"):
-        refine(img, start, budget=5, species="palm", hold=["scalev"])
+        refine(img, start, RefineSettings(budget=5, hold=("scalev",)), species="palm")
 
 
 def test_start_point_at_truth_stays_at_zero() -> None:
     img, gt, _ = _case()
-    r = refine(img, gt, budget=5, species="palm", yaw=0.0)
+    r = refine(img, gt, RefineSettings(budget=5), species="palm", yaw=0.0)
     assert r.loss_before == pytest.approx(0.0, abs=1e-9)
     assert r.loss_after == pytest.approx(0.0, abs=1e-9)
     assert r.params["scaleV"] == pytest.approx(gt["scaleV"])
@@ -63,8 +69,8 @@ def test_start_point_at_truth_stays_at_zero() -> None:
 
 def test_deterministic() -> None:
     img, _gt, start = _case(seed=5)
-    a = refine(img, start, budget=15, species="palm")
-    b = refine(img, start, budget=15, species="palm")
+    a = refine(img, start, RefineSettings(budget=15), species="palm")
+    b = refine(img, start, RefineSettings(budget=15), species="palm")
     assert a.loss_after == b.loss_after and a.yaw == b.yaw
     assert a.params.to_dict() == b.params.to_dict()
 
@@ -72,20 +78,27 @@ def test_deterministic() -> None:
 @pytest.mark.parametrize("algorithm", ["sbplx", "cobyla"])
 def test_other_algorithms_and_budget(algorithm: str) -> None:
     img, _gt, start = _case(seed=6)
-    r = refine(img, start, budget=12, species="palm", algorithm=algorithm, global_evals=0)
+    r = refine(
+        img, start, RefineSettings(budget=12, algorithm=algorithm, global_evals=0), species="palm"
+    )
     assert r.evaluations <= 12 and r.loss_after <= r.loss_before
 
 
 def test_global_stage_and_discrete_neighbours() -> None:
     img, _gt, start = _case(seed=7)
-    r = refine(img, start, budget=20, species="palm", global_evals=5, discrete_neighbours=True)
+    r = refine(
+        img,
+        start,
+        RefineSettings(budget=20, global_evals=5, discrete_neighbours=True),
+        species="palm",
+    )
     assert r.evaluations <= 20 and r.loss_after <= r.loss_before
 
 
 def test_time_limit_respected() -> None:
     img, _gt, start = _case(name="maple", seed=2)
     t = time.perf_counter()
-    r = refine(img, start, budget=10_000, species="maple", time_limit=2.0)
+    r = refine(img, start, RefineSettings(budget=10_000, time_limit=2.0), species="maple")
     took = time.perf_counter() - t
     assert r.stopped_by == "time"
     assert took < 2.0 + 2.5  # one tree evaluation may run past the limit
@@ -95,33 +108,33 @@ def test_time_limit_respected() -> None:
 def test_bad_arguments() -> None:
     img, gt, _ = _case()
     with pytest.raises(ValueError, match="budget"):
-        refine(img, gt, budget=0)
+        refine(img, gt, RefineSettings(budget=0))
     with pytest.raises(ValueError, match="algorithm"):
-        refine(img, gt, algorithm="nope")
+        refine(img, gt, RefineSettings(algorithm="nope"))
     with pytest.raises(ValueError, match="time_limit"):
-        refine(img, gt, time_limit=-1)
+        refine(img, gt, RefineSettings(time_limit=-1))
 
 
 def test_prior_weight_holds_the_start_and_reports_sketch_loss() -> None:
     img, _gt, start = _case(seed=8)
-    free = refine(img, start, budget=15, species="palm", yaw=0.0)
-    held = refine(img, start, budget=15, species="palm", yaw=0.0, prior_weight=1e6)
+    free = refine(img, start, RefineSettings(budget=15), species="palm", yaw=0.0)
+    held = refine(img, start, RefineSettings(budget=15, prior_weight=1e6), species="palm", yaw=0.0)
     assert held.loss_before == pytest.approx(free.loss_before)
     assert held.loss_after == pytest.approx(held.loss_before)  # no move pays for itself
     assert held.params["scaleV"] == pytest.approx(start["scaleV"])
-    some = refine(img, start, budget=15, species="palm", yaw=0.0, prior_weight=0.5)
+    some = refine(img, start, RefineSettings(budget=15, prior_weight=0.5), species="palm", yaw=0.0)
     assert some.loss_after <= some.loss_before
     with pytest.raises(ValueError, match="prior_weight"):
-        refine(img, start, budget=5, prior_weight=-1.0)
+        refine(img, start, RefineSettings(budget=5, prior_weight=-1.0))
 
 
 def test_view_prior_keeps_front_unless_another_view_fits_clearly() -> None:
     img, gt, _ = _case(name="maple", seed=2, yaw=90.0)
-    r = refine(img, gt, budget=10, species="maple")
+    r = refine(img, gt, RefineSettings(budget=10), species="maple")
     assert r.yaw == pytest.approx(90.0) and r.start_yaw == 90.0  # clearly better: taken
     assert r.loss_before == pytest.approx(0.0, abs=1e-9)  # the sketch distance, no penalty
     front, gt, _ = _case(name="maple", seed=2, yaw=0.0)
-    r0 = refine(front, gt, budget=10, species="maple", yaw_weight=1e3)
+    r0 = refine(front, gt, RefineSettings(budget=10, yaw_weight=1e3), species="maple")
     assert r0.start_yaw == 0.0 and r0.loss_after == pytest.approx(0.0, abs=1e-9)
     with pytest.raises(ValueError, match="yaw_weight"):
-        refine(front, gt, budget=5, yaw_weight=float("nan"))
+        refine(front, gt, RefineSettings(budget=5, yaw_weight=float("nan")))

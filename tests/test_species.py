@@ -3,15 +3,12 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import pytest
+from paths import GT_PARAM_DIR as PARAM_DIR
 
 from weberpenn import ParamError, TreeParams, species
 from weberpenn.params import SPECS
-
-REF_DIR = Path(__file__).resolve().parents[1].parent / "shared" / "reference"
-PARAM_DIR = REF_DIR / "treesketchnet_test_params"
 
 
 def _value(p, key, index):
@@ -67,7 +64,6 @@ def test_fixed_values_equal_base(name):
             assert p[key] == base[key], key
 
 
-@pytest.mark.skipif(not PARAM_DIR.is_dir(), reason="reference files not available")
 @pytest.mark.parametrize("name", species.SPECIES)
 def test_fixed_values_match_reference_files(name):
     files = species.reference_files(name)

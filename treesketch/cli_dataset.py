@@ -34,6 +34,16 @@ def build(
         "maple,pine,bonsai,palm,cherry", "--species", help="Comma-separated species."
     ),
     size: int = typer.Option(256, "--size", min=32, max=2048, help="Sketch size in pixels."),
+    styles: str = typer.Option(
+        "sg",
+        "--styles",
+        help="Comma-separated drawing styles: sg (the paper's chain), pen, cloud, scribble, "
+        "pencil, felt. With sg and others, every view is drawn in sg and in "
+        "--styles-per-view of the others (a seeded choice per view).",
+    ),
+    styles_per_view: int = typer.Option(
+        1, "--styles-per-view", min=1, max=16, help="Other styles drawn per view besides sg."
+    ),
     workers: int = typer.Option(
         1, "--workers", min=1, max=64, help="Worker processes (local) or CPUs of a local Ray."
     ),
@@ -74,6 +84,8 @@ def build(
             seed=seed,
             val_fraction=val_fraction,
             test_fraction=test_fraction,
+            styles=_csv(styles, "style"),
+            styles_per_view=styles_per_view,
         )
     except DatasetError as exc:
         raise typer.BadParameter(str(exc)) from None

@@ -9,16 +9,12 @@ from pathlib import Path
 import typer
 
 from . import cli_eval_tsn
+from .cli_common import fail
 
 eval_app = typer.Typer(
     help="Evaluate: 1-RMSE tables, Hausdorff distance, rotation sweep, reports.",
     no_args_is_help=True,
 )
-
-
-def _fail(msg: str) -> None:
-    typer.secho(f"error: {msg}", fg=typer.colors.RED, err=True)
-    raise typer.Exit(2)
 
 
 @eval_app.command("rotation")
@@ -64,30 +60,26 @@ def rotation(
         if budget < 1:
             raise ValueError(f"--budget must be >= 1, got {budget}")
     except (ParamError, ValueError, OSError) as e:
-        _fail(str(e))
-    from eval.report import tsn_backend
+        fail(str(e))
+    from .estimators import load_estimator
+    from .pipeline import Pipeline, RefineSettings
 
     try:
-        backend = tsn_backend(checkpoint)  # a bad checkpoint fails here, before any work
-    except (RuntimeError, FileNotFoundError, ValueError) as e:
-        _fail(str(e))
+        settings = RefineSettings(refine=refine, budget=budget, time_limit=None)
+        pipeline = Pipeline(load_estimator("tsn", checkpoint=checkpoint), settings)
+    except ValueError as e:
+        fail(str(e))
     try:
         runner = from_options(executor, workers, address)
     except ExecutorError as e:
-        _fail(str(e))
-    from eval.rotation import CheckpointPredictor
-
-    # workers load the checkpoint themselves; one predictor for every executor, so the
-    # values are the same whichever runs the angles
-    predict = CheckpointPredictor(backend.info["checkpoint"])
+        fail(str(e))
     try:
         with tqdm(total=n, desc="rotation sweep", dynamic_ncols=True) as bar:
             res = rotation_sweep(
                 gt,
-                predict,
+                pipeline,
                 step=step,
                 size=size,
-                refine_budget=budget if refine else 0,
                 samples=samples,
                 seed=seed,
                 progress=lambda i, total: bar.update(i - bar.n),
@@ -156,32 +148,40 @@ def all_(
     ),
 ) -> None:
     """Write the full evaluation report (markdown + PNGs) to --out."""
-    from eval.baseline import nns_backend
-    from eval.report import build_report, tsn_backend
-    from eval.rotation import CheckpointPredictor
+    from eval.baseline import NNSIndex
+    from eval.report import build_report
+    from eval.scoring import tsn_scorer
 
+    from .estimators import NNSEstimator, TSNEstimator
     from .executor import ExecutorError, from_options
+    from .pipeline import Pipeline
 
     extras = []
     if model not in ("tsn", "nns"):
-        _fail(f"--model must be 'tsn' or 'nns', got {model!r}")
+        fail(f"--model must be 'tsn' or 'nns', got {model!r}")
     spread = executor.strip().lower() != "local" or workers != 1 or address is not None
     if spread and model != "tsn":
-        _fail("--executor/--workers/--address spread the sweeps of --model tsn only")
+        fail("--executor/--workers/--address spread the sweeps of --model tsn only")
     try:
-        if model == "tsn":
-            main = tsn_backend(checkpoint)
-            if nns:  # scored on TSN's own normaliser, so the rows compare
-                extras.append(nns_backend(data, reference=main.normalise_targets))
-        else:
-            main = nns_backend(data)
-        for spec in backbone:
+        for spec in backbone:  # checked before anything is loaded
             name, sep, path = spec.partition("=")
             if not sep or not name or not path:
                 raise ValueError(f"--compare expects NAME=PATH, got {spec!r}")
-            extras.append(tsn_backend(Path(path), name=name))
+        if model == "tsn":
+            estimator = TSNEstimator.load(checkpoint)
+            main = tsn_scorer(estimator.model)
+            if nns:  # scored on TSN's own normaliser, so the rows compare
+                index = NNSIndex.fit(data)
+                extras.append(index.scorer(reference=main.normalise_targets))
+        else:
+            index = NNSIndex.fit(data)
+            estimator, main = NNSEstimator(index), index.scorer()
+        for spec in backbone:
+            name, _, path = spec.partition("=")
+            extras.append(tsn_scorer(TSNEstimator.load(Path(path)).model, name=name))
+        pipeline = Pipeline(estimator)
     except (RuntimeError, ValueError, OSError) as e:  # DatasetError is a ValueError
-        _fail(str(e))
+        fail(str(e))
     if rotation_species == "all":
         rot = None
     elif rotation_species == "none":
@@ -191,14 +191,12 @@ def all_(
     try:
         runner = from_options(executor, workers, address)
     except ExecutorError as e:
-        _fail(str(e))
-    sweep_predict = None
-    if model == "tsn":  # the same predictor whichever executor runs the sweeps
-        sweep_predict = CheckpointPredictor(main.info["checkpoint"])
+        fail(str(e))
     try:
         path = build_report(
             data,
             out,
+            pipeline,
             main,
             extras,
             per_species=per_species,
@@ -210,10 +208,9 @@ def all_(
             max_sketches=max_sketches,
             command="treesketch " + " ".join(shlex.quote(a) for a in sys.argv[1:]),
             executor=runner,
-            sweep_predict=sweep_predict,
         )
     except ValueError as e:
-        _fail(str(e))
+        fail(str(e))
     finally:
         if runner is not None:
             runner.close()

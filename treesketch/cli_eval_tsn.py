@@ -29,29 +29,33 @@ def evaluate(
     batch: int = 32,
     max_sketches: int | None = None,
     bar: bool = True,
+    styles: tuple[str, ...] | None = None,
 ) -> dict[str, Any]:
-    """Scores of a checkpoint on ``split`` of the dataset at ``data``."""
-    from eval._tsn_adapter import backend as tsn_backend
+    """Scores of a checkpoint on ``split`` of the dataset at ``data`` (only its sketches
+    drawn in ``styles`` when given)."""
     from eval.metrics import one_minus_rmse
-    from eval.report import _load_sketch, _progress
+    from eval.scoring import dataset_sketch, progress_bar, tsn_scorer
     from render.dataset import read_manifest
     from tsn import encoding
     from weberpenn import TreeParams
 
-    rows = read_manifest(data, split=split)
+    rows = read_manifest(data, split=split, styles=styles)
     if max_sketches is not None:
         rows = rows[:max_sketches]
     if not rows:
-        raise ValueError(f"{data}: the {split!r} split is empty")
-    b = tsn_backend(checkpoint)
-    model = b.tsn_model  # type: ignore[attr-defined]
+        what = f" in the styles {', '.join(styles)}" if styles else ""
+        raise ValueError(f"{data}: the {split!r} split is empty{what}")
+    from .estimators import TSNEstimator
+
+    model = TSNEstimator.load(checkpoint).model
+    b = tsn_scorer(model)
     raw, flip, proj, tgt, sp_pred, sp_true = [], [], [], [], [], []
     params: dict[str, TreeParams] = {}
     t0 = time.perf_counter()
     starts = range(0, len(rows), batch)
-    for s in _progress(starts, "eval tsn", len(starts), bar):
+    for s in progress_bar(starts, "eval tsn", len(starts), bar):
         chunk = rows[s : s + batch]
-        imgs = [_load_sketch(data / r["sketch"]) for r in chunk]
+        imgs = [dataset_sketch(data / r["sketch"]) for r in chunk]
         alone, mirror = model.raw_views(imgs)
         out = 0.5 * (alone + mirror)  # what predict uses (flip=True)
         for r, a, o in zip(chunk, alone, out, strict=True):
@@ -115,15 +119,23 @@ def eval_tsn(
         None, "--max-sketches", help="Score only the first N sketches."
     ),
     json_out: Path | None = typer.Option(None, "--json", help="Also write the numbers as JSON."),
+    styles: str | None = typer.Option(
+        None,
+        "--styles",
+        help="Score only sketches drawn in these comma-separated styles (e.g. sg); "
+        "default: every sketch of the split.",
+    ),
 ) -> None:
     """Paper-style table: 1-RMSE per head and overall, species-identification accuracy."""
-    from weberpenn.params import atomic_write_text
+    from weberpenn.fileio import atomic_write
+
+    from .cli_common import fail
 
     try:
-        res = evaluate(data, checkpoint, split, max_sketches=max_sketches)
+        keep = None if styles is None else tuple(s.strip() for s in styles.split(",") if s.strip())
+        res = evaluate(data, checkpoint, split, max_sketches=max_sketches, styles=keep)
     except (RuntimeError, ValueError, OSError) as e:  # DatasetError/CheckpointError too
-        typer.secho(f"error: {e}", fg=typer.colors.RED, err=True)
-        raise typer.Exit(2) from None
+        fail(str(e))
     typer.echo(format_result(res, split))
     if json_out is not None:
         plain = {
@@ -134,7 +146,7 @@ def eval_tsn(
             )
             for k, v in res.items()
         }
-        atomic_write_text(json_out, json.dumps(plain, indent=1) + "\n")
+        atomic_write(json_out, json.dumps(plain, indent=1) + "\n")
 
 
 def register(eval_app: typer.Typer) -> None:

@@ -6,10 +6,7 @@ from pathlib import Path
 
 import typer
 
-
-def _fail(msg: str) -> None:
-    typer.echo(f"error: {msg}", err=True)
-    raise typer.Exit(2)
+from .cli_common import fail
 
 
 def train_cmd(
@@ -44,6 +41,23 @@ def train_cmd(
     loss: str = typer.Option(
         "mse", "--loss", help="mse: sum of per-head MSE (paper); rmse: sum of per-head RMSE."
     ),
+    styles: str | None = typer.Option(
+        None,
+        "--styles",
+        help="Comma-separated drawing styles to train and validate on (default: every "
+        "sketch of the dataset); leave one out to test on it.",
+    ),
+    cache: Path | None = typer.Option(
+        None,
+        "--cache",
+        help="Folder of the feature caches (default: the work folder); runs on the same "
+        "dataset that keep other --styles can share it.",
+    ),
+    init: Path | None = typer.Option(
+        None,
+        "--init",
+        help="Checkpoint to fine-tune from (same --backbone and --size); keeps its normaliser.",
+    ),
 ) -> None:
     """Train TSN: cached frozen early layers, fine-tuned last layers and six heads."""
     from tsn.train import TrainConfig, TrainError, train
@@ -65,11 +79,17 @@ def train_cmd(
         resume=resume,
         loss=loss,
         more_data=tuple(str(d) for d in more_data),
+        styles=None
+        if styles is None
+        else tuple(s.strip().lower() for s in styles.split(",") if s.strip()),
+        init=str(init) if init else None,
+        cache=str(cache) if cache else None,
     )
     try:
+        cfg.check()
         res = train(cfg, log=lambda s: typer.echo(s))
     except (TrainError, ValueError, OSError) as e:
-        _fail(str(e))
+        fail(str(e))
         return
     typer.echo(
         f"best val 1-RMSE {res['best_val_overall']:.4f} at epoch {res['best_epoch']}; "

@@ -18,7 +18,7 @@ RGB, or RGBA composited on white) and returns a :class:`Prediction`:
 
 ``preprocess(image)`` is the network's input preparation (``tsn.data.preprocess``: crop
 to the drawing, pad square, area-resize; float32, 1 = white), identical to training.
-Bad input raises :class:`tsn.data.SketchInputError` (a ``ValueError``).
+Bad input raises ``render.reader.SketchError`` (a ``ValueError``).
 """
 
 from __future__ import annotations
@@ -37,14 +37,11 @@ from weberpenn.params import TreeParams
 from . import data as tdata
 from . import encoding
 from .checkpoint import CheckpointError, Loaded, load_checkpoint
-from .data import SketchInputError
 
 __all__ = [
     "DEFAULT_CHECKPOINT",
     "CheckpointError",
     "Prediction",
-    "Predictor",
-    "SketchInputError",
     "TSNModel",
     "load_model",
     "predict",
@@ -144,13 +141,3 @@ def predict(model: TSNModel, image: Any) -> Prediction:
 def preprocess(image: Any, size: int = tdata.DEFAULT_SIZE) -> np.ndarray:
     """The network's input: crop to the drawing, pad square, area-resize (1 = white)."""
     return tdata.preprocess(image, size)
-
-
-class Predictor:
-    """``sketch -> TreeParams`` callable over a checkpoint (loaded once)."""
-
-    def __init__(self, checkpoint: str | os.PathLike[str] | None = None) -> None:
-        self.model = load_model(checkpoint)
-
-    def __call__(self, image: Any) -> TreeParams:
-        return self.model.predict(image).params

@@ -1,6 +1,8 @@
 """Weber-Penn tree model speaking Blender Sapling's parameter dictionary (TreeSketchNet keys)."""
 
 from . import species
+from .grow import Skeleton, grow
+from .mesh import TreeMesh, build_mesh
 from .params import (
     HEADS,
     PARAMS,
@@ -18,18 +20,14 @@ __all__ = [
     "PARAMS",
     "ParamError",
     "ParamSpec",
+    "Skeleton",
+    "TreeMesh",
     "TreeParams",
+    "build_mesh",
     "default_params",
+    "grow",
     "load_params",
     "save_params",
     "species",
     "validate",
 ]
-
-try:  # the generator and mesher arrive in their own modules
-    from .grow import Skeleton, grow  # noqa: F401
-    from .mesh import TreeMesh, build_mesh  # noqa: F401
-
-    __all__ += ["Skeleton", "TreeMesh", "build_mesh", "grow"]
-except ImportError:  # pragma: no cover - during bootstrap only
-    pass

@@ -14,14 +14,16 @@ from __future__ import annotations
 
 import ast
 import contextlib
+import hashlib
 import json
 import math
 import os
-import tempfile
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
+
+from .fileio import atomic_write
 
 Kind = Literal["float", "int", "bool", "sign", "enum"]
 
@@ -446,6 +448,29 @@ def fill_from_sapling(values: Mapping[str, Any]) -> dict[str, Any]:
     return src
 
 
+#: Comment prefix of the full dictionary that ``weberpenn.preset`` seals into a preset.
+EMBEDDED_PREFIX = "# treesketch-params "
+
+
+def _embedded_params(text: str) -> dict | None:
+    """The full dictionary sealed into a TreeSketch preset, if the Sapling line (the
+    first line not starting with '#', as Sapling reads it) still has the sealed hash."""
+    lines = text.splitlines()
+    sapling = next((t.strip() for t in lines if t.strip() and not t.startswith("#")), None)
+    for t in lines:
+        if not t.startswith(EMBEDDED_PREFIX) or sapling is None:
+            continue
+        seal, _, body = t[len(EMBEDDED_PREFIX) :].partition(" ")
+        if seal != "sha256=" + hashlib.sha256(sapling.encode()).hexdigest():
+            return None  # the Sapling line was edited: it wins
+        try:
+            data = json.loads(body)
+        except json.JSONDecodeError:
+            return None
+        return data if isinstance(data, dict) else None
+    return None
+
+
 def _read_preset_literal(text: str, path: Path) -> Any:
     for line in text.splitlines():
         stripped = line.strip()
@@ -467,22 +492,55 @@ def _read_preset_literal(text: str, path: Path) -> Any:
         ) from None
 
 
+MAX_PARAM_FILE_BYTES = 1_000_000
+MAX_NESTING = 8  # {"key": [v, ...]} nests 2 deep; anything far deeper is not parameters
+
+
+def _max_nesting(text: str) -> int:
+    """Deepest bracket nesting in ``text`` (strings ignored), without recursion: parsers
+    recurse per level and a file of 100000 '[' would blow the interpreter's stack."""
+    import re
+
+    depth = best = 0
+    for tok in re.findall(r'"(?:[^"\\]|\\.)*"|\'(?:[^\'\\]|\\.)*\'|[\[\]{}()]', text):
+        if tok in "[{(":
+            depth += 1
+            best = max(best, depth)
+        elif tok in "]})":
+            depth -= 1
+    return best
+
+
 def load_params(path: str | os.PathLike[str]) -> TreeParams:
     """Load a parameter dictionary from JSON, or from a Sapling preset (``.py``).
 
     JSON files must hold exactly the 70 TreeSketchNet keys.  Sapling presets are parsed
     with :func:`ast.literal_eval` (never executed) and mapped by :func:`fill_from_sapling`
-    when they lack TreeSketchNet's realised keys.
+    when they lack TreeSketchNet's realised keys; a preset written by
+    ``weberpenn.preset`` gives back its sealed full dictionary while its Sapling line is
+    unedited (a lossless round trip).
     """
     path = Path(path)
     if not path.is_file():
         raise ParamError(f"{path}: no such parameter file")
+    size = path.stat().st_size
+    if size > MAX_PARAM_FILE_BYTES:
+        raise ParamError(
+            f"{path}: {size:,} bytes is too large for a parameter file "
+            f"(at most {MAX_PARAM_FILE_BYTES:,})"
+        )
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise ParamError(f"{path}: cannot read parameter file: {exc}") from None
+    depth = _max_nesting(text)
+    if depth > MAX_NESTING:
+        raise ParamError(
+            f"{path}: brackets nested {depth} deep; a parameter file nests at most {MAX_NESTING}"
+        )
     if path.suffix.lower() == ".py":
-        data = _read_preset_literal(text, path)
+        embedded = _embedded_params(text)
+        data = embedded if embedded is not None else _read_preset_literal(text, path)
         if not isinstance(data, dict):
             raise ParamError(f"{path}: a Sapling preset must be a dict literal")
         if not all(k in data for k in TSN_ONLY_NEUTRAL):
@@ -501,24 +559,15 @@ def load_params(path: str | os.PathLike[str]) -> TreeParams:
 
 
 def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
-    """Write text to ``path`` through a temporary file and a rename (never half-written)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    """Write text atomically (``weberpenn.fileio.atomic_write``)."""
+    atomic_write(path, text)
 
 
 def save_params(params: TreeParams | Mapping[str, Any], path: str | os.PathLike[str]) -> Path:
     """Save as JSON (atomically).  Use ``weberpenn.export.save_sapling_preset`` for Sapling."""
     params = validate(params)
     path = Path(path)
-    atomic_write_text(path, json.dumps(params.to_dict(), indent=1) + "\n")
+    atomic_write(path, json.dumps(params.to_dict(), indent=1) + "\n")
     return path
 
 

@@ -1,0 +1,308 @@
+"""The one sketch reader: every image that enters TreeSketch comes through :func:`read_sketch`.
+
+``read_sketch(source)`` takes a path, bytes, a PIL image or an array (grey, RGB, RGBA, with
+values 0..255 or 0..1) and gives an ``(H, W)`` ``uint8`` grey image, 255 = white:
+
+1. **Limits before decoding.**  An encoded image's header is read first: its pixel count
+   (at most :data:`MAX_PIXELS`), its sides (at least :data:`MIN_SIDE`) and its aspect ratio
+   (at most :data:`MAX_ASPECT`) are checked before a single pixel is decoded, so a 109-byte
+   PNG that declares 30000 x 30000 pixels or a 1 x 20000 strip is refused at once, with
+   bounded memory (Pillow's decompression-bomb error is turned into the same message).
+2. **Alpha flattened on white**, then **one grey formula** (ITU-R 601 luma, Pillow's "L").
+3. **One ink rule** (:func:`ink_mask`): a pixel is ink when it is darker than
+   :data:`INK_LEVEL`.  A page with (almost) no ink is refused as blank, a page that is
+   mostly ink as all dark (:func:`check_ink`).
+
+Every failure is a :class:`SketchError` (a ``ValueError``) whose message names what was
+wrong in plain words: no object addresses, no class names of other libraries.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "INK_LEVEL",
+    "MAX_ASPECT",
+    "MAX_BYTES",
+    "MAX_PIXELS",
+    "MIN_SIDE",
+    "SketchError",
+    "check_ink",
+    "ink_mask",
+    "read_sketch",
+]
+
+MAX_BYTES = 10 * 1024 * 1024  # an encoded sketch larger than this is refused unread
+MAX_PIXELS = 25_000_000  # 5000 x 5000: a phone photo fits, a bomb does not
+MAX_ASPECT = 8.0  # a drawing of a tree is not a strip
+MIN_SIDE = 8
+INK_LEVEL = 200  # a pixel darker than this (0..255) is part of the drawing
+MIN_INK = 2e-4  # fraction of ink pixels below which the page counts as blank
+MAX_INK = 0.9  # fraction above which the page counts as all dark
+
+
+class SketchError(ValueError):
+    """The input is not a usable sketch (unreadable, too large, blank, all dark)."""
+
+
+def _check_size(width: int, height: int) -> None:
+    if width < MIN_SIDE or height < MIN_SIDE:
+        raise SketchError(
+            f"the image is {width} x {height} pixels; a sketch needs at least "
+            f"{MIN_SIDE} x {MIN_SIDE}"
+        )
+    if width * height > MAX_PIXELS:
+        raise SketchError(
+            f"the image is {width} x {height} pixels, over the limit of {MAX_PIXELS:,} "
+            "pixels; scale it down (1000 px across is plenty)"
+        )
+    aspect = max(width, height) / min(width, height)
+    if aspect > MAX_ASPECT:
+        raise SketchError(
+            f"the image is {width} x {height} pixels (aspect ratio {aspect:.0f}:1); a sketch "
+            f"must be at most {MAX_ASPECT:.0f} times longer than wide"
+        )
+
+
+def _open(data: bytes, what: str) -> Any:
+    """Decode an encoded image after checking its declared size (header only first)."""
+    from PIL import Image, UnidentifiedImageError
+
+    if len(data) > MAX_BYTES:
+        raise SketchError(f"{what} is {len(data):,} bytes, over the limit of {MAX_BYTES:,}")
+    if not data:
+        raise SketchError(f"{what} is empty")
+    try:
+        with Image.open(io.BytesIO(data)) as im:  # lazy: reads the header only
+            _check_size(*im.size)
+            im.load()
+            return _flatten(im)
+    except SketchError:
+        raise
+    except Image.DecompressionBombError:
+        raise SketchError(f"{what} declares too many pixels to be a sketch") from None
+    except UnidentifiedImageError:
+        raise SketchError(f"{what} is not an image Pillow can read (PNG, JPEG, ...)") from None
+    except (OSError, ValueError, SyntaxError, EOFError) as exc:
+        raise SketchError(f"{what} is a damaged or truncated image ({_plain(exc)})") from None
+
+
+def _plain(exc: BaseException) -> str:
+    """An exception's message without object reprs like ``<_io.BytesIO object at 0x..>``."""
+    import re
+
+    text = re.sub(r"<[^<>]* at 0x[0-9a-fA-F]+>", "the data", str(exc))
+    return text or type(exc).__name__
+
+
+def _flatten(im: Any) -> np.ndarray:
+    """A PIL image -> uint8 grey: alpha composited on white, then ITU-R 601 luma."""
+    from PIL import Image
+
+    if im.mode in ("RGBA", "LA", "PA", "La", "RGBa") or "transparency" in im.info:
+        rgba = im.convert("RGBA")
+        bg = Image.new("RGBA", rgba.size, (255, 255, 255, 255))
+        bg.alpha_composite(rgba)
+        im = bg
+    elif im.mode in ("I", "I;16", "I;16B", "I;16L", "F"):
+        a = np.asarray(im, dtype=np.float64)
+        top = 65535.0 if a.max(initial=0) > 255 else 255.0
+        return np.clip(np.round(a / top * 255.0), 0, 255).astype(np.uint8)
+    return np.asarray(im.convert("L"), dtype=np.uint8)
+
+
+def _from_array(source: Any) -> np.ndarray:
+    try:
+        a = np.asarray(source)
+    except Exception:  # noqa: BLE001 - anything that is not array-like
+        raise SketchError(f"cannot read a {type(source).__name__} as an image") from None
+    if a.dtype == object or a.dtype.kind not in "biuf":
+        raise SketchError(f"an image array must hold numbers, got {a.dtype}")
+    if not (a.ndim == 2 or (a.ndim == 3 and a.shape[2] in (1, 3, 4))):
+        raise SketchError(f"an image array must be (H, W), (H, W, 3) or (H, W, 4); got {a.shape}")
+    _check_size(a.shape[1], a.shape[0])
+    if a.dtype == np.uint8 and a.ndim == 2:
+        return a.copy()
+    f = a.astype(np.float32)
+    if not np.isfinite(f).all():
+        raise SketchError("the image holds NaN or infinite values")
+    if a.dtype.kind == "f" and f.max(initial=0.0) <= 1.0:
+        f = f * 255.0
+    f = np.clip(f, 0.0, 255.0)
+    if f.ndim == 3:
+        if f.shape[2] == 4:
+            alpha = f[..., 3:] / 255.0
+            f = f[..., :3] * alpha + 255.0 * (1.0 - alpha)
+        f = f[..., 0] if f.shape[2] == 1 else f[..., :3] @ np.array([0.299, 0.587, 0.114])
+    return np.round(f).astype(np.uint8)
+
+
+def read_sketch(source: Any) -> np.ndarray:
+    """Any supported image -> ``(H, W)`` uint8 grey (255 = white); see the module text.
+
+    Checks size and decoding only; :func:`check_ink` refuses blank and all-dark pages.
+    """
+    from PIL import Image
+
+    if isinstance(source, str | os.PathLike):
+        path = Path(source)
+        if not path.is_file():
+            raise SketchError(f"sketch file not found: {path}")
+        size = path.stat().st_size
+        if size > MAX_BYTES:
+            raise SketchError(f"{path} is {size:,} bytes, over the limit of {MAX_BYTES:,}")
+        return _open(path.read_bytes(), str(path))
+    if isinstance(source, bytes | bytearray | memoryview):
+        return _open(bytes(source), "the uploaded sketch")
+    if isinstance(source, Image.Image):
+        _check_size(*source.size)
+        try:
+            source.load()
+        except Image.DecompressionBombError:
+            raise SketchError("the image declares too many pixels to be a sketch") from None
+        return _flatten(source)
+    return _from_array(source)
+
+
+def ink_mask(img: np.ndarray) -> np.ndarray:
+    """The one ink rule: pixels darker than :data:`INK_LEVEL`."""
+    return np.asarray(img) < INK_LEVEL
+
+
+def check_ink(img: np.ndarray) -> float:
+    """Refuse blank and all-dark pages; returns the ink fraction."""
+    ink = float(ink_mask(img).mean())
+    if ink < MIN_INK:
+        raise SketchError("the sketch is blank: draw a tree (dark lines on a light page)")
+    if ink > MAX_INK:
+        raise SketchError(
+            f"the page is almost all dark ({ink:.0%} of it): draw dark lines on a light page"
+        )
+    return ink
+
+
+# --------------------------------------------------------------------------- normalising
+# Where the renderer puts a tree's sketch in its square frame (measured on SG sketches of
+# every species, `tests/test_reader.py` checks it): the trunk base's ink ends at FRAME_BOTTOM
+# of the side, the trunk axis is the vertical centre line, and the drawing reaches up to
+# FRAME_EDGE from the top or sideways to FRAME_EDGE from an edge, whichever comes first.
+FRAME_BOTTOM = 0.969
+FRAME_EDGE = 0.043
+WORK_SIDE = 512  # drawings are normalised at most this large (bounded time and memory)
+MIN_PAPER = 0.25  # paper darker than this (fraction of white) is refused as a dark page
+INK_CONTRAST = 0.85  # ink is at most this bright relative to the paper around it
+FRAME_TOLERANCE = 0.015  # a drawing already this close to the renderer's frame keeps its scale
+
+
+def flatten_paper(img: np.ndarray) -> np.ndarray:
+    """Grey ``uint8`` -> float 0..1 relative to the paper around each pixel (1 = paper).
+
+    The paper's brightness is estimated with a maximum filter wider than any stroke (so
+    strokes vanish from it) and smoothed; dividing by it removes uneven light, grey or
+    off-white paper and the vignetting of phone photos.  A page whose paper is darker than
+    :data:`MIN_PAPER` is refused.
+    """
+    from scipy import ndimage
+
+    f = np.asarray(img, dtype=np.float32) / 255.0
+    side = max(f.shape)
+    k = max(5, int(round(side / 24)) | 1)
+    paper = ndimage.maximum_filter(f, size=k, mode="nearest")
+    paper = ndimage.uniform_filter(paper, size=k, mode="nearest")
+    level = float(np.median(paper))
+    if level < MIN_PAPER:
+        raise SketchError(
+            f"the page is too dark (paper at {level:.0%} of white): draw or photograph dark "
+            "lines on light paper, in good light"
+        )
+    return np.clip(f / np.maximum(paper, MIN_PAPER / 2), 0.0, 1.0)
+
+
+def _ink_of(flat: np.ndarray) -> np.ndarray:
+    """Ink pixels of a flattened page: darker than Otsu's split and than INK_CONTRAST,
+    without isolated specks (paper grain, sensor noise)."""
+    from skimage.filters import threshold_otsu
+    from skimage.morphology import remove_small_objects
+
+    dark = flat < INK_CONTRAST
+    if not dark.any():
+        return dark
+    t = min(INK_CONTRAST, float(threshold_otsu(flat)) if np.ptp(flat) > 0 else INK_CONTRAST)
+    ink = flat < max(t, 0.5)
+    min_px = max(2, int(round(ink.size * 2e-5)))
+    return remove_small_objects(ink, max_size=min_px - 1)
+
+
+def _axis_and_box(ink: np.ndarray) -> tuple[int, int, int, int, float]:
+    ys = np.flatnonzero(ink.any(axis=1))
+    xs = np.flatnonzero(ink.any(axis=0))
+    top, bottom, left, right = int(ys[0]), int(ys[-1]), int(xs[0]), int(xs[-1])
+    base_rows = ink[max(top, bottom - max(2, (bottom - top) // 40)) : bottom + 1]
+    bx = np.flatnonzero(base_rows.any(axis=0))
+    axis = (bx[0] + bx[-1] + 1) / 2.0
+    return top, bottom, left, right, float(axis)
+
+
+def normalise_drawing(img: np.ndarray, size: int = 256) -> np.ndarray:
+    """A drawing (grey ``uint8``, any size) -> ``(size, size)`` uint8 as the renderer
+    frames a tree: paper white, strokes dark, trunk base on the bottom margin, trunk axis
+    on the centre line, the drawing as large as the frame allows.
+
+    Pencil on grey or off-white paper and phone photos read as ink (:func:`flatten_paper`,
+    Otsu) and come out as black strokes on white, like the training sketches; a drawing in
+    a corner is moved and scaled to the middle.  A sketch already framed as the renderer
+    frames a tree (trunk base on the bottom margin, axis centred, inside the frame) keeps
+    its scale: a tree may be framed by its width seen from another side.  Refuses blank and
+    dark pages.
+    """
+    from PIL import Image
+
+    a = np.asarray(img, dtype=np.uint8)
+    if max(a.shape) > WORK_SIDE:  # bounded work for photos; strokes stay > 1 px
+        s = WORK_SIDE / max(a.shape)
+        shape = (max(MIN_SIDE, round(a.shape[1] * s)), max(MIN_SIDE, round(a.shape[0] * s)))
+        a = np.asarray(Image.fromarray(a).resize(shape, Image.Resampling.BOX))
+    flat = flatten_paper(a)
+    ink = _ink_of(flat)
+    frac = float(ink.mean())
+    if frac < MIN_INK:
+        raise SketchError("the sketch is blank: draw a tree (dark lines on a light page)")
+    if frac > MAX_INK:
+        raise SketchError(f"the page is almost all ink ({frac:.0%}): draw lines, not a fill")
+    clean = np.where(ink, 0.0, 1.0)
+
+    top, bottom, left, right, axis = _axis_and_box(ink)
+    n, m = a.shape
+    framed = (
+        n == m
+        and abs((bottom + 1) / n - FRAME_BOTTOM) <= FRAME_TOLERANCE
+        and abs(axis / n - 0.5) <= FRAME_TOLERANCE
+        and top / n >= FRAME_EDGE - FRAME_TOLERANCE
+        and min(left, n - 1 - right) / n >= FRAME_EDGE - FRAME_TOLERANCE
+    )
+    if framed:
+        scale, axis, bottom = size / n, n / 2.0, int(round(FRAME_BOTTOM * n)) - 1
+    else:
+        h = bottom - top + 1
+        half = max(axis - left, right + 1 - axis, 0.5)
+        scale = min((FRAME_BOTTOM - FRAME_EDGE) * size / h, (0.5 - FRAME_EDGE) * size / half)
+    # the page, scaled, with the trunk base at (size/2, FRAME_BOTTOM * size)
+    out_w = max(1, int(round(a.shape[1] * scale)))
+    out_h = max(1, int(round(a.shape[0] * scale)))
+    x0 = int(round(size / 2 - axis * scale))
+    y0 = int(round(FRAME_BOTTOM * size - (bottom + 1) * scale))
+    pic = Image.fromarray(np.round(clean * 255).astype(np.uint8))
+    resample = Image.Resampling.BOX if scale < 1 else Image.Resampling.BILINEAR
+    pic = pic.resize((out_w, out_h), resample)
+    canvas = Image.new("L", (size, size), 255)
+    canvas.paste(pic, (x0, y0))
+    out = np.asarray(canvas, dtype=np.uint8)
+    if float(ink_mask(out).mean()) < MIN_INK:
+        raise SketchError("the sketch is blank: draw a tree (dark lines on a light page)")
+    return out
