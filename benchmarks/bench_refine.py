@@ -234,6 +234,10 @@ def main(argv: list[str] | None = None) -> int:
         settings = settings.replace(prior_weight=args.prior_weight)
     if args.hold is not None:
         settings = settings.replace(hold=tuple(k for k in args.hold.split(",") if k))
+    try:
+        settings.validate()  # a bad option fails here, not in every case
+    except ValueError as exc:
+        ap.error(str(exc))
     only = None if args.species is None else set(args.species.split(","))
     cases = [
         (k, row)
