@@ -305,7 +305,9 @@ class RayExecutor:
             _check_reachable(address)
             try:
                 ray.init(
-                    address=address,
+                    # "local": always a new Ray of our own, never one a stale
+                    # /tmp/ray/ray_current_cluster points at
+                    address=address or "local",
                     num_cpus=num_cpus,
                     include_dashboard=False,
                     log_to_driver=False,
