@@ -49,6 +49,13 @@ after all its files, so killing the builder at any moment leaves no half-written
 re-run skips finished trees, redoes unfinished ones, and rewrites the manifest.  The same
 settings give the same files (PNG bytes included).  A lock file stops two builders from
 writing the same directory.
+
+Trees are independent pieces: ``build_dataset(cfg, executor=...)`` hands them to an
+executor (``treesketch.executor``: a local process pool, Ray).  Its workers build a tree
+in a scratch folder and send the files back as bytes (:class:`TreeFiles`); only this
+process writes into ``OUT`` (a tree's files together, then its marker), so the workers
+need no shared disk, and a lost worker leaves nothing behind.  Whichever executor runs
+them, the files are the same bytes.
 """
 
 from __future__ import annotations

@@ -11,8 +11,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -58,9 +60,28 @@ class TSNEstimator:
             raise ValueError(str(exc)) from None
 
     def estimate(self, sketch: np.ndarray) -> Estimate:
-        pred = self.model.predict(sketch)
+        with _one_torch_thread():
+            pred = self.model.predict(sketch)
         scores = self.model.species_id.shares(pred.matrix)
         return Estimate(pred.params, pred.species, scores, None, decoded=pred.decoded)
+
+
+@contextlib.contextmanager
+def _one_torch_thread() -> Iterator[None]:
+    """Run the network on one thread: a sum split over threads is added in another order,
+    which moves the last digits of a prediction, and an executor's workers (one CPU each)
+    must give the values this process gives.  One image is no slower on one thread."""
+    import torch
+
+    n = torch.get_num_threads()
+    if n == 1:
+        yield
+        return
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(n)
 
 
 def _scores_from_distances(best: dict[str, float]) -> dict[str, float]:
