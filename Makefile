@@ -4,7 +4,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: setup demo test test-fast lint bench reports clean
+.PHONY: setup demo test test-fast lint bench reports clean blender-test blender-addon
 
 $(STAMP): pyproject.toml scripts/setup.sh
 	bash scripts/setup.sh
@@ -34,6 +34,23 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_grow.py
 	$(PY) benchmarks/bench_render.py
 	$(PY) benchmarks/bench_tsn.py
+
+## The Blender add-on as an installable zip: $(OUT)/treesketch_addon.zip.
+blender-addon: $(STAMP)
+	$(PY) scripts/blender_addon_zip.py $(OUT)/treesketch_addon.zip
+
+## Our GLB in Blender's glTF importer and the add-on end to end, headless (about a minute
+## once Blender is there). Installs Debian's blender and python3-numpy when missing (root).
+blender-test: $(STAMP)
+	@if ! command -v blender >/dev/null 2>&1 || ! dpkg -s python3-numpy >/dev/null 2>&1; then \
+		if [ "$$(id -u)" = "0" ] && command -v apt-get >/dev/null 2>&1; then \
+			echo "blender-test: installing Debian packages blender python3-numpy"; \
+			apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq blender python3-numpy; \
+		else \
+			echo "blender-test: needs Debian's blender and python3-numpy (run as root to install)" >&2; exit 2; \
+		fi; \
+	fi
+	bash scripts/blender_test.sh
 
 clean:
 	rm -rf $(OUT) .pytest_cache

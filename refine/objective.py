@@ -210,7 +210,10 @@ class SearchSpace:
         yaw: float = 0.0,
     ) -> SearchSpace:
         name = species.canonical(name)
+        levels = int(base["levels"])
         rows = [u for u in species.unfixed(name) if u.free and not u.discrete]
+        rows = [u for u in rows if u.hi > u.lo and (u.index is None or u.index < levels)]
+        rows += species.search_freedoms(name)  # level 0 values and a 4-value envelope
         if keys is not None:
             wanted = set(keys)
             unknown = wanted - {u.key for u in rows} - {u.label for u in rows}
@@ -220,9 +223,13 @@ class SearchSpace:
                     f"choose from {', '.join(u.label for u in rows)}"
                 )
             rows = [u for u in rows if u.key in wanted or u.label in wanted]
-        levels = int(base["levels"])
-        rows = [u for u in rows if u.hi > u.lo and (u.index is None or u.index < levels)]
-        return cls(name, species.project(name, base), tuple(rows), search_yaw, float(yaw) % 360.0)
+        return cls(
+            name,
+            species.project(name, base, search=True),
+            tuple(rows),
+            search_yaw,
+            float(yaw) % 360.0,
+        )
 
     @property
     def n(self) -> int:
@@ -248,7 +255,7 @@ class SearchSpace:
                 vec = list(values[u.key])
                 vec[u.index] = v
                 values[u.key] = vec
-        return species.project(self.species, TreeParams(values))
+        return species.project(self.species, TreeParams(values), search=True)
 
     def yaw(self, x: Sequence[float]) -> float:
         if not self.search_yaw:
@@ -256,7 +263,7 @@ class SearchSpace:
         return float(np.clip(x[len(self.dims)], 0.0, 1.0) * 360.0) % 360.0
 
     def from_params(self, params: TreeParams, yaw: float = 0.0) -> np.ndarray:
-        p = species.project(self.species, params).to_dict()
+        p = species.project(self.species, params, search=True).to_dict()
         xs = []
         for u in self.dims:
             v = p[u.key] if u.index is None else p[u.key][u.index]
@@ -266,7 +273,7 @@ class SearchSpace:
         return np.clip(np.asarray(xs, dtype=np.float64), 0.0, 1.0)
 
     def with_base(self, base: TreeParams) -> SearchSpace:
-        base = species.project(self.species, base)
+        base = species.project(self.species, base, search=True)
         return SearchSpace(self.species, base, self.dims, self.search_yaw, self.fixed_yaw)
 
     def without(self, keys: Sequence[str]) -> SearchSpace:

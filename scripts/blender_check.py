@@ -24,6 +24,7 @@ addon_utils.enable("add_curve_sapling", default_set=True)
 with open(preset, encoding="utf-8") as fh:
     line = next(t for t in fh if t.strip() and not t.lstrip().startswith("#"))
 d = ast.literal_eval(line)
+d.pop("limitImport", None)  # as a keyword it is applied last and turns the build off
 for o in list(bpy.data.objects):
     bpy.data.objects.remove(o)
 res = bpy.ops.curve.tree_add(do_update=True, **d)

@@ -36,6 +36,7 @@ for path in presets:
     with open(path, encoding="utf-8") as fh:
         line = next(t for t in fh if t.strip() and not t.lstrip().startswith("#"))
     d = ast.literal_eval(line)
+    d.pop("limitImport", None)  # as a keyword it is applied last and turns the build off
     secs = []
     for _ in range(repeats):
         clear()

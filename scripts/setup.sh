@@ -45,6 +45,6 @@ fi
 .venv/bin/python -m pip install -q --upgrade pip
 # torch first, pinned: pip takes the CPU build of torch 2.13.0 that lies on this disk.
 .venv/bin/python -m pip install -q "torch==2.13.0"
-.venv/bin/python -m pip install -q -e ".[dev]"
+.venv/bin/python -m pip install -q -e ".[dev,cluster]"
 touch .venv/.installed
 echo "setup: done ($(.venv/bin/python --version))"

@@ -24,7 +24,7 @@ def test_grow_species_glb_params_and_preset(tmp_path):
     assert "branch faces" in res.output
     assert set(trimesh.load(out).geometry) == {"branches", "leaves"}
     assert load_params(tmp_path / "p.json") == species.sample("maple", 3)
-    assert (tmp_path / "p.py").read_text().count("\n") == 1
+    assert load_params(tmp_path / "p.py") == species.sample("maple", 3)  # lossless preset
 
 
 def test_grow_from_params_same_tree(tmp_path):
@@ -71,3 +71,21 @@ def test_params_command():
     res = runner.invoke(app, ["params"])
     assert res.exit_code == 0
     assert "leafShape" in res.output and "curveRes" in res.output
+
+
+def test_grow_light_turned_lods_and_bad_lods(tmp_path):
+    out = tmp_path / "c.glb"
+    res = runner.invoke(
+        app,
+        ["grow", "--species", "cherry", "--out", str(out), "--max-faces", "20000",
+         "--lods", "5000,1000", "--yaw", "30", "--preset", str(tmp_path / "c.py")],
+    )  # fmt: skip
+    assert res.exit_code == 0, res.output
+    faces = [
+        sum(len(g.faces) for g in trimesh.load(p).geometry.values())
+        for p in (out, tmp_path / "c_lod1.glb", tmp_path / "c_lod2.glb")
+    ]
+    assert faces[0] <= 20000 and faces[1] <= 5000 and faces[2] <= 1000
+    assert "view yaw: 30.00" in (tmp_path / "c.py").read_text()
+    res = runner.invoke(app, ["grow", "--species", "palm", "--out", str(out), "--lods", "5,x"])
+    assert res.exit_code == 2 and "--lods" in res.output

@@ -1,16 +1,17 @@
-"""Tests of weberpenn.export: GLB, OBJ and Sapling presets."""
+"""Tests of weberpenn.export: upright GLB/OBJ, the drawn view, textures, all-or-nothing."""
 
 from __future__ import annotations
 
-import ast
+import json
+import struct
 
 import numpy as np
 import pytest
 import trimesh
 
-from weberpenn import build_mesh, default_params, grow, load_params, species
-from weberpenn.export import SAPLING_KEYS, colours, export_mesh, save_sapling_preset, to_sapling
-from weberpenn.params import TSN_ONLY_NEUTRAL, ParamError
+from weberpenn import build_mesh, default_params, grow, species
+from weberpenn.export import colours, export_mesh, glb_bytes, obj_files
+from weberpenn.orient import face_view_matrix, to_export_frame
 
 
 @pytest.fixture(scope="module")
@@ -18,90 +19,128 @@ def tree():
     return build_mesh(grow(species.sample("palm", seed=1)), species="palm")
 
 
-def test_glb_two_named_meshes_with_materials(tree, tmp_path):
+def _gltf_json(data: bytes) -> dict:
+    """The JSON chunk of a GLB (read by hand, not through trimesh)."""
+    assert data[:4] == b"glTF"
+    length, kind = struct.unpack_from("<I4s", data, 12)
+    assert kind == b"JSON"
+    return json.loads(data[20 : 20 + length])
+
+
+def _position_bounds(doc: dict) -> np.ndarray:
+    acc = [
+        doc["accessors"][p["attributes"]["POSITION"]]
+        for m in doc["meshes"]
+        for p in m["primitives"]
+    ]
+    return np.array(
+        [np.min([a["min"] for a in acc], axis=0), np.max([a["max"] for a in acc], axis=0)]
+    )
+
+
+def test_glb_is_y_up_base_at_origin(tree):
+    doc = _gltf_json(glb_bytes(tree))
+    lo, hi = _position_bounds(doc)
+    zb = tree.bounds()
+    height = zb[1, 2]
+    assert height > 1.0
+    assert hi[1] == pytest.approx(height, rel=1e-5)  # glTF +Y is up
+    assert abs(lo[1]) < 0.01 * height  # base at the origin
+    assert lo[2] == pytest.approx(-zb[1, 1], rel=1e-5) and hi[2] == pytest.approx(-zb[0, 1])
+    assert lo[0] == pytest.approx(zb[0, 0], rel=1e-5)
+    assert not any("matrix" in n or "rotation" in n for n in doc["nodes"])
+
+
+def test_glb_named_meshes_textures_and_alpha(tree, tmp_path):
     path = export_mesh(tree, tmp_path / "t.glb")
-    assert path.read_bytes()[:4] == b"glTF"
+    doc = _gltf_json(path.read_bytes())
+    assert {n["name"] for n in doc["nodes"] if "mesh" in n} == {"branches", "leaves"}
+    mats = {m["name"]: m for m in doc["materials"]}
+    assert set(mats) == {"bark", "leaf"}
+    assert mats["leaf"]["alphaMode"] == "MASK"
+    for m in mats.values():
+        assert "baseColorTexture" in m["pbrMetallicRoughness"]
+    assert len(doc["images"]) == 2
     scene = trimesh.load(path)
-    assert set(scene.geometry) == {"branches", "leaves"}
-    leaves = scene.geometry["leaves"]
-    assert leaves.visual.uv is not None and len(leaves.visual.uv) == len(leaves.vertices)
-    mats = {g.visual.material.name for g in scene.geometry.values()}
-    assert mats == {"bark", "leaf"}
-    bark = scene.geometry["branches"].visual.material.baseColorFactor[:3]
-    assert np.allclose(np.asarray(bark) / 255.0, colours("palm")[0], atol=0.01)
+    for g in scene.geometry.values():
+        assert g.visual.uv is not None and len(g.visual.uv) == len(g.vertices)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["t.glb"]  # no temp files
 
 
-def test_obj_and_mtl(tree, tmp_path):
-    path = export_mesh(tree, tmp_path / "t.obj")
+def test_glb_flat_colours_without_textures(tree):
+    doc = _gltf_json(glb_bytes(tree, textures=False))
+    assert "images" not in doc
+    bark = next(m for m in doc["materials"] if m["name"] == "bark")
+    rgb = bark["pbrMetallicRoughness"]["baseColorFactor"][:3]
+    assert np.allclose(rgb, colours("palm")[0], atol=0.01)
+
+
+def test_bark_seam_closed_in_export(tree):
+    scene = trimesh.load(trimesh.util.wrap_as_stream(glb_bytes(tree)), file_type="glb")
+    b = scene.geometry["branches"]
+    fu = b.visual.uv[b.faces, 0]
+    assert (fu.max(axis=1) - fu.min(axis=1)).max() <= 0.5  # no face spans the wrap
+    assert b.visual.uv[:, 0].max() == pytest.approx(1.0)
+    assert len(b.faces) == len(tree.branches.faces)
+
+
+def test_yaw_turns_the_drawn_view_to_the_front(tree):
+    # a camera at yaw a has +X' = (cos a, sin a, 0) on its right; after the turn that
+    # direction is the front view's right (+X in Blender and glTF alike)
+    for a in (0.0, 45.0, 90.0, 200.0):
+        r = np.radians(a)
+        right = np.array([[np.cos(r), np.sin(r), 0.0]])
+        forward = np.array([[-np.sin(r), np.cos(r), 0.0]])
+        assert np.allclose(to_export_frame(right, a), [[1, 0, 0]], atol=1e-12)
+        assert np.allclose(to_export_frame(forward, a), [[0, 0, -1]], atol=1e-12)  # glTF view
+    lo, hi = _position_bounds(_gltf_json(glb_bytes(tree, yaw=90.0)))
+    b = tree.bounds()
+    assert hi[1] == pytest.approx(b[1, 2], rel=1e-5)  # still upright
+    assert lo[0] == pytest.approx(b[0, 1], rel=1e-5)  # world +Y turned onto +X
+    with pytest.raises(ValueError, match="yaw"):
+        face_view_matrix(float("nan"))
+
+
+def test_max_faces_in_export(tree):
+    doc = _gltf_json(glb_bytes(tree, max_faces=2000))
+    tris = sum(
+        doc["accessors"][p["indices"]]["count"] // 3 for m in doc["meshes"] for p in m["primitives"]
+    )
+    assert tris <= 2000
+
+
+def test_obj_upright_with_mtl_and_textures(tree, tmp_path):
+    path = export_mesh(tree, tmp_path / "t.obj", yaw=0.0)
     text = path.read_text()
     assert "o branches" in text and "o leaves" in text and "mtllib t.mtl" in text
-    assert (tmp_path / "t.mtl").read_text().count("newmtl") == 2
+    mtl = (tmp_path / "t.mtl").read_text()
+    assert mtl.count("newmtl") == 2 and "map_Kd t_bark.png" in mtl and "map_d t_leaf.png" in mtl
+    v = np.array([[float(x) for x in ln.split()[1:]] for ln in text.splitlines() if ln[:2] == "v "])
+    assert v[:, 1].max() == pytest.approx(tree.bounds()[1, 2], rel=1e-4)  # Y up
     loaded = trimesh.load(path, process=False)
-    n = (
-        sum(len(g.faces) for g in loaded.geometry.values())
-        if hasattr(loaded, "geometry")
-        else len(loaded.faces)
-    )
+    n = sum(len(g.faces) for g in loaded.geometry.values())
     assert n == len(tree.branches.faces) + len(tree.leaves.faces)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.mtl", "t.obj"]
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == ["t.mtl", "t.obj", "t_bark.png", "t_leaf.png"]
+    files = obj_files(tree, tmp_path / "u.obj", textures=False)
+    assert sorted(p.name for p in files) == ["u.mtl", "u.obj"]
 
 
-def test_bad_format_and_empty(tree, tmp_path):
+def test_bad_format_and_empty_leave_nothing(tree, tmp_path):
     with pytest.raises(ValueError, match="format"):
         export_mesh(tree, tmp_path / "t.stl")
     empty = build_mesh(grow(default_params().replace(leaves=0)))
     empty.branches = trimesh.Trimesh(vertices=np.zeros((0, 3)), faces=np.zeros((0, 3), int))
-    with pytest.raises(ValueError, match="empty"):
-        export_mesh(empty, tmp_path / "e.glb")
+    for name in ("e.glb", "e.obj"):
+        with pytest.raises(ValueError, match="empty"):
+            export_mesh(empty, tmp_path / name)
+    with pytest.raises(ValueError, match="max_faces"):
+        export_mesh(tree, tmp_path / "s.glb", max_faces=3)
+    with pytest.raises(TypeError, match="TreeMesh"):
+        export_mesh(tree.branches, tmp_path / "x.glb")
     assert list(tmp_path.iterdir()) == []
-
-
-def test_treemesh_export_method(tree, tmp_path):
-    assert tree.export(tmp_path / "x.glb").is_file()
 
 
 def test_colour_table():
     assert colours(None) == colours("no-such-species")
     assert colours("cherry") != colours("pine")
-
-
-@pytest.mark.parametrize("name", species.SPECIES)
-def test_sapling_preset_one_line_sapling_keys_only(name, tmp_path):
-    p = species.sample(name, 4).replace(seed=1_656_000_000_123)  # epoch-ms seed
-    path = save_sapling_preset(p, tmp_path / f"{name}.py")
-    text = path.read_text()
-    assert text.count("\n") == 1 and text.endswith("\n")
-    d = ast.literal_eval(text.strip())
-    assert isinstance(d, dict)
-    assert set(d) <= set(SAPLING_KEYS)
-    assert not set(d) & set(TSN_ONLY_NEUTRAL)
-    assert -(2**31) <= d["seed"] < 2**31
-    for key in ("shape", "shapeS", "leafDist", "leafShape", "handleType"):
-        assert isinstance(d[key], str), key
-    assert d["bevel"] is True and d["rMode"] == "rotate" and d["autoTaper"] is True
-    assert d["showLeaves"] is (p.leaves != 0)
-    assert sorted(q.name for q in tmp_path.iterdir()) == [f"{name}.py"]
-    # our loader reads it back as a valid dictionary of the same overall size
-    q = load_params(path)
-    assert q.levels == p.levels and q.branches == p.branches
-    assert q.scale == pytest.approx(p.scale + p.scaleV)
-
-
-def test_sapling_mapping_rules():
-    p = species.sample("maple", 2)
-    d = to_sapling(p)
-    for i in range(4):
-        assert d["curveV"][i] == pytest.approx(
-            (abs(p.curveV1[i]) + abs(p.curveV2[i])) * p.curveRes[i]
-        )
-        mean = (p.splitAngleV1[i] + p.splitAngleV2[i]) / 2
-        assert d["splitAngle"][i] == pytest.approx(p.splitAngle[i] + mean)
-        assert d["splitAngleV"][i] == pytest.approx(abs(p.splitAngleV1[i] - p.splitAngleV2[i]) / 2)
-    assert d["scaleV"] == 0.0 and d["scaleV0"] == 0.0 and d["leafScaleV"] == 0.0
-    assert d["scale0"] == pytest.approx(p.scale0 * p.scaleV0)
-    assert d["leafScale"] == pytest.approx(p.leafScale * p.leafScaleV)
-    assert d["rotate"][0] == pytest.approx(p.rotate[0] + p.rotateV[0]) and d["rotateV"][0] == 0.0
-    assert d["leafRotate"] == pytest.approx(p.leafRotate + p.leafRotateV)
-    with pytest.raises(ParamError):
-        to_sapling({"levels": 2})

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 from paths import GT_PARAM_DIR as PARAM_DIR
 
@@ -113,3 +114,48 @@ def test_unfixed_keys_listed():
         keys = species.unfixed_keys(name)
         assert keys and all(k in SPECS for k in keys)
         assert "seed" not in keys
+
+
+def _trunk_lean(params: TreeParams) -> float:
+    from weberpenn import grow
+
+    sk = grow(params)
+    t = np.asarray(sk.points)[sk.offsets[0] : sk.offsets[1]]
+    return float(np.hypot(*(t[-1, :2] - t[0, :2])) / max(t[-1, 2] - t[0, 2], 1e-6))
+
+
+@pytest.mark.parametrize("name", ["palm", "bonsai"])
+def test_a_leaning_trunk_is_reachable_by_the_search(name: str) -> None:
+    from refine.objective import SearchSpace
+
+    start = species.sample(name, 3)
+    space = SearchSpace.create(name, start, search_yaw=False)
+    assert "curveBack[0]" in space.labels and "curve[0]" in space.labels
+    x = space.from_params(start)
+    assert _trunk_lean(space.to_params(x)) < 0.3  # the published trunks end above their base
+    i, j = space.labels.index("curve[0]"), space.labels.index("curveBack[0]")
+    x[i], x[j] = 0.95, 0.5  # bend far one way, do not bend back
+    if "attractUp[0]" in space.labels:
+        x[space.labels.index("attractUp[0]")] = 0.0
+    leaning = space.to_params(x)
+    assert _trunk_lean(leaning) > 0.45
+    # sampling and projection without the search are unchanged: the mirror holds there
+    assert species.project(name, leaning)["curveBack"][0] == -leaning["curve"][0]
+
+
+def test_a_conical_conifer_is_reachable_by_the_search() -> None:
+    from refine.objective import SearchSpace
+    from weberpenn import grow
+
+    start = species.sample("pine", 3)
+    space = SearchSpace.create("pine", start, search_yaw=False)
+    x = space.from_params(start)
+    for k, v in ((0, 1.0), (1, 1.0), (2, 0.0), (3, 0.0)):  # widest at the base, a point on top
+        x[space.labels.index(f"customShape[{k}]")] = v
+    sk = grow(space.to_params(x))
+    pts, off = np.asarray(sk.points), np.asarray(sk.offsets)
+    first = np.flatnonzero(np.asarray(sk.levels) == 1)
+    base_z = pts[off[first], 2]
+    length = np.array([np.linalg.norm(pts[off[i + 1] - 1] - pts[off[i]]) for i in first])
+    low, high = base_z < np.quantile(base_z, 1 / 3), base_z > np.quantile(base_z, 2 / 3)
+    assert length[low].mean() > 2.0 * length[high].mean()

@@ -20,7 +20,8 @@ def grow_command(
         "--out",
         "-o",
         help="Mesh file to write: .glb (two named meshes 'branches' and 'leaves' with bark "
-        "and leaf materials) or .obj (with a .mtl beside it).",
+        "and leaf materials, Y-up as glTF wants) or .obj (Blender's default OBJ axes, with a "
+        ".mtl and the texture PNGs beside it).",
     ),
     species_name: str | None = typer.Option(
         None,
@@ -50,16 +51,43 @@ def grow_command(
     preset_path: Path | None = typer.Option(
         None,
         "--preset",
-        help="Also write a Sapling preset (.py) that Blender's Sapling 'Import Preset' loads.",
+        help="Also write a Sapling preset (.py) that Blender's Sapling 'Import Preset' loads "
+        "(all levels and leaves; growing it here gives back the same tree).",
+    ),
+    yaw: float = typer.Option(
+        0.0,
+        "--yaw",
+        help="Turn the exported tree so the view seen from this camera yaw (degrees) faces "
+        "the front view (recorded in the preset's comment).",
+    ),
+    max_faces: int | None = typer.Option(
+        None,
+        "--max-faces",
+        min=100,
+        help="Keep the mesh under this many triangles (coarser tubes, fewer and lighter "
+        "leaves, then decimation).",
+    ),
+    lods: str | None = typer.Option(
+        None,
+        "--lods",
+        help="Also write lighter copies, e.g. '50000,10000' writes OUT_lod1 and OUT_lod2 "
+        "under those triangle counts (OUT itself is lod0).",
+    ),
+    textures: bool = typer.Option(
+        True,
+        "--textures/--no-textures",
+        help="Bark and leaf textures (made by the project, embedded in GLB, PNGs beside OBJ) "
+        "or flat species colours.",
     ),
 ) -> None:
     """Grow one Weber-Penn tree and write its mesh.
 
     Examples: `treesketch grow --species maple --seed 3 --out maple.glb`,
-    `treesketch grow --params tree.json --out tree.obj`.
+    `treesketch grow --params tree.json --out tree.obj --max-faces 20000`.
     """
     from weberpenn import build_mesh, grow, load_params, species
-    from weberpenn.export import save_sapling_preset
+    from weberpenn.export import export_mesh, save_sapling_preset
+    from weberpenn.lod import MIN_FACES, lod
     from weberpenn.params import ParamError, save_params
 
     if (species_name is None) == (params_path is None):
@@ -67,6 +95,14 @@ def grow_command(
     suffix = out.suffix.lower()
     if suffix not in (".glb", ".obj"):
         _fail(f"--out {out}: unknown mesh format {suffix or '(none)'!r}; use .glb or .obj")
+    budgets: list[int] = []
+    if lods is not None:
+        try:
+            budgets = [int(x) for x in lods.split(",") if x.strip()]
+        except ValueError:
+            _fail(f"--lods {lods!r}: give triangle counts separated by commas, e.g. 50000,10000")
+        if not budgets or min(budgets) < MIN_FACES:
+            _fail(f"--lods {lods!r}: every triangle count must be at least {MIN_FACES}")
     name: str | None = None
     try:
         if species_name is not None:
@@ -82,16 +118,20 @@ def grow_command(
             if seed is not None:
                 params = params.replace(seed=seed)
         t0 = time.perf_counter()
-        tree = build_mesh(grow(params), species=name)
+        full = build_mesh(grow(params), species=name)
         dt = time.perf_counter() - t0
-        if tree.is_empty:
+        if full.is_empty:
             _fail("these parameters grow an empty tree (no branches and no leaves)")
-        tree.export(out)
+        tree = full if max_faces is None else lod(full, max_faces)
+        export_mesh(tree, out, yaw=yaw, textures=textures)
+        for i, budget in enumerate(budgets, start=1):
+            lod_out = out.with_name(f"{out.stem}_lod{i}{out.suffix}")
+            export_mesh(full, lod_out, yaw=yaw, max_faces=budget, textures=textures)
         if save_params_path is not None:
             save_params(params, save_params_path)
         if preset_path is not None:
-            save_sapling_preset(params, preset_path)
-    except ParamError as exc:
+            save_sapling_preset(params, preset_path, yaw=yaw)
+    except (ParamError, ValueError) as exc:
         _fail(str(exc))
     except OSError as exc:
         _fail(f"cannot write output: {exc}")

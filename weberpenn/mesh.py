@@ -39,9 +39,11 @@ _EPS = 1e-12
 
 
 def _empty_mesh() -> trimesh.Trimesh:
-    return trimesh.Trimesh(
+    m = trimesh.Trimesh(
         vertices=np.zeros((0, 3)), faces=np.zeros((0, 3), dtype=np.int64), process=False
     )
+    m.visual = TextureVisuals(uv=np.zeros((0, 2)))
+    return m
 
 
 def tube_counts(n_points: int, res_u: int, bevel_res: int) -> tuple[int, int]:
@@ -191,6 +193,21 @@ def _ring_faces(rings: int, sides: int) -> np.ndarray:
     return tri.reshape(-1, 3)
 
 
+def _tube_uv(x: np.ndarray, rr: np.ndarray, u_ring: np.ndarray, out: np.ndarray) -> None:
+    """Bark UVs of a group of tubes into ``out`` (G, R, sides, 2).
+
+    u runs once around the stem (0 .. (sides-1)/sides; the exporter closes the seam at
+    u = 1), v along it by arc length in units of the stem's mean circumference, so a
+    square tiling bark texture keeps its aspect and flows on unbroken from ring to ring.
+    """
+    seg = _norm(np.diff(x, axis=1))  # (G, R-1)
+    arc = np.zeros(x.shape[:2])
+    np.cumsum(seg, axis=1, out=arc[:, 1:])
+    circ = 2.0 * np.pi * np.maximum(rr.mean(axis=1), 1e-4)  # (G,)
+    out[..., 0] = u_ring
+    out[..., 1] = (arc / circ[:, None])[:, :, None]
+
+
 def _branches(sk: Skeleton) -> tuple[trimesh.Trimesh, dict]:
     s = sk.n_stems
     if s == 0:
@@ -212,6 +229,8 @@ def _branches(sk: Skeleton) -> tuple[trimesh.Trimesh, dict]:
     nf_total = sum(len(members[n]) * 2 * sides * (rings_of[n] - 1) for n in groups)
     verts = np.empty((nv_total, 3), dtype=np.float64)
     faces = np.empty((nf_total, 3), dtype=np.int64)
+    uv = np.empty((nv_total, 2), dtype=np.float64)
+    u_ring = np.arange(sides, dtype=np.float64) / sides
     v0 = f0 = 0
     # stems grouped by control-point count, stem order kept inside a group
     sampled = {}
@@ -248,12 +267,14 @@ def _branches(sk: Skeleton) -> tuple[trimesh.Trimesh, dict]:
         out = verts[v0 : v0 + g * nv].reshape(g, rings, sides, 3)
         np.matmul(circle, frame, out=out)
         out += x[:, :, None]
+        _tube_uv(x, rr, u_ring, uv[v0 : v0 + g * nv].reshape(g, rings, sides, 2))
         tmpl = _ring_faces(rings, sides)
         fout = faces[f0 : f0 + g * nf].reshape(g, nf, 3)
         np.add(tmpl[None], (v0 + nv * np.arange(g, dtype=np.int64))[:, None, None], out=fout)
         v0 += g * nv
         f0 += g * nf
     mesh = trimesh.Trimesh(vertices=verts, faces=faces, process=False)
+    mesh.visual = TextureVisuals(uv=uv)
     return mesh, {"stems": s, "sides": sides, "res_u": res_u}
 
 
@@ -262,9 +283,7 @@ def _leaves(sk: Skeleton) -> trimesh.Trimesh:
     rect = str(sk.leaf_shape) == "rect"
     tmpl2, tf = (RECT, RECT_FACES) if rect else (HEX, HEX_FACES)
     if nl == 0:
-        m = _empty_mesh()
-        m.visual = TextureVisuals(uv=np.zeros((0, 2)))
-        return m
+        return _empty_mesh()
     mats = np.asarray(sk.leaf_matrices, dtype=np.float64)
     pos = np.asarray(sk.leaf_positions, dtype=np.float64)
     # template z = 0: only the first two matrix columns matter; v = x*col0 + y*col1 + pos
@@ -280,7 +299,7 @@ def _leaves(sk: Skeleton) -> trimesh.Trimesh:
 
 
 def build_mesh(skeleton: Skeleton, species: str | None = None) -> TreeMesh:
-    """Mesh a grown skeleton: tubes for the stems, leaf quads/hexes with UVs.
+    """Mesh a grown skeleton: tubes for the stems, leaf quads/hexes, both with UVs.
 
     ``species`` is recorded on the TreeMesh (it picks export/render colours).  An empty
     skeleton gives two empty meshes.
@@ -290,4 +309,4 @@ def build_mesh(skeleton: Skeleton, species: str | None = None) -> TreeMesh:
     branches, meta = _branches(skeleton)
     leaves = _leaves(skeleton)
     meta = {**meta, "leaves": skeleton.n_leaves, "leaf_shape": str(skeleton.leaf_shape)}
-    return TreeMesh(branches=branches, leaves=leaves, species=species, meta=meta)
+    return TreeMesh(branches=branches, leaves=leaves, species=species, meta=meta, skeleton=skeleton)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import ast
 import contextlib
+import hashlib
 import json
 import math
 import os
@@ -332,6 +333,11 @@ class TreeParams(Mapping[str, Any]):
     def __setattr__(self, key: str, value: Any) -> None:
         raise AttributeError("TreeParams is immutable: use .replace(key=value)")
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        # pickle through the constructor (executors ship parameters to worker processes);
+        # the default path would call __getattr__ before _values exists
+        return (TreeParams, (dict(self._values),))
+
     def __eq__(self, other: object) -> bool:
         if isinstance(other, TreeParams):
             return self._values == other._values
@@ -442,6 +448,29 @@ def fill_from_sapling(values: Mapping[str, Any]) -> dict[str, Any]:
     return src
 
 
+#: Comment prefix of the full dictionary that ``weberpenn.preset`` seals into a preset.
+EMBEDDED_PREFIX = "# treesketch-params "
+
+
+def _embedded_params(text: str) -> dict | None:
+    """The full dictionary sealed into a TreeSketch preset, if the Sapling line (the
+    first line not starting with '#', as Sapling reads it) still has the sealed hash."""
+    lines = text.splitlines()
+    sapling = next((t.strip() for t in lines if t.strip() and not t.startswith("#")), None)
+    for t in lines:
+        if not t.startswith(EMBEDDED_PREFIX) or sapling is None:
+            continue
+        seal, _, body = t[len(EMBEDDED_PREFIX) :].partition(" ")
+        if seal != "sha256=" + hashlib.sha256(sapling.encode()).hexdigest():
+            return None  # the Sapling line was edited: it wins
+        try:
+            data = json.loads(body)
+        except json.JSONDecodeError:
+            return None
+        return data if isinstance(data, dict) else None
+    return None
+
+
 def _read_preset_literal(text: str, path: Path) -> Any:
     for line in text.splitlines():
         stripped = line.strip()
@@ -487,7 +516,9 @@ def load_params(path: str | os.PathLike[str]) -> TreeParams:
 
     JSON files must hold exactly the 70 TreeSketchNet keys.  Sapling presets are parsed
     with :func:`ast.literal_eval` (never executed) and mapped by :func:`fill_from_sapling`
-    when they lack TreeSketchNet's realised keys.
+    when they lack TreeSketchNet's realised keys; a preset written by
+    ``weberpenn.preset`` gives back its sealed full dictionary while its Sapling line is
+    unedited (a lossless round trip).
     """
     path = Path(path)
     if not path.is_file():
@@ -508,7 +539,8 @@ def load_params(path: str | os.PathLike[str]) -> TreeParams:
             f"{path}: brackets nested {depth} deep; a parameter file nests at most {MAX_NESTING}"
         )
     if path.suffix.lower() == ".py":
-        data = _read_preset_literal(text, path)
+        embedded = _embedded_params(text)
+        data = embedded if embedded is not None else _read_preset_literal(text, path)
         if not isinstance(data, dict):
             raise ParamError(f"{path}: a Sapling preset must be a dict literal")
         if not all(k in data for k in TSN_ONLY_NEUTRAL):

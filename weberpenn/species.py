@@ -165,11 +165,39 @@ def sample(name: str, seed: int = 0) -> TreeParams:
     return TreeParams(values)
 
 
-def project(name: str, params: TreeParams) -> TreeParams:
+#: Shapes people draw that the published variation cannot reach, opened to the
+#: refinement's search only (``sample`` never draws them, so datasets are unchanged, and
+#: every base value lies inside its range).  A trunk that leans or bends: the published
+#: palm and bonsai trunks curve by ``curve[0]`` and curve straight back by the mirrored
+#: ``curveBack[0]`` (and the palm's ``attractUp[0]`` of 8.6 pulls it upright), so the
+#: trunk always ends above its base.  A conical conifer: the pine's envelope
+#: (``customShape``: length factor at the base, the widest point, its height, the top) is
+#: fixed at a tiered shape.  Ranges stay inside what Sapling accepts.
+SEARCH_FREEDOMS: dict[str, tuple[Unfixed, ...]] = {
+    "palm": (
+        Unfixed("curveBack", 0, -90.0, 90.0, "search"),
+        Unfixed("attractUp", 0, 0.0, 8.57, "search"),
+    ),
+    "bonsai": (
+        Unfixed("curveBack", 0, -150.0, 150.0, "search"),
+        Unfixed("attractUp", 0, 0.0, 0.81, "search"),
+    ),
+    "pine": tuple(Unfixed("customShape", i, 0.05, 1.0, "search") for i in range(4)),
+}
+
+
+def search_freedoms(name: str) -> tuple[Unfixed, ...]:
+    """The species' search-only freedoms (see :data:`SEARCH_FREEDOMS`)."""
+    return SEARCH_FREEDOMS.get(canonical(name), ())
+
+
+def project(name: str, params: TreeParams, search: bool = False) -> TreeParams:
     """Force a dictionary onto a species: its fixed values, keeping the unfixed ones.
 
     Unfixed values are clipped into the species' ranges; derived values (mirrors, the
     split height) are recomputed.  Used after prediction so a tree is a valid member.
+    With ``search`` the species' search-only freedoms (:data:`SEARCH_FREEDOMS`) keep the
+    given values too, clipped into their ranges (what the refinement moves).
     """
     values = base(name).to_dict()
     src = params.to_dict()
@@ -185,5 +213,8 @@ def project(name: str, params: TreeParams) -> TreeParams:
             _set(values, u.key, u.index, -float(_get(values, "curve", u.index)))
         elif u.rule == "split_height":
             values[u.key] = u.hi if values["baseSplits"] > 0 else u.lo
+    if search:
+        for u in search_freedoms(name):
+            _set(values, u.key, u.index, float(np.clip(_get(src, u.key, u.index), u.lo, u.hi)))
     values["seed"] = params["seed"]
     return TreeParams(values)

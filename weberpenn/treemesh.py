@@ -2,30 +2,40 @@
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 import trimesh
 
+from .skeleton import Skeleton
+
 
 @dataclass(eq=False)
 class TreeMesh:
-    """Branches and leaves as two ``trimesh.Trimesh`` (leaves carry UVs).
+    """Branches and leaves as two ``trimesh.Trimesh`` (both carry UVs when built by
+    ``build_mesh``: branches around x along each stem, leaves over the leaf template).
 
-    ``species`` (optional) picks the bark and leaf colours used by exports and renders.
-    Z is up, the trunk base sits at the origin.  Either mesh may be empty.
+    ``species`` (optional) picks the bark and leaf colours and textures used by exports.
+    ``skeleton`` is the grown tree the meshes were built from, when known: level of
+    detail (``weberpenn.lod``) re-meshes it at a coarser resolution.  Z is up, the trunk
+    base sits at the origin.  Either mesh may be empty.  Write files with
+    ``weberpenn.export.export_mesh``.
     """
 
     branches: trimesh.Trimesh
     leaves: trimesh.Trimesh
     species: str | None = None
     meta: dict = field(default_factory=dict)
+    skeleton: Skeleton | None = None
 
     @property
     def is_empty(self) -> bool:
         return len(self.branches.faces) == 0 and len(self.leaves.faces) == 0
+
+    @property
+    def n_faces(self) -> int:
+        """Triangles of both meshes together."""
+        return len(self.branches.faces) + len(self.leaves.faces)
 
     def bounds(self) -> np.ndarray:
         """(2, 3) axis-aligned bounds of both meshes; zeros when empty."""
@@ -36,16 +46,15 @@ class TreeMesh:
         return np.array([v.min(axis=0), v.max(axis=0)])
 
     def combined(self) -> trimesh.Trimesh:
-        """Both meshes concatenated into one (for distances and simple exports)."""
+        """Both meshes' geometry in one mesh (for distances and simple exports; no UVs)."""
         parts = [m for m in (self.branches, self.leaves) if len(m.faces)]
-        if not parts:
-            return trimesh.Trimesh(
-                vertices=np.zeros((0, 3)), faces=np.zeros((0, 3), dtype=np.int64)
-            )
-        return trimesh.util.concatenate(parts)
-
-    def export(self, path: str | os.PathLike[str]) -> Path:
-        """Write GLB (``.glb``/``.gltf``) or OBJ (``.obj``), atomically; see ``weberpenn.export``."""
-        from .export import export_mesh
-
-        return export_mesh(self, path)
+        verts = [np.asarray(m.vertices, dtype=np.float64) for m in parts]
+        starts = np.cumsum([0] + [len(v) for v in verts])[:-1]
+        faces = [
+            np.asarray(m.faces, dtype=np.int64) + s for m, s in zip(parts, starts, strict=True)
+        ]
+        return trimesh.Trimesh(
+            vertices=np.vstack(verts) if verts else np.zeros((0, 3)),
+            faces=np.vstack(faces) if faces else np.zeros((0, 3), dtype=np.int64),
+            process=False,
+        )

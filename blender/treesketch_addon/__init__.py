@@ -1,0 +1,313 @@
+"""TreeSketch for Blender: draw a tree (an image file or a Grease Pencil drawing), get a
+3D tree back, as a native Sapling tree (editable in Sapling's redo panel) or as the
+imported GLB.  Install the zip (``make blender-addon``) in Edit > Preferences > Add-ons,
+then set where the project's ``treesketch`` program lives (or the service's URL) in the
+add-on's preferences.  Panel: 3D view > sidebar (N) > TreeSketch.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import queue
+import tempfile
+import threading
+from pathlib import Path
+
+import bpy
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, StringProperty
+
+from . import backend
+
+bl_info = {
+    "name": "TreeSketch",
+    "author": "TreeSketch",
+    "version": (0, 1, 0),
+    "blender": (3, 4, 0),
+    "location": "View3D > Sidebar > TreeSketch",
+    "description": "Sketch a tree, get a 3D Weber-Penn tree (Sapling or GLB)",
+    "category": "Add Curve",
+}
+
+BUNDLED_DRAWING = Path(__file__).with_name("drawing_maple.png")
+SAPLING = "add_curve_sapling"
+
+
+def _prefs(context) -> bpy.types.AddonPreferences:
+    return context.preferences.addons[__package__].preferences
+
+
+class TREESKETCH_Preferences(bpy.types.AddonPreferences):
+    bl_idname = __package__
+
+    backend: EnumProperty(
+        name="Run with",
+        items=[
+            ("CLI", "Project CLI", "Run 'treesketch predict' from the project's venv"),
+            ("SERVICE", "Service URL", "POST the drawing to a running TreeSketch service"),
+        ],
+        default="CLI",
+    )
+    cli_path: StringProperty(
+        name="treesketch program",
+        description="The 'treesketch' program in the project's venv (.venv/bin/treesketch)",
+        subtype="FILE_PATH",
+        default=os.environ.get("TREESKETCH_CLI", ""),
+    )
+    service_url: StringProperty(
+        name="Service URL", default=os.environ.get("TREESKETCH_URL", "http://127.0.0.1:8000")
+    )
+    copy_presets: BoolProperty(
+        name="Add presets to Sapling's menu",
+        description="Also copy each predicted tree's preset into Sapling's Import Preset menu",
+        default=True,
+    )
+
+    def draw(self, context):
+        col = self.layout.column()
+        col.prop(self, "backend")
+        col.prop(self, "cli_path")
+        col.prop(self, "service_url")
+        col.prop(self, "copy_presets")
+
+
+class TREESKETCH_Settings(bpy.types.PropertyGroup):
+    source: EnumProperty(
+        name="Drawing",
+        items=[
+            ("IMAGE", "Image file", "A PNG/JPEG of a tree, dark lines on white"),
+            ("GPENCIL", "Grease Pencil", "The active Grease Pencil object, seen from the front"),
+        ],
+        default="IMAGE",
+    )
+    image_path: StringProperty(name="Image", subtype="FILE_PATH", default=str(BUNDLED_DRAWING))
+    result: EnumProperty(
+        name="Add as",
+        items=[
+            ("SAPLING", "Sapling tree", "A native Sapling tree built from the predicted preset"),
+            ("GLB", "Mesh (GLB)", "The predicted mesh with bark and leaf textures"),
+        ],
+        default="SAPLING",
+    )
+    refine: BoolProperty(name="Refine", description="Refine the network's estimate", default=True)
+    budget: IntProperty(
+        name="Budget", description="Trees the refinement may try", default=40, min=1
+    )
+    status: StringProperty(name="Status", default="")
+    progress: FloatProperty(name="Progress", default=0.0, min=0.0, max=1.0, subtype="FACTOR")
+    running: BoolProperty(default=False)
+
+
+def _gpencil_strokes(obj) -> list:
+    """World-space strokes of a Grease Pencil object seen from the front (x, z)."""
+    mw = obj.matrix_world
+    out = []
+    for layer in obj.data.layers:
+        if layer.hide or layer.active_frame is None:
+            continue
+        for stroke in layer.active_frame.strokes:
+            pts = [mw @ p.co for p in stroke.points]
+            out.append([(p.x, p.z) for p in pts])
+    return out
+
+
+def drawing_file(context, folder: Path) -> Path:
+    """The drawing to send: the image file, or the Grease Pencil drawing rendered to PNG."""
+    settings = context.scene.treesketch
+    if settings.source == "IMAGE":
+        path = Path(bpy.path.abspath(settings.image_path))
+        if not path.is_file():
+            raise backend.PredictError(f"no image file at {path}")
+        return path
+    obj = context.active_object
+    if obj is None or obj.type != "GPENCIL":
+        raise backend.PredictError("make a Grease Pencil drawing the active object first")
+    path = folder / "drawing.png"
+    path.write_bytes(backend.strokes_png(_gpencil_strokes(obj)))
+    return path
+
+
+def prediction_job(context, image: Path, out: backend.Outputs):
+    """A function ``job(on_line, cancel)`` that runs the prediction with the backend
+    chosen in the preferences; it reads every setting now, so it can run in a thread
+    without touching Blender's data."""
+    prefs, settings = _prefs(context), context.scene.treesketch
+    refine, budget = bool(settings.refine), int(settings.budget)
+    if prefs.backend == "CLI":
+        cmd = backend.cli_command(
+            bpy.path.abspath(prefs.cli_path) or "treesketch",
+            image,
+            out,
+            refine=refine,
+            budget=budget,
+        )
+        return lambda on_line=None, cancel=None: backend.run_cli(cmd, on_line, cancel)
+    url = str(prefs.service_url)
+    return lambda on_line=None, cancel=None: backend.post_predict(
+        url, image, out.glb, refine=refine, budget=budget
+    )
+
+
+def add_result(context, out: backend.Outputs, yaw: float | None = None) -> list:
+    """Add the predicted tree to the scene; returns the new objects."""
+    settings = context.scene.treesketch
+    before = set(bpy.data.objects)
+    use_sapling = settings.result == "SAPLING" and out.preset.is_file()
+    if use_sapling:
+        import addon_utils
+
+        addon_utils.enable(SAPLING, default_set=True)
+        kwargs, preset_yaw = backend.read_preset(out.preset)
+        # as keyword arguments limitImport would be applied last and switch the build off
+        kwargs.pop("limitImport", None)
+        if bpy.ops.curve.tree_add(do_update=True, **kwargs) != {"FINISHED"}:
+            raise backend.PredictError("Sapling did not build the tree from the preset")
+        turn = preset_yaw if yaw is None else yaw
+        if _prefs(context).copy_presets:
+            _copy_to_sapling_menu(out.preset)
+    else:
+        bpy.ops.import_scene.gltf(filepath=str(out.glb))
+        turn = 0.0  # the GLB already faces the drawn view
+    new = [o for o in bpy.data.objects if o not in before]
+    for o in new:
+        if o.parent is None and turn:
+            o.rotation_euler.z -= math.radians(turn)
+    return new
+
+
+def _copy_to_sapling_menu(preset: Path) -> None:
+    folder = bpy.utils.user_resource("SCRIPTS", path=f"presets/operator/{SAPLING}", create=True)
+    target = Path(folder) / f"treesketch_{preset.stem}.py"
+    target.write_bytes(preset.read_bytes())
+
+
+class TREESKETCH_OT_predict(bpy.types.Operator):
+    """Predict a 3D tree from the drawing and add it to the scene"""
+
+    bl_idname = "treesketch.predict"
+    bl_label = "Sketch to Tree"
+    # not REGISTER: Sapling's tree_add, run inside, stays the last operator, so the
+    # redo panel edits the Sapling tree (ours would re-run the whole prediction)
+    bl_options = {"UNDO"}
+
+    wait: BoolProperty(
+        name="Wait", description="Run in the foreground (scripts, background mode)", default=False
+    )
+
+    _timer = None
+    _thread = None
+    _lines: queue.Queue
+    _cancel = False
+
+    def execute(self, context):
+        settings = context.scene.treesketch
+        folder = Path(tempfile.mkdtemp(prefix="treesketch-"))
+        try:
+            image = drawing_file(context, folder)
+        except backend.PredictError as exc:
+            self.report({"ERROR"}, str(exc))
+            return {"CANCELLED"}
+        self._out = backend.Outputs.in_folder(folder)
+        if self.wait or bpy.app.background:
+            try:
+                job = prediction_job(context, image, self._out)
+                job(on_line=lambda s: print("treesketch:", s))
+                new = add_result(context, self._out)
+            except (backend.PredictError, RuntimeError) as exc:
+                settings.status = str(exc).splitlines()[0]
+                self.report({"ERROR"}, str(exc))
+                return {"CANCELLED"}
+            settings.status = f"added {len(new)} object(s)"
+            return {"FINISHED"}
+        self._lines = queue.Queue()
+        self._error = None
+        job = prediction_job(context, image, self._out)
+
+        def work():
+            try:
+                job(on_line=self._lines.put, cancel=lambda: self._cancel)
+            except Exception as exc:  # shown in the panel, never lost in a thread
+                self._error = exc
+
+        settings.running, settings.progress, settings.status = True, 0.0, "starting..."
+        self._thread = threading.Thread(target=work, daemon=True)
+        self._thread.start()
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(0.25, window=context.window)
+        wm.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def modal(self, context, event):
+        settings = context.scene.treesketch
+        if event.type == "ESC":
+            self._cancel = True
+        if event.type != "TIMER":
+            return {"PASS_THROUGH"}
+        while not self._lines.empty():
+            line = self._lines.get()
+            settings.status = line[:80]
+            frac = backend.progress_fraction(line)
+            if frac is not None:
+                settings.progress = frac
+        for area in context.screen.areas if context.screen else []:
+            area.tag_redraw()
+        if self._thread.is_alive():
+            return {"RUNNING_MODAL"}
+        context.window_manager.event_timer_remove(self._timer)
+        settings.running = False
+        if self._error is not None:
+            settings.status = str(self._error).splitlines()[0]
+            self.report({"ERROR"}, str(self._error))
+            return {"CANCELLED"}
+        new = add_result(context, self._out)
+        settings.progress, settings.status = 1.0, f"added {len(new)} object(s)"
+        return {"FINISHED"}
+
+
+class TREESKETCH_PT_panel(bpy.types.Panel):
+    bl_label = "TreeSketch"
+    bl_idname = "VIEW3D_PT_treesketch"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "TreeSketch"
+
+    def draw(self, context):
+        settings = context.scene.treesketch
+        layout = self.layout
+        layout.prop(settings, "source", expand=True)
+        if settings.source == "IMAGE":
+            layout.prop(settings, "image_path")
+        else:
+            obj = context.active_object
+            ok = obj is not None and obj.type == "GPENCIL"
+            layout.label(
+                text=obj.name if ok else "select a Grease Pencil drawing", icon="GREASEPENCIL"
+            )
+        layout.prop(settings, "result", expand=True)
+        row = layout.row()
+        row.prop(settings, "refine")
+        sub = row.row()
+        sub.enabled = settings.refine
+        sub.prop(settings, "budget")
+        col = layout.column()
+        col.enabled = not settings.running
+        col.operator(TREESKETCH_OT_predict.bl_idname, icon="OUTLINER_OB_CURVE")
+        if settings.running:
+            layout.prop(settings, "progress", text="Progress (Esc cancels)")
+        if settings.status:
+            layout.label(text=settings.status)
+
+
+CLASSES = (TREESKETCH_Preferences, TREESKETCH_Settings, TREESKETCH_OT_predict, TREESKETCH_PT_panel)
+
+
+def register() -> None:
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+    bpy.types.Scene.treesketch = bpy.props.PointerProperty(type=TREESKETCH_Settings)
+
+
+def unregister() -> None:
+    del bpy.types.Scene.treesketch
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,264 @@
+"""The add-on's work that needs no Blender: running the prediction, reading its outputs,
+turning pen strokes into a drawing.  Plain Python and numpy (Blender's own Python has
+both), so the project's test suite checks it without Blender.
+
+- :func:`cli_command` / :func:`run_cli`: ``treesketch predict IMAGE --out X.glb --params
+  X.json --preset X.py`` in the project's venv, its output lines handed to a callback.
+- :func:`post_predict`: the service's ``POST /predict`` (multipart ``sketch``), then the
+  GLB it names is downloaded.
+- :func:`read_preset`: the Sapling dict and the view yaw from a TreeSketch preset.
+- :func:`strokes_png`: pen strokes (lists of 2-D points) drawn black on white as a PNG,
+  framed the way the project's reader expects (tree filling the canvas, base at the
+  bottom).
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import os
+import re
+import struct
+import subprocess
+import time
+import urllib.parse
+import urllib.request
+import uuid
+import zlib
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+__all__ = [
+    "Outputs",
+    "PredictError",
+    "cli_command",
+    "multipart_body",
+    "post_predict",
+    "progress_fraction",
+    "read_preset",
+    "run_cli",
+    "strokes_png",
+]
+
+_YAW = re.compile(r"^# view yaw: (-?[0-9.]+) degrees")
+
+
+class PredictError(RuntimeError):
+    """The prediction could not run or failed; the message says why in plain words."""
+
+
+@dataclass(frozen=True)
+class Outputs:
+    """Where one prediction's files go (all in one folder)."""
+
+    glb: Path
+    params: Path
+    preset: Path
+
+    @classmethod
+    def in_folder(cls, folder: str | os.PathLike[str], stem: str = "tree") -> Outputs:
+        d = Path(folder)
+        return cls(d / f"{stem}.glb", d / f"{stem}.json", d / f"{stem}_sapling.py")
+
+
+def cli_command(
+    treesketch: str | os.PathLike[str],
+    image: str | os.PathLike[str],
+    outputs: Outputs,
+    *,
+    refine: bool = True,
+    budget: int | None = None,
+    max_faces: int | None = None,
+) -> list[str]:
+    """The ``treesketch predict`` command line for one drawing."""
+    cmd = [str(treesketch), "predict", str(image), "--out", str(outputs.glb)]
+    cmd += ["--params", str(outputs.params), "--preset", str(outputs.preset)]
+    if not refine:
+        cmd.append("--no-refine")
+    elif budget is not None:
+        cmd += ["--budget", str(int(budget))]
+    if max_faces is not None:
+        cmd += ["--max-faces", str(int(max_faces))]
+    return cmd
+
+
+def run_cli(
+    cmd: Sequence[str],
+    on_line: Callable[[str], None] | None = None,
+    cancel: Callable[[], bool] | None = None,
+    timeout: float = 600.0,
+) -> None:
+    """Run the CLI, passing each output line to ``on_line``; raise :class:`PredictError`
+    with its last lines when it fails, is cancelled or runs past ``timeout`` seconds."""
+    exe = Path(cmd[0])
+    if not exe.is_file():
+        raise PredictError(
+            f"TreeSketch CLI not found at {exe}: set it in the add-on preferences "
+            "(the 'treesketch' program inside the project's .venv/bin)"
+        )
+    env = {**os.environ, "PYTHONUNBUFFERED": "1", "COLUMNS": "100"}
+    proc = subprocess.Popen(
+        list(cmd),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        bufsize=1,
+        env=env,
+    )
+    tail: list[str] = []
+    assert proc.stdout is not None
+    start = time.monotonic()
+    for raw in proc.stdout:
+        for line in raw.replace("\r", "\n").splitlines():
+            if line.strip():
+                tail = (tail + [line.strip()])[-8:]
+                if on_line is not None:
+                    on_line(line.strip())
+        if (cancel is not None and cancel()) or time.monotonic() - start > timeout:
+            proc.kill()
+            proc.wait()
+            raise PredictError("prediction cancelled" if cancel and cancel() else "timed out")
+    if proc.wait() != 0:
+        raise PredictError("treesketch predict failed:\n" + "\n".join(tail))
+
+
+def multipart_body(
+    field: str, filename: str, data: bytes, fields: dict[str, str]
+) -> tuple[bytes, str]:
+    """(body, content type) of a multipart/form-data request with one file."""
+    boundary = uuid.uuid4().hex
+    parts = []
+    for name, value in fields.items():
+        parts.append(
+            f'--{boundary}\r\nContent-Disposition: form-data; name="{name}"\r\n\r\n{value}\r\n'.encode()
+        )
+    parts.append(
+        (
+            f'--{boundary}\r\nContent-Disposition: form-data; name="{field}"; '
+            f'filename="{filename}"\r\nContent-Type: image/png\r\n\r\n'
+        ).encode()
+        + data
+        + b"\r\n"
+    )
+    parts.append(f"--{boundary}--\r\n".encode())
+    return b"".join(parts), f"multipart/form-data; boundary={boundary}"
+
+
+def post_predict(
+    url: str,
+    image: str | os.PathLike[str],
+    glb_path: str | os.PathLike[str],
+    *,
+    refine: bool = True,
+    budget: int | None = None,
+    timeout: float = 600.0,
+) -> dict:
+    """``POST {url}/predict`` with the drawing; writes the returned GLB to ``glb_path``
+    and returns the service's JSON."""
+    fields = {"refine": "true" if refine else "false"}
+    if budget is not None:
+        fields["budget"] = str(int(budget))
+    body, ctype = multipart_body("sketch", Path(image).name, Path(image).read_bytes(), fields)
+    base = url.rstrip("/") + "/"
+    req = urllib.request.Request(
+        urllib.parse.urljoin(base, "predict"), data=body, headers={"Content-Type": ctype}
+    )
+    try:
+        with urllib.request.urlopen(req, timeout=timeout) as resp:
+            reply = json.loads(resp.read())
+        glb_url = urllib.parse.urljoin(base, str(reply["glb"]))
+        with urllib.request.urlopen(glb_url, timeout=timeout) as resp:
+            Path(glb_path).write_bytes(resp.read())
+    except (OSError, ValueError, KeyError) as exc:
+        raise PredictError(f"TreeSketch service at {url}: {exc}") from None
+    return reply
+
+
+def read_preset(path: str | os.PathLike[str]) -> tuple[dict, float]:
+    """(Sapling's keyword arguments, view yaw in degrees) from a TreeSketch preset: the
+    first line not starting with '#', read as Sapling reads it."""
+    yaw = 0.0
+    settings = None
+    with open(path, encoding="utf-8") as fh:
+        for line in fh:
+            m = _YAW.match(line)
+            if m:
+                yaw = float(m.group(1))
+            if settings is None and line.strip() and not line.startswith("#"):
+                settings = ast.literal_eval(line.strip())
+    if not isinstance(settings, dict):
+        raise PredictError(f"{path}: no Sapling dictionary in the preset")
+    return settings, yaw
+
+
+def _png(gray: np.ndarray) -> bytes:
+    """A greyscale uint8 image as PNG bytes (no imaging library needed)."""
+    h, w = gray.shape
+    raw = b"".join(b"\x00" + gray[y].tobytes() for y in range(h))
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return (
+            struct.pack(">I", len(data))
+            + kind
+            + data
+            + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+        )
+
+    head = struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0)
+    return (
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", head)
+        + chunk(b"IDAT", zlib.compress(raw, 6))
+        + chunk(b"IEND", b"")
+    )
+
+
+def strokes_png(strokes: Iterable[np.ndarray], size: int = 512, pen: float = 2.0) -> bytes:
+    """Pen strokes (each (n, 2): x right, y up, any units) drawn black on white, scaled
+    so the drawing fills about 85 % of the canvas height, centred, base near the bottom."""
+    strokes = [np.asarray(s, dtype=np.float64).reshape(-1, 2) for s in strokes]
+    strokes = [s for s in strokes if len(s)]
+    if not strokes:
+        raise PredictError("the drawing is empty: draw the tree with the Grease Pencil first")
+    pts = np.vstack(strokes)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    extent = max(float((hi - lo).max()), 1e-9)
+    scale = 0.85 * size / extent
+    centre_x = (lo[0] + hi[0]) / 2.0
+    img = np.full((size, size), 255, dtype=np.uint8)
+    r = int(np.ceil(pen))
+    oy, ox = np.mgrid[-r : r + 1, -r : r + 1]
+    disc = (ox * ox + oy * oy) <= pen * pen
+    ox, oy = ox[disc], oy[disc]  # pixel offsets of the pen's tip
+    for s in strokes:
+        px = (s[:, 0] - centre_x) * scale + size / 2.0
+        py = size * 0.96 - (s[:, 1] - lo[1]) * scale
+        if len(s) == 1:
+            px, py = np.repeat(px, 2), np.repeat(py, 2)
+        # samples every half pixel along each segment, the pen stamped at each
+        seg = np.hypot(np.diff(px), np.diff(py))
+        n = np.maximum(np.ceil(seg / 0.5).astype(int), 1)
+        i = np.repeat(np.arange(len(n)), n)
+        t = np.arange(len(i)) - np.repeat(np.cumsum(n) - n, n)
+        t = t / np.repeat(n, n)
+        sx = np.append(px[i] + (px[i + 1] - px[i]) * t, px[-1])
+        sy = np.append(py[i] + (py[i + 1] - py[i]) * t, py[-1])
+        cx = np.rint(sx).astype(np.int64)[:, None] + ox[None]
+        cy = np.rint(sy).astype(np.int64)[:, None] + oy[None]
+        ok = (cx >= 0) & (cx < size) & (cy >= 0) & (cy < size)
+        img[cy[ok], cx[ok]] = 0
+    return _png(img)
+
+
+_FRACTION = re.compile(r"(\d+)\s*/\s*(\d+)")
+
+
+def progress_fraction(line: str) -> float | None:
+    """The done fraction a CLI progress line shows ('... 12/40 ...'), if any."""
+    m = _FRACTION.search(line)
+    if not m or int(m.group(2)) == 0:
+        return None
+    return min(int(m.group(1)) / int(m.group(2)), 1.0)

@@ -1,0 +1,141 @@
+"""Blender-side checks of our GLB and the add-on (run by ``make blender-test``).
+
+    blender -b --factory-startup --python-exit-code 1 --python scripts/blender_test.py -- \
+        ZIP GLB HEIGHT TREESKETCH_CLI
+
+1. Blender's glTF importer reads our GLB: the tree stands along +Z, base at z~0, height
+   equal to ours within 1 %.
+2. The add-on installs from its zip, registers its panel, and the panel draws.
+3. It adds a tree from the bundled drawing through the project's CLI, as a native
+   Sapling tree (every level and the leaves: no Limit Import), and from a Grease Pencil
+   drawing as the imported GLB, standing upright.
+"""
+
+import sys
+import time
+
+import numpy as _np
+
+if not hasattr(_np, "bool"):
+    _np.bool = bool  # Debian Blender 3.4's glTF importer calls np.bool (gone in numpy 2)
+
+import addon_utils  # type: ignore[import-not-found]  # noqa: E402
+import bpy  # type: ignore[import-not-found]  # noqa: E402
+
+ZIP, GLB, HEIGHT, CLI = sys.argv[sys.argv.index("--") + 1 :]
+OBJ = GLB[: -len(".glb")] + ".obj"
+HEIGHT = float(HEIGHT)
+T0 = time.time()
+
+
+def clear():
+    for o in list(bpy.data.objects):
+        bpy.data.objects.remove(o)
+
+
+def world_z(objs):
+    zs = [(o.matrix_world @ v.co).z for o in objs if o.type == "MESH" for v in o.data.vertices]
+    return min(zs), max(zs)
+
+
+def step(msg):
+    print(f"BLENDER_TEST {time.time() - T0:6.1f}s {msg}", flush=True)
+
+
+# 1. our GLB through Blender's own importer
+clear()
+bpy.ops.import_scene.gltf(filepath=GLB)
+meshes = [o for o in bpy.data.objects if o.type == "MESH"]
+assert sorted(o.name for o in meshes) == ["branches", "leaves"], [o.name for o in meshes]
+lo, hi = world_z(meshes)
+assert abs(lo) < 0.01 * HEIGHT, f"base at z={lo}, expected ~0"
+assert abs(hi - lo - HEIGHT) < 0.01 * HEIGHT, f"height {hi - lo} vs ours {HEIGHT}"
+for o in meshes:
+    dims = o.dimensions
+    assert o.data.uv_layers, f"{o.name}: no UVs"
+    assert o.data.materials[0].node_tree.nodes.get("Image Texture"), f"{o.name}: no texture"
+step(f"GLB upright: z {lo:.3f}..{hi:.3f}, ours {HEIGHT:.3f} m; textured")
+
+# 1b. the OBJ through Blender's default OBJ importer (its default axes: up +Y, forward -Z)
+clear()
+bpy.ops.wm.obj_import(filepath=OBJ)
+meshes = [o for o in bpy.data.objects if o.type == "MESH"]
+lo, hi = world_z(meshes)
+assert abs(lo) < 0.01 * HEIGHT and abs(hi - lo - HEIGHT) < 0.01 * HEIGHT, (lo, hi, HEIGHT)
+step(f"OBJ upright: z {lo:.3f}..{hi:.3f}")
+
+# 2. install the add-on from its zip, enable, draw the panel
+bpy.ops.preferences.addon_install(filepath=ZIP, overwrite=True)
+addon_utils.enable("treesketch_addon", default_set=True)
+assert hasattr(bpy.types, "VIEW3D_PT_treesketch"), "panel not registered"
+prefs = bpy.context.preferences.addons["treesketch_addon"].preferences
+prefs.cli_path, prefs.copy_presets = CLI, False
+
+
+class Layout:  # records what the panel draws (there is no screen in background mode)
+    def __init__(self, log):
+        self.log, self.enabled = log, True
+
+    def prop(self, data, name, **kw):
+        self.log.append(("prop", name))
+
+    def operator(self, idname, **kw):
+        self.log.append(("operator", idname))
+
+    def label(self, **kw):
+        self.log.append(("label", kw.get("text")))
+
+    def row(self, **kw):
+        return self
+
+    def column(self, **kw):
+        return self
+
+
+log = []
+panel = bpy.types.VIEW3D_PT_treesketch
+panel.draw(type("P", (), {"layout": Layout(log)})(), bpy.context)
+assert ("operator", "treesketch.predict") in log and ("prop", "image_path") in log, log
+step(f"add-on installed, panel draws {len(log)} items")
+
+# 3a. the bundled drawing -> native Sapling tree
+clear()
+settings = bpy.context.scene.treesketch
+settings.source, settings.result, settings.refine = "IMAGE", "SAPLING", False
+assert bpy.ops.treesketch.predict(wait=True) == {"FINISHED"}, settings.status
+curves = [o for o in bpy.data.objects if o.type == "CURVE"]
+leaves = [o for o in bpy.data.objects if o.type == "MESH"]
+assert curves, "no Sapling tree added"
+splines = sum(len(o.data.splines) for o in curves)
+assert leaves and len(leaves[0].data.polygons) > 0, "Sapling made no leaves (Limit Import?)"
+step(
+    f"Sapling tree from the bundled drawing: {splines} splines, {len(leaves[0].data.polygons)} leaves"
+)
+
+# 3b. a Grease Pencil drawing -> the GLB
+clear()
+bpy.ops.object.gpencil_add(type="EMPTY")
+gp = bpy.context.active_object
+frame = gp.data.layers.active.frames[0] if gp.data.layers.active.frames else None
+frame = frame or gp.data.layers.active.frames.new(1)
+
+
+def stroke(points):
+    s = frame.strokes.new()
+    s.points.add(len(points))
+    for p, (x, z) in zip(s.points, points, strict=True):
+        p.co = (x, 0.0, z)
+
+
+stroke([(-0.15, 0.0), (-0.1, 1.5)])  # trunk, two lines
+stroke([(0.15, 0.0), (0.1, 1.5)])
+ring = [(1.3 * _np.cos(a), 2.6 + 1.2 * _np.sin(a)) for a in _np.linspace(0, 2 * _np.pi, 60)]
+stroke(ring)  # crown outline
+settings.source, settings.result = "GPENCIL", "GLB"
+assert bpy.ops.treesketch.predict(wait=True) == {"FINISHED"}, settings.status
+meshes = [o for o in bpy.data.objects if o.type == "MESH"]
+assert meshes, "no GLB imported"
+lo, hi = world_z(meshes)
+assert abs(lo) < 0.02 * (hi - lo) and hi - lo > 0.5, (lo, hi)
+step(f"GLB from a Grease Pencil drawing: z {lo:.2f}..{hi:.2f}")
+step(f"ALL OK (Blender {bpy.app.version_string})")

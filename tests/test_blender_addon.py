@@ -1,0 +1,140 @@
+"""Tests of the Blender add-on's Blender-free part (blender/treesketch_addon/backend.py)
+and its zip; the add-on inside Blender is checked by `make blender-test`."""
+
+from __future__ import annotations
+
+import importlib.util
+import io
+import sys
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from weberpenn import species
+from weberpenn.preset import save_sapling_preset
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def backend():
+    path = ROOT / "blender" / "treesketch_addon" / "backend.py"
+    spec = importlib.util.spec_from_file_location("treesketch_addon_backend", path)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod
+    spec.loader.exec_module(mod)
+    yield mod
+    del sys.modules[spec.name]
+
+
+def test_cli_command(backend, tmp_path):
+    out = backend.Outputs.in_folder(tmp_path)
+    cmd = backend.cli_command("/v/bin/treesketch", "d.png", out, refine=True, budget=20)
+    assert cmd[:3] == ["/v/bin/treesketch", "predict", "d.png"]
+    assert cmd[cmd.index("--out") + 1] == str(tmp_path / "tree.glb")
+    assert cmd[cmd.index("--preset") + 1] == str(tmp_path / "tree_sapling.py")
+    assert cmd[cmd.index("--budget") + 1] == "20"
+    assert "--no-refine" in backend.cli_command("t", "d.png", out, refine=False)
+    with pytest.raises(backend.PredictError, match="preferences"):
+        backend.run_cli([str(tmp_path / "missing"), "predict"])
+
+
+def test_run_cli_lines_and_failure(backend, tmp_path):
+    script = tmp_path / "fake"
+    script.write_text("#!/bin/sh\necho 'refining 3/10'\necho done\nexit $1\n")
+    script.chmod(0o755)
+    lines = []
+    backend.run_cli([str(script), "0"], on_line=lines.append)
+    assert lines == ["refining 3/10", "done"]
+    assert backend.progress_fraction(lines[0]) == pytest.approx(0.3)
+    assert backend.progress_fraction("no numbers") is None
+    with pytest.raises(backend.PredictError, match="done"):
+        backend.run_cli([str(script), "3"])
+
+
+def test_read_preset_yaw(backend, tmp_path):
+    path = save_sapling_preset(species.sample("pine", 0), tmp_path / "p.py", yaw=-30.0)
+    kwargs, yaw = backend.read_preset(path)
+    assert yaw == -30.0 and kwargs["levels"] == species.sample("pine", 0).levels
+    bad = tmp_path / "bad.py"
+    bad.write_text("# nothing\n")
+    with pytest.raises(backend.PredictError, match="no Sapling"):
+        backend.read_preset(bad)
+
+
+def test_strokes_png(backend):
+    ring = [(np.cos(a), 3 + np.sin(a)) for a in np.linspace(0, 2 * np.pi, 40)]
+    img = np.asarray(Image.open(io.BytesIO(backend.strokes_png([[(0, 0), (0, 2)], ring], 128))))
+    assert img.shape == (128, 128) and img.dtype == np.uint8
+    ink = np.argwhere(img < 128)
+    assert len(ink) > 100
+    assert ink[:, 0].max() > 118 and ink[:, 0].min() > 5  # base near the bottom, room above
+    assert abs(ink[:, 1].mean() - 64) < 3  # centred
+    with pytest.raises(backend.PredictError, match="empty"):
+        backend.strokes_png([])
+
+
+def test_multipart_body(backend):
+    body, ctype = backend.multipart_body("sketch", "d.png", b"\x89PNG", {"budget": "5"})
+    boundary = ctype.split("boundary=")[1]
+    assert body.startswith(f"--{boundary}".encode()) and body.endswith(
+        f"--{boundary}--\r\n".encode()
+    )
+    assert b'name="sketch"; filename="d.png"' in body and b'name="budget"\r\n\r\n5' in body
+
+
+def test_addon_zip(tmp_path):
+    sys.path.insert(0, str(ROOT / "scripts"))
+    try:
+        from blender_addon_zip import main
+    finally:
+        sys.path.remove(str(ROOT / "scripts"))
+    assert main([str(tmp_path / "a.zip")]) == 0
+    names = zipfile.ZipFile(tmp_path / "a.zip").namelist()
+    assert "treesketch_addon/__init__.py" in names and "treesketch_addon/backend.py" in names
+    assert "treesketch_addon/drawing_maple.png" in names
+    init = zipfile.ZipFile(tmp_path / "a.zip").read("treesketch_addon/__init__.py").decode()
+    assert '"blender": (3, 4, 0)' in init
+
+
+def test_post_predict_against_a_local_service(backend, tmp_path):
+    """The service path: POST /predict (multipart 'sketch'), then GET the GLB it names."""
+    import json
+    import threading
+    from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+
+    seen = {}
+
+    class Handler(BaseHTTPRequestHandler):
+        def do_POST(self):  # noqa: N802 - http.server's name
+            body = self.rfile.read(int(self.headers["Content-Length"]))
+            seen["path"], seen["body"] = self.path, body
+            reply = json.dumps({"species": "maple", "yaw": 45.0, "glb": "/trees/abc.glb"})
+            self.send_response(200)
+            self.end_headers()
+            self.wfile.write(reply.encode())
+
+        def do_GET(self):  # noqa: N802
+            self.send_response(200 if self.path == "/trees/abc.glb" else 404)
+            self.end_headers()
+            self.wfile.write(b"glTF-bytes")
+
+        def log_message(self, *args):
+            pass
+
+    server = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        image = tmp_path / "d.png"
+        image.write_bytes(b"\x89PNG fake")
+        url = f"http://127.0.0.1:{server.server_address[1]}"
+        reply = backend.post_predict(url, image, tmp_path / "t.glb", budget=7)
+        assert reply["yaw"] == 45.0 and (tmp_path / "t.glb").read_bytes() == b"glTF-bytes"
+        assert seen["path"] == "/predict" and b'name="budget"\r\n\r\n7' in seen["body"]
+        with pytest.raises(backend.PredictError, match="service"):
+            backend.post_predict("http://127.0.0.1:1", image, tmp_path / "u.glb", timeout=5)
+    finally:
+        server.shutdown()
