@@ -285,3 +285,39 @@ def test_default_data_folder(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) ->
     assert default_data_dir() == tmp_path / "treesketch"
     monkeypatch.delenv("XDG_DATA_HOME")
     assert default_data_dir() == Path.home() / ".local" / "share" / "treesketch"
+
+
+def test_retention_by_total_size(tmp_path: Path) -> None:
+    """The oldest finished jobs go first until the results fit the size limit."""
+    store = JobStore(tmp_path)
+    ids = []
+    for _ in range(3):
+        job = store.create(b"x" * 100, {"budget": 1}, max_queued=8)
+        assert job is not None and store.claim_next() is not None
+        (store.result_dir(job.id)).mkdir()
+        (store.result_dir(job.id) / "tree.glb").write_bytes(b"g" * 1000)
+        store.finish(job.id, {"evaluations": 1})
+        ids.append(job.id)
+    assert store.get(ids[0]).bytes == 1100
+    assert store.expire(max_age_s=None, max_bytes=2500) == [ids[0]]
+    assert [store.get(i).state for i in ids] == ["expired", "done", "done"]
+    assert store.expire(max_age_s=None, max_bytes=2500) == []
+
+
+def test_serve_warns_off_localhost(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    import uvicorn
+    from typer.testing import CliRunner
+
+    from treesketch.cli import app
+
+    seen = {}
+    monkeypatch.setattr(uvicorn, "run", lambda a, **kw: seen.update(kw, app=a))
+    args = ["serve", "--host", "0.0.0.0", "--data", str(tmp_path), "--workers", "1"]
+    r = CliRunner().invoke(app, [*args, "--estimator", "template", "--cors", "http://a.b"])
+    assert r.exit_code == 0, r.output
+    assert "other machines can reach" in r.output and "--token" in r.output
+    config = seen["app"].state.config
+    assert seen["host"] == "0.0.0.0" and config.data == tmp_path and config.workers == 1
+    assert config.cors == ("http://a.b",) and config.token is None
+    r = CliRunner().invoke(app, ["serve", "--data", str(tmp_path), "--token", "t"])
+    assert "warning" not in r.output and seen["app"].state.config.token == "t"
