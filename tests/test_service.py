@@ -230,6 +230,8 @@ def test_token_and_cors(tmp_path: Path) -> None:
     assert c.get("/status?token=wrong").status_code == 401
     r = c.get("/health", headers={"Origin": "http://a.example"})
     assert r.headers["access-control-allow-origin"] == "http://a.example"
+    preflight = {"Origin": "http://a.example", "Access-Control-Request-Method": "POST"}
+    assert c.options("/jobs", headers=preflight).status_code == 200  # no token needed
     plain = TestClient(create_app(ServiceConfig(data=tmp_path / "b", workers=1)))
     r = plain.get("/health", headers={"Origin": "http://a.example"})
     assert "access-control-allow-origin" not in r.headers
@@ -256,3 +258,66 @@ def test_read_form_stops_a_huge_upload_early() -> None:
     with pytest.raises(LimitError) as exc:  # declared up front: refused before any byte
         asyncio.run(read_form("multipart/form-data; boundary=B", "1610612736", body(), Limits()))
     assert exc.value.status == 413 and read[0] == 0
+
+
+def test_estimator_that_cannot_load_is_reported(tmp_path: Path, sketch: bytes) -> None:
+    from treesketch.service.pool import LOAD_ATTEMPTS
+
+    config = ServiceConfig(data=tmp_path, workers=1, estimator="service_helpers:missing")
+    app = create_app(config)
+    app.state.pool.respawn_backoff = 0.1
+    with TestClient(app) as c:
+        deadline = time.monotonic() + 120
+        while c.get("/health").json()["status"] == "ok":
+            assert time.monotonic() < deadline, "the broken estimator was never reported"
+            time.sleep(0.2)
+        h = c.get("/health").json()
+        assert h["status"] == "error" and "service_helpers:missing" in h["error"]
+        assert app.state.pool.replaced == LOAD_ATTEMPTS - 1
+        r = c.post("/jobs", files={"sketch": ("s.png", sketch, "image/png")})
+        assert r.status_code == 503 and "no worker can start" in r.json()["detail"]
+
+
+def test_default_data_folder(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    from treesketch.cli_serve import default_data_dir
+
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path))
+    assert default_data_dir() == tmp_path / "treesketch"
+    monkeypatch.delenv("XDG_DATA_HOME")
+    assert default_data_dir() == Path.home() / ".local" / "share" / "treesketch"
+
+
+def test_retention_by_total_size(tmp_path: Path) -> None:
+    """The oldest finished jobs go first until the results fit the size limit."""
+    store = JobStore(tmp_path)
+    ids = []
+    for _ in range(3):
+        job = store.create(b"x" * 100, {"budget": 1}, max_queued=8)
+        assert job is not None and store.claim_next() is not None
+        (store.result_dir(job.id)).mkdir()
+        (store.result_dir(job.id) / "tree.glb").write_bytes(b"g" * 1000)
+        store.finish(job.id, {"evaluations": 1})
+        ids.append(job.id)
+    assert store.get(ids[0]).bytes == 1100
+    assert store.expire(max_age_s=None, max_bytes=2500) == [ids[0]]
+    assert [store.get(i).state for i in ids] == ["expired", "done", "done"]
+    assert store.expire(max_age_s=None, max_bytes=2500) == []
+
+
+def test_serve_warns_off_localhost(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    import uvicorn
+    from typer.testing import CliRunner
+
+    from treesketch.cli import app
+
+    seen = {}
+    monkeypatch.setattr(uvicorn, "run", lambda a, **kw: seen.update(kw, app=a))
+    args = ["serve", "--host", "0.0.0.0", "--data", str(tmp_path), "--workers", "1"]
+    r = CliRunner().invoke(app, [*args, "--estimator", "template", "--cors", "http://a.b"])
+    assert r.exit_code == 0, r.output
+    assert "other machines can reach" in r.output and "--token" in r.output
+    config = seen["app"].state.config
+    assert seen["host"] == "0.0.0.0" and config.data == tmp_path and config.workers == 1
+    assert config.cors == ("http://a.b",) and config.token is None
+    r = CliRunner().invoke(app, ["serve", "--data", str(tmp_path), "--token", "t"])
+    assert "warning" not in r.output and seen["app"].state.config.token == "t"

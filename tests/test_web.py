@@ -93,6 +93,9 @@ def test_draw_submit_view_and_download(page: Any, tmp_path: Path) -> None:
     background = np.array([0xE8, 0xEE, 0xF0])
     tree = np.abs(middle - background).sum(axis=2) > 40
     assert tree.mean() > 0.02, f"only {tree.mean():.3%} of the view's middle shows the tree"
+    inner = shot[4:-4, 4:-4].astype(int)  # the element's screenshot has a white rim
+    ys, xs = np.nonzero(np.abs(inner - background).sum(axis=2) > 40)
+    assert np.ptp(ys) > np.ptp(xs), "the palm should stand (taller than wide), not lie"
 
     for img in ("#before", "#after"):
         assert page.evaluate(f"document.querySelector('{img}').naturalWidth") > 0

@@ -155,16 +155,6 @@ def create_app(config: ServiceConfig) -> FastAPI:
     )
     app.state.store, app.state.pool, app.state.config = store, pool, config
 
-    if config.cors:
-        from fastapi.middleware.cors import CORSMiddleware
-
-        app.add_middleware(
-            CORSMiddleware,
-            allow_origins=list(config.cors),
-            allow_methods=["GET", "POST", "DELETE"],
-            allow_headers=["Authorization", "Content-Type"],
-        )
-
     open_paths = ("/", "/health", "/favicon.ico")
 
     @app.get("/favicon.ico", include_in_schema=False)
@@ -173,6 +163,16 @@ def create_app(config: ServiceConfig) -> FastAPI:
 
     if config.token:
         app.add_middleware(TokenGuard, token=config.token, open_paths=open_paths)
+
+    if config.cors:  # added last: outermost, so a preflight needs no token
+        from fastapi.middleware.cors import CORSMiddleware
+
+        app.add_middleware(
+            CORSMiddleware,
+            allow_origins=list(config.cors),
+            allow_methods=["GET", "POST", "DELETE"],
+            allow_headers=["Authorization", "Content-Type"],
+        )
 
     async def get_job(job_id: str) -> Job:
         job = await run_in_threadpool(store.get, job_id)
@@ -187,6 +187,8 @@ def create_app(config: ServiceConfig) -> FastAPI:
         return _view(job, position, pool.live(job.id) if job.state == "running" else None)
 
     async def submit(request: Request) -> Job:
+        if pool.broken:
+            raise HTTPException(503, f"no worker can start: {pool.error}")
         try:
             fields, data = await read_form(
                 request.headers.get("content-type", ""),
@@ -229,7 +231,8 @@ def create_app(config: ServiceConfig) -> FastAPI:
     async def health() -> dict[str, Any]:
         workers = pool.status()
         return {
-            "status": "ok",
+            "status": "error" if pool.broken else "ok",
+            "error": pool.error if pool.broken else None,
             "estimator": config.estimator,
             "workers": sum(w["alive"] for w in workers),
             "busy": sum(w["job"] is not None for w in workers),

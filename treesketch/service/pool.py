@@ -25,6 +25,7 @@ __all__ = ["WorkerPool"]
 
 SAVE_PROGRESS_EVERY = 1.0
 RESPAWN_BACKOFF = 5.0  # seconds before retrying a worker that could not load its model
+LOAD_ATTEMPTS = 3  # failed loads in a row after which the pool gives up (``broken``)
 
 
 @dataclass
@@ -51,6 +52,7 @@ class WorkerPool:
         cancel_grace: float = 3.0,
         retention: tuple[float | None, int | None] = (None, None),
         sweep_every: float = 60.0,
+        respawn_backoff: float = RESPAWN_BACKOFF,
     ) -> None:
         if workers < 1:
             raise ValueError(f"workers must be at least 1, got {workers}")
@@ -67,7 +69,9 @@ class WorkerPool:
         self._wake_r, self._wake_w = self._ctx.Pipe(duplex=False)
         self._stopping = threading.Event()
         self._thread: threading.Thread | None = None
+        self.respawn_backoff = respawn_backoff
         self.error: str | None = None  # the last worker start-up failure
+        self._load_failures = 0
         self.replaced = 0  # workers replaced after dying
 
     # -- life --------------------------------------------------------------------------
@@ -143,6 +147,11 @@ class WorkerPool:
                 for w in self._workers
             ]
 
+    @property
+    def broken(self) -> bool:
+        """True when workers failed to load the estimator LOAD_ATTEMPTS times in a row."""
+        return self._load_failures >= LOAD_ATTEMPTS
+
     def busy(self) -> int:
         with self._lock:
             return sum(w.job is not None for w in self._workers)
@@ -155,14 +164,15 @@ class WorkerPool:
             waitables: list[Any] = [self._wake_r]
             with self._lock:
                 for w in self._workers:
-                    waitables += [w.conn, w.process.sentinel]
+                    if w.process.is_alive():  # a dead one's sentinel would never block
+                        waitables += [w.conn, w.process.sentinel]
             ready = wait(waitables, timeout=0.2)
             if self._wake_r in ready:
                 while self._wake_r.poll():
                     self._wake_r.recv_bytes()
             for i in range(len(self._workers)):
                 self._drain(self._workers[i])
-                if not self._workers[i].process.is_alive():
+                if not self._workers[i].process.is_alive() and not self.broken:
                     self._replace(i)
             self._enforce_cancels()
             if time.monotonic() - last_sweep > self.sweep_every:
@@ -200,6 +210,7 @@ class WorkerPool:
     def _handle(self, w: _Worker, kind: str, job_id: Any, payload: Any) -> None:
         if kind == "ready":
             w.ready = True
+            self._load_failures = 0
             return
         if kind == "broken":
             self.error = str(payload)
@@ -238,9 +249,12 @@ class WorkerPool:
                 )
             with self._lock:
                 self._live.pop(w.job, None)
-        if not w.ready:  # died while loading: do not spin
+        if not w.ready:  # died while loading: retry a few times, slowly, then give up
             self.error = self.error or f"a worker exited while loading (exit code {code})"
-            self._stopping.wait(RESPAWN_BACKOFF)
+            self._load_failures += 1
+            if self.broken:
+                return
+            self._stopping.wait(self.respawn_backoff)
         w.conn.close()
         fresh = self._spawn()
         with self._lock:

@@ -32,9 +32,8 @@ class _Reporter:
     """The progress callback of one job: at most one message per PROGRESS_EVERY."""
 
     def __init__(self, conn: Connection, job_id: str, t0: float) -> None:
-        self.conn, self.job_id, self.t0, self.last = conn, job_id, t0, 0.0
-
-        self.stage = ""
+        self.conn, self.job_id, self.t0 = conn, job_id, t0
+        self.last, self.stage = 0.0, ""
 
     def __call__(self, p: Any) -> None:
         """``p``: a ``treesketch.Progress``; a new stage is always told."""

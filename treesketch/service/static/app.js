@@ -269,14 +269,22 @@ function loadModel(url) {
   new GLTFLoader().load(url, (gltf) => {
     if (model) scene.remove(model);
     model = gltf.scene;
-    // glTF is Y-up with the tree's base at the origin.  A file left in the generator's
-    // Z-up frame has its base at z = 0 and is centred in y instead: stand it up.
-    const raw = new THREE.Box3().setFromObject(model);
-    const rawSize = raw.getSize(new THREE.Vector3());
-    if (Math.abs(raw.min.z) / rawSize.z < Math.abs(raw.min.y) / rawSize.y) model.rotation.x = -Math.PI / 2;
     scene.add(model);
     let meshes = 0;
-    model.traverse((o) => { if (o.isMesh) { meshes++; o.material.side = THREE.DoubleSide; } });
+    model.traverse((o) => {
+      if (!o.isMesh) return;
+      meshes++;
+      const m = o.material;
+      m.side = THREE.DoubleSide;
+      if (m.alphaTest > 0 && m.map) {
+        // alpha-masked leaves seen small: mipmaps average their cut-out alpha below the
+        // file's cutoff and whole leaves vanish; a lower cutoff (with coverage-blended
+        // edges) keeps the crown as full as it is up close
+        m.alphaTest = Math.min(m.alphaTest, 0.2);
+        m.alphaToCoverage = true;
+        m.needsUpdate = true;
+      }
+    });
     // frame the tree: look at its middle from the front, a little above
     const box = new THREE.Box3().setFromObject(model);
     const size = box.getSize(new THREE.Vector3());
