@@ -24,6 +24,7 @@ import bpy  # type: ignore[import-not-found]  # noqa: E402
 
 ZIP, GLB, HEIGHT, CLI = sys.argv[sys.argv.index("--") + 1 :]
 OBJ = GLB[: -len(".glb")] + ".obj"
+PRESET = GLB[: -len(".glb")] + "_sapling.py"
 HEIGHT = float(HEIGHT)
 T0 = time.time()
 
@@ -63,6 +64,31 @@ meshes = [o for o in bpy.data.objects if o.type == "MESH"]
 lo, hi = world_z(meshes)
 assert abs(lo) < 0.01 * HEIGHT and abs(hi - lo - HEIGHT) < 0.01 * HEIGHT, (lo, hi, HEIGHT)
 step(f"OBJ upright: z {lo:.3f}..{hi:.3f}")
+
+# 1c. our preset through Sapling's own Import Preset: every level and the leaves
+addon_utils.enable("add_curve_sapling", default_set=True)
+folder = bpy.utils.user_resource("SCRIPTS", path="presets/operator/add_curve_sapling", create=True)
+with open(PRESET, encoding="utf-8") as src, open(f"{folder}/ts_test.py", "w") as dst:
+    dst.write(src.read())
+levels = {}
+for limit in (False, True):  # ours (limitImport off inside), then Sapling's default forced on
+    clear()
+    bpy.ops.sapling.importdata(filename="ts_test.py")
+    if limit:  # what a preset without our key gets: Sapling's default Limit Import
+        import add_curve_sapling  # type: ignore[import-not-found]
+
+        add_curve_sapling.settings["limitImport"] = True
+    assert bpy.ops.curve.tree_add() == {"FINISHED"}
+    leaf_objs = [o for o in bpy.data.objects if o.type == "MESH"]
+    levels[limit] = (
+        sum(len(o.data.splines) for o in bpy.data.objects if o.type == "CURVE"),
+        sum(len(o.data.polygons) for o in leaf_objs),
+    )
+assert levels[False][1] > 0, f"Import Preset dropped the leaves: {levels}"
+assert levels[True][1] == 0  # the check is live: Limit Import on drops them
+step(
+    f"Sapling Import Preset (splines, leaf faces): ours {levels[False]}, Limit Import on {levels[True]}"
+)
 
 # 2. install the add-on from its zip, enable, draw the panel
 bpy.ops.preferences.addon_install(filepath=ZIP, overwrite=True)

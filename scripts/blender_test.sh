@@ -9,7 +9,8 @@ export PYTHONPATH="$PWD${PYTHONPATH:+:$PYTHONPATH}"
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 start=$(date +%s)
-.venv/bin/treesketch grow --species maple --seed 3 --out "$T/maple.glb" --save-params "$T/maple.json"
+.venv/bin/treesketch grow --species maple --seed 3 --out "$T/maple.glb" --save-params "$T/maple.json" \
+    --preset "$T/maple_sapling.py"
 .venv/bin/treesketch grow --species maple --seed 3 --out "$T/maple.obj"
 HEIGHT=$(.venv/bin/python -c "import sys; from weberpenn import grow, build_mesh, load_params
 print(build_mesh(grow(load_params(sys.argv[1]))).bounds()[1, 2])" "$T/maple.json")
