@@ -65,13 +65,20 @@ lo, hi = world_z(meshes)
 assert abs(lo) < 0.01 * HEIGHT and abs(hi - lo - HEIGHT) < 0.01 * HEIGHT, (lo, hi, HEIGHT)
 step(f"OBJ upright: z {lo:.3f}..{hi:.3f}")
 
-# 1c. our preset through Sapling's own Import Preset: every level and the leaves
+# 1c. our preset through Sapling's own Import Preset: every level and the leaves.
+# Sapling is bundled up to Blender 4.1 (an online extension from 4.2): required there.
 addon_utils.enable("add_curve_sapling", default_set=True)
+SAPLING = "add_curve_sapling" in bpy.context.preferences.addons
+assert SAPLING or bpy.app.version >= (4, 2), "Sapling Tree Gen missing from this Blender"
+if not SAPLING:
+    step("Sapling not bundled in this Blender (an extension since 4.2): Sapling checks skipped")
 folder = bpy.utils.user_resource("SCRIPTS", path="presets/operator/add_curve_sapling", create=True)
 with open(PRESET, encoding="utf-8") as src, open(f"{folder}/ts_test.py", "w") as dst:
     dst.write(src.read())
 levels = {}
-for limit in (False, True):  # ours (limitImport off inside), then Sapling's default forced on
+for limit in (
+    (False, True) if SAPLING else ()
+):  # ours (limitImport off inside), then Sapling's default forced on
     clear()
     bpy.ops.sapling.importdata(filename="ts_test.py")
     if limit:  # what a preset without our key gets: Sapling's default Limit Import
@@ -124,33 +131,48 @@ panel.draw(type("P", (), {"layout": Layout(log)})(), bpy.context)
 assert ("operator", "treesketch.predict") in log and ("prop", "image_path") in log, log
 step(f"add-on installed, panel draws {len(log)} items")
 
-# 3a. the bundled drawing -> native Sapling tree
+# 3a. the bundled drawing -> native Sapling tree (the GLB where Sapling is missing)
 clear()
 settings = bpy.context.scene.treesketch
-settings.source, settings.result, settings.refine = "IMAGE", "SAPLING", False
+settings.source, settings.refine = "IMAGE", False
+settings.result = "SAPLING" if SAPLING else "GLB"
 assert bpy.ops.treesketch.predict(wait=True) == {"FINISHED"}, settings.status
-curves = [o for o in bpy.data.objects if o.type == "CURVE"]
-leaves = [o for o in bpy.data.objects if o.type == "MESH"]
-assert curves, "no Sapling tree added"
-splines = sum(len(o.data.splines) for o in curves)
-assert leaves and len(leaves[0].data.polygons) > 0, "Sapling made no leaves (Limit Import?)"
-step(
-    f"Sapling tree from the bundled drawing: {splines} splines, {len(leaves[0].data.polygons)} leaves"
-)
+if SAPLING:
+    curves = [o for o in bpy.data.objects if o.type == "CURVE"]
+    leaves = [o for o in bpy.data.objects if o.type == "MESH"]
+    assert curves, "no Sapling tree added"
+    splines = sum(len(o.data.splines) for o in curves)
+    assert leaves and len(leaves[0].data.polygons) > 0, "Sapling made no leaves (Limit Import?)"
+    n_leaves = len(leaves[0].data.polygons)
+    step(f"Sapling tree from the bundled drawing: {splines} splines, {n_leaves} leaves")
+else:
+    lo, hi = world_z([o for o in bpy.data.objects if o.type == "MESH"])
+    step(f"GLB from the bundled drawing: z {lo:.2f}..{hi:.2f}")
 
 # 3b. a Grease Pencil drawing -> the GLB
 clear()
-bpy.ops.object.gpencil_add(type="EMPTY")
-gp = bpy.context.active_object
-frame = gp.data.layers.active.frames[0] if gp.data.layers.active.frames else None
-frame = frame or gp.data.layers.active.frames.new(1)
+if bpy.app.version >= (4, 3, 0):  # Grease Pencil v3
+    bpy.ops.object.grease_pencil_add(type="EMPTY")
+    gp = bpy.context.active_object
+    layer = gp.data.layers.active or gp.data.layers.new("ink")
+    drawing = (layer.current_frame() or layer.frames.new(1)).drawing
 
+    def stroke(points):
+        drawing.add_strokes([len(points)])
+        for p, (x, z) in zip(drawing.strokes[-1].points, points, strict=True):
+            p.position = (x, 0.0, z)
 
-def stroke(points):
-    s = frame.strokes.new()
-    s.points.add(len(points))
-    for p, (x, z) in zip(s.points, points, strict=True):
-        p.co = (x, 0.0, z)
+else:  # Blender up to 4.2: legacy Grease Pencil
+    bpy.ops.object.gpencil_add(type="EMPTY")
+    gp = bpy.context.active_object
+    frames = gp.data.layers.active.frames
+    frame = frames[0] if len(frames) else frames.new(1)
+
+    def stroke(points):
+        s = frame.strokes.new()
+        s.points.add(len(points))
+        for p, (x, z) in zip(s.points, points, strict=True):
+            p.co = (x, 0.0, z)
 
 
 stroke([(-0.15, 0.0), (-0.1, 1.5)])  # trunk, two lines
