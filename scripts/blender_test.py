@@ -19,8 +19,8 @@ import numpy as _np
 if not hasattr(_np, "bool"):
     _np.bool = bool  # Debian Blender 3.4's glTF importer calls np.bool (gone in numpy 2)
 
+import bpy  # type: ignore[import-not-found]  # noqa: E402, I001 - bpy first (bpy module)
 import addon_utils  # type: ignore[import-not-found]  # noqa: E402
-import bpy  # type: ignore[import-not-found]  # noqa: E402
 
 ZIP, GLB, HEIGHT, CLI = sys.argv[sys.argv.index("--") + 1 :]
 OBJ = GLB[: -len(".glb")] + ".obj"
@@ -75,13 +75,12 @@ if not SAPLING:
 folder = bpy.utils.user_resource("SCRIPTS", path="presets/operator/add_curve_sapling", create=True)
 with open(PRESET, encoding="utf-8") as src, open(f"{folder}/ts_test.py", "w") as dst:
     dst.write(src.read())
+# ours (limitImport off inside), then Sapling's default Limit Import forced on
 levels = {}
-for limit in (
-    (False, True) if SAPLING else ()
-):  # ours (limitImport off inside), then Sapling's default forced on
+for limit in (False, True) if SAPLING else ():
     clear()
     bpy.ops.sapling.importdata(filename="ts_test.py")
-    if limit:  # what a preset without our key gets: Sapling's default Limit Import
+    if limit:  # what a preset without our key gets
         import add_curve_sapling  # type: ignore[import-not-found]
 
         add_curve_sapling.settings["limitImport"] = True
@@ -91,11 +90,12 @@ for limit in (
         sum(len(o.data.splines) for o in bpy.data.objects if o.type == "CURVE"),
         sum(len(o.data.polygons) for o in leaf_objs),
     )
-assert levels[False][1] > 0, f"Import Preset dropped the leaves: {levels}"
-assert levels[True][1] == 0  # the check is live: Limit Import on drops them
-step(
-    f"Sapling Import Preset (splines, leaf faces): ours {levels[False]}, Limit Import on {levels[True]}"
-)
+if SAPLING:
+    assert levels[False][1] > 0, f"Import Preset dropped the leaves: {levels}"
+    assert levels[True][1] == 0  # the check is live: Limit Import on drops them
+    step(
+        f"Sapling Import Preset (splines, leaf faces): ours {levels[False]}, Limit on {levels[True]}"
+    )
 
 # 2. install the add-on from its zip, enable, draw the panel
 bpy.ops.preferences.addon_install(filepath=ZIP, overwrite=True)
@@ -148,6 +148,13 @@ if SAPLING:
 else:
     lo, hi = world_z([o for o in bpy.data.objects if o.type == "MESH"])
     step(f"GLB from the bundled drawing: z {lo:.2f}..{hi:.2f}")
+    settings.result = "SAPLING"  # without Sapling: a plain message before any work
+    try:  # an operator that reports an error raises it when called from Python
+        bpy.ops.treesketch.predict(wait=True)
+        raise AssertionError("a Sapling tree was asked for without Sapling and not refused")
+    except RuntimeError as exc:
+        assert "Sapling Tree Gen is not installed" in str(exc), exc
+    step("asking for a Sapling tree without Sapling: refused up front with a plain message")
 
 # 3b. a Grease Pencil drawing -> the GLB
 clear()

@@ -232,8 +232,11 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
         settings = context.scene.treesketch
         folder = Path(tempfile.mkdtemp(prefix="treesketch-"))
         try:
+            if settings.result == "SAPLING" and _prefs(context).backend == "CLI":
+                _enable_sapling()  # before the prediction, not after a minute of it
             image = drawing_file(context, folder)
         except backend.PredictError as exc:
+            settings.status = str(exc)
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
         self._out = backend.Outputs.in_folder(folder)
