@@ -88,14 +88,15 @@ def bench_sketch(size: int, repeats: int, seed: int) -> list[dict]:
 
 def bench_builder(trees: int, workers: int, size: int, out: str | None) -> dict:
     from render.dataset import DatasetConfig, build_dataset
+    from treesketch.executor import LocalExecutor
 
     tmp = None
     if out is None:
         tmp = tempfile.TemporaryDirectory(prefix="bench_ds_")
         out = os.path.join(tmp.name, "ds")
-    cfg = DatasetConfig(out=out, trees_per_species=trees, size=size, workers=workers)
+    cfg = DatasetConfig(out=out, trees_per_species=trees, size=size)
     t0 = time.perf_counter()
-    s = build_dataset(cfg, progress=False)
+    s = build_dataset(cfg, progress=False, executor=LocalExecutor(workers) if workers > 1 else None)
     dt = time.perf_counter() - t0
     n = s.built * len(cfg.views)
     res = {

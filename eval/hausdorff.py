@@ -2,10 +2,10 @@
 
 Definition used everywhere in this project (and stated in the reports):
 
-* Each direction A->B samples ``samples`` points on A (all vertices plus uniformly spread
-  points on the faces, MeshLab ``get_hausdorff_distance`` with ``samplevert`` and
-  ``sampleface``) and measures, for each sample, the distance to the closest point of B's
-  *surface*.  ``maxdist`` is set to the diagonal of the union of both bounding boxes, so no
+* Each direction A->B samples points on A (``samples`` of its vertices and ``samples``
+  area-weighted points on its faces, drawn from a fixed seed so the same meshes give the
+  same distance in any process) and measures, for each sample, the distance to the
+  closest point of B's *surface* (MeshLab ``get_hausdorff_distance``).  ``maxdist`` is set to the diagonal of the union of both bounding boxes, so no
   sample is ever discarded.
 * Symmetric **max** = max of the two directional maxima (the classical Hausdorff distance).
   Symmetric **mean** = mean of the two directional means (each over its samples).
@@ -75,17 +75,41 @@ def bbox_diagonal(vertices: np.ndarray) -> float:
     return float(np.linalg.norm(v.max(axis=0) - v.min(axis=0)))
 
 
-def _directional(ms, a: int, b: int, samples: int, maxdist: float) -> dict:
+def _surface_points(v: np.ndarray, f: np.ndarray, samples: int, seed: int) -> np.ndarray:
+    """``samples`` of the mesh's vertices and ``samples`` area-weighted points on its faces,
+    drawn from a seeded generator: the same meshes give the same points in any process
+    (pymeshlab's own sampler draws from one process-wide generator, so its distances
+    depend on every call made before)."""
+    rng = np.random.default_rng(seed)
+    verts = v if len(v) <= samples else v[np.sort(rng.choice(len(v), samples, replace=False))]
+    tri = v[f]
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    total = float(area.sum())
+    if not total > 0:
+        return verts
+    face = rng.choice(len(f), samples, p=area / total)
+    r = rng.random((samples, 2))
+    flip = r.sum(axis=1) > 1.0  # fold the unit square onto the triangle
+    r[flip] = 1.0 - r[flip]
+    t = tri[face]
+    on_faces = t[:, 0] + r[:, :1] * (t[:, 1] - t[:, 0]) + r[:, 1:] * (t[:, 2] - t[:, 0])
+    return np.vstack([verts, on_faces])
+
+
+def _directional(ms, points: np.ndarray, target: int, maxdist: float) -> dict:
+    """Distances from every one of ``points`` to mesh ``target`` of ``ms``."""
     import pymeshlab
 
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.ascontiguousarray(points)), "points")
+    cloud = ms.current_mesh_id()
     return ms.get_hausdorff_distance(
-        sampledmesh=a,
-        targetmesh=b,
-        samplevert=True,
+        sampledmesh=cloud,
+        targetmesh=target,
+        samplevert=True,  # with samplenum = the point count, every point is measured
         sampleedge=False,
         samplefauxedge=False,
-        sampleface=True,
-        samplenum=int(samples),
+        sampleface=False,
+        samplenum=len(points),
         maxdist=pymeshlab.PureValue(float(maxdist)),
     )
 
@@ -120,8 +144,8 @@ def hausdorff(
     ms.add_mesh(pymeshlab.Mesh(vertex_matrix=pv, face_matrix=pf), "pred")
     ms.add_mesh(pymeshlab.Mesh(vertex_matrix=gv, face_matrix=gf), "gt")
     reach = bbox_diagonal(np.vstack([pv, gv])) * 1.01 + 1e-9  # nothing is farther: keep all
-    ab = _directional(ms, 0, 1, samples, reach)
-    ba = _directional(ms, 1, 0, samples, reach)
+    ab = _directional(ms, _surface_points(pv, pf, int(samples), 0), 1, reach)
+    ba = _directional(ms, _surface_points(gv, gf, int(samples), 1), 0, reach)
     dmax = float(max(ab["max"], ba["max"]))
     dmean = float(0.5 * (ab["mean"] + ba["mean"]))
     scale = 1.0 / diag if diag > 0 else float("nan")

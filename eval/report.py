@@ -229,12 +229,15 @@ def build_report(
     max_sketches: int | None = None,
     bar: bool = True,
     command: str = "",
+    executor: Any = None,
 ) -> Path:
     """Compute everything and write ``OUT/README.md`` (+ PNG/CSV files); returns its path.
 
     ``pipeline`` makes the first estimates and refinements (its settings, with the budgets
     given here and no time limit, so the numbers do not depend on the machine's speed);
-    ``backend`` and ``extra_backends`` score the 1-RMSE table."""
+    ``backend`` and ``extra_backends`` score the 1-RMSE table; ``executor``
+    (``treesketch.executor``) spreads the rotation sweeps' angles over workers, each with
+    its own copy of the pipeline."""
     t_start = time.perf_counter()
     data, out = Path(data), Path(out)
     if not data.is_dir():
@@ -287,6 +290,7 @@ def build_report(
             size=rotation_size,
             samples=samples,
             progress=tick,
+            executor=executor,
         )
         if hasattr(pbar, "close"):
             pbar.close()

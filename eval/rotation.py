@@ -8,8 +8,10 @@ is measured (``eval.hausdorff``, combined branch+leaf mesh, normalised by the gr
 bounding-box diagonal).
 
 The predictions come from a pipeline handed in (``treesketch.Pipeline``, or anything with
-``estimate(sketch)`` and ``run(sketch)``): with refining settings each view is estimated and
-refined (``run``), otherwise estimated only (``estimate``).
+``settings``, ``estimate(sketch)`` and ``run(sketch)``): with refining settings each view is
+estimated and refined (``run``), otherwise estimated only (``estimate``).  With an
+executor the pipeline travels to its workers, so it must pickle (a ``treesketch.Pipeline``
+does: a TSN estimator reloads its checkpoint in the worker).
 """
 
 from __future__ import annotations
@@ -116,32 +118,31 @@ def _params_key(p: Mapping[str, Any]) -> str:
     return json.dumps(TreeParams(p).to_dict(), sort_keys=True, default=str)
 
 
-def rotation_sweep(
-    gt_params: Mapping[str, Any],
-    pipeline: Any,
-    step: float = 5.0,
-    size: int = 256,
-    samples: int = DEFAULT_SAMPLES,
-    seed: int = 0,
-    progress: Progress | None = None,
-) -> SweepResult:
-    """Run the sweep (see the module text)."""
-    gt = TreeParams(gt_params)
-    angles = yaw_angles(step)
-    refining = bool(pipeline.settings.refine)
+@dataclass(frozen=True)
+class AngleResult:
+    """One angle of the sweep: its row, the (refined) prediction and the input sketch."""
+
+    row: SweepRow
+    prediction: TreeParams | None
+    sketch: np.ndarray | None
+
+
+def _angle_fn(
+    gt_mesh: Any, pipeline: Any, size: int, samples: int, seed: int
+) -> Callable[[float], AngleResult]:
+    """The function that does one angle: sketch at that yaw, estimate (and refine),
+    Hausdorff to the ground truth."""
     from render.sketch import SketchRenderer
 
-    gt_mesh = build_mesh(grow(gt, seed=seed))
-    if gt_mesh.is_empty:
-        raise ValueError("the ground-truth parameters grow an empty tree; nothing to compare")
     gt_combined = gt_mesh.combined()
     renderer = SketchRenderer(gt_mesh)
     cache: dict[str, Any] = {}  # identical predictions share one mesh and distance
-    result = SweepResult([], gt, seed=int(seed), size=int(size))
-    for i, yaw in enumerate(angles):
+
+    def one(yaw: float) -> AngleResult:
         t0 = time.perf_counter()
         img = renderer.sketch(float(yaw), size=size)
         lb = la = float("nan")
+        refining = bool(pipeline.settings.refine)
         if refining:
             run = pipeline.run(img)
             pred, lb, la = run.params, run.losses["before"], run.losses["after"]
@@ -157,24 +158,94 @@ def rotation_sweep(
                 pm = rotate_about_trunk(pm, turn)
             cache[key] = hausdorff(pm.combined(), gt_combined, samples)
         d = cache[key]
-        result.rows.append(
-            SweepRow(
-                float(yaw),
-                d.max,
-                d.mean,
-                d.max_norm,
-                d.mean_norm,
-                d.status,
-                refining,
-                lb,
-                la,
-                time.perf_counter() - t0,
-            )
+        row = SweepRow(
+            float(yaw),
+            d.max,
+            d.mean,
+            d.max_norm,
+            d.mean_norm,
+            d.status,
+            refining,
+            lb,
+            la,
+            time.perf_counter() - t0,
         )
-        result.predictions.append(pred)
-        result.sketches.append(img)
-        if progress is not None:
-            progress(i + 1, len(angles))
+        return AngleResult(row, pred, img)
+
+    return one
+
+
+@dataclass(frozen=True)
+class SweepWorker:
+    """Worker factory for an executor (picklable): each worker grows the ground truth and
+    builds its scene once, then does angles with its own copy of the pipeline."""
+
+    gt: TreeParams
+    pipeline: Any
+    size: int
+    samples: int
+    seed: int
+
+    def __call__(self) -> Callable[[float], AngleResult]:
+        from render.backend import init_mitsuba
+
+        init_mitsuba(threads=1)
+        gt_mesh = build_mesh(grow(self.gt, seed=self.seed))
+        return _angle_fn(gt_mesh, self.pipeline, self.size, self.samples, self.seed)
+
+
+def _failed_row(yaw: float, error: str) -> SweepRow:
+    nan = float("nan")
+    first = error.splitlines()[0] if error else "lost"
+    return SweepRow(float(yaw), nan, nan, nan, nan, f"failed: {first}", False, nan, nan, 0.0)
+
+
+def rotation_sweep(
+    gt_params: Mapping[str, Any],
+    pipeline: Any,
+    step: float = 5.0,
+    size: int = 256,
+    samples: int = DEFAULT_SAMPLES,
+    seed: int = 0,
+    progress: Progress | None = None,
+    executor: Any = None,
+) -> SweepResult:
+    """Run the sweep (see the module text).
+
+    ``executor`` (``treesketch.executor``: a local pool, Ray) spreads the angles; each is
+    deterministic, so the rows are the same values whichever runs them.  An angle that
+    fails there is reported as a row with status ``failed: ...`` and NaN distances (its
+    prediction and sketch are None); in this process an error propagates.
+    """
+    gt = TreeParams(gt_params)
+    angles = yaw_angles(step)
+    gt_mesh = build_mesh(grow(gt, seed=seed))
+    if gt_mesh.is_empty:
+        raise ValueError("the ground-truth parameters grow an empty tree; nothing to compare")
+    result = SweepResult([], gt, seed=int(seed), size=int(size))
+    opts = (int(size), int(samples), int(seed))
+    outs: list[AngleResult] = []
+    if executor is None:
+        one = _angle_fn(gt_mesh, pipeline, *opts)
+        for i, yaw in enumerate(angles):
+            outs.append(one(float(yaw)))
+            if progress is not None:
+                progress(i + 1, len(angles))
+    else:
+        from_worker = executor.run(SweepWorker(gt, pipeline, *opts), [float(a) for a in angles])
+        done: dict[int, AngleResult] = {}
+        for o in from_worker:
+            ok = o.error is None
+            done[o.index] = (
+                o.value if ok else AngleResult(_failed_row(angles[o.index], o.error), None, None)
+            )
+            if progress is not None:
+                progress(len(done), len(angles))
+        outs = [done[i] for i in range(len(angles))]
+    for a in outs:
+        result.rows.append(a.row)
+        result.predictions.append(a.prediction)  # type: ignore[arg-type]
+        result.sketches.append(a.sketch)  # type: ignore[arg-type]
     return result
 
 
@@ -189,9 +260,7 @@ def rows_csv(rows: list[SweepRow]) -> str:
 
 
 def write_csv(rows: list[SweepRow], path: str | Path) -> Path:
-    path = Path(path)
-    atomic_write(path, rows_csv(rows))
-    return path
+    return atomic_write(Path(path), rows_csv(rows))
 
 
 def _save_fig(fig, path: Path) -> Path:

@@ -134,6 +134,12 @@ class RefineSettings:
     ``yaw_weight`` (when the yaw is searched) adds ``yaw_weight * (turn from the front
     view / 180)^2``, so the front view is kept unless another fits clearly better;
     ``size`` is the side in pixels the search renders and compares at.
+
+    Species by synthesis (``treesketch.Pipeline``): up to ``species_tries`` species are
+    refined, the estimator's best and any other whose score is at least ``species_ratio``
+    times the best's (each other one with half the budget and half the time); the tree
+    whose sketch matches best wins.  ``species_tries`` 1 refines the estimator's species
+    only.
     """
 
     refine: bool = True
@@ -152,6 +158,8 @@ class RefineSettings:
     xtol: float = 1e-3
     prior_weight: float = 0.0
     yaw_weight: float = YAW_WEIGHT
+    species_tries: int = 2
+    species_ratio: float = 0.5
 
     def replace(self, **changes: Any) -> RefineSettings:
         return dataclasses.replace(self, **changes).validate()
@@ -186,6 +194,12 @@ class RefineSettings:
             w = getattr(self, label)
             if not (isinstance(w, int | float) and math.isfinite(w) and w >= 0):
                 raise ValueError(f"{label} must be a number >= 0, got {w!r}")
+        if not isinstance(self.species_tries, int) or not 1 <= self.species_tries <= 5:
+            raise ValueError(
+                f"species_tries must be an integer in 1..5, got {self.species_tries!r}"
+            )
+        if not (isinstance(self.species_ratio, int | float) and 0 <= self.species_ratio <= 1):
+            raise ValueError(f"species_ratio must be in [0, 1], got {self.species_ratio!r}")
         if not isinstance(self.global_evals, int) or self.global_evals < 0:
             raise ValueError(f"global_evals must be an integer >= 0, got {self.global_evals!r}")
         return self

@@ -26,6 +26,18 @@ Manifest columns (JSONL: one JSON object per line; CSV: the same columns, header
 sorted by species (in ``weberpenn.species.SPECIES`` order), index, view order:
 
     species, tree_id, index, tree_seed, split, view, yaw, size, sketch, params, render
+    [, style]   (only in datasets drawn in other styles than the paper's SG chain)
+
+Drawing styles (``styles``, :mod:`render.styles`): with the default ``("sg",)`` every view
+is drawn once by the paper's chain and the files and manifest are exactly those of a build
+without styles.  Otherwise, when ``sg`` is listed every view is still drawn in SG (at the
+same path, the same bytes) and, besides, in ``styles_per_view`` of the other listed styles,
+chosen per view by a seeded draw (``numpy.random.default_rng([tree_seed, view_no, 83])``):
+the SG dataset stays inside the mixed one (its test split is the SG benchmark, unchanged)
+and SG is half of what the network sees, while every other style gets an equal share of
+the views.  Without ``sg`` in the list, ``styles_per_view`` of the listed styles are drawn
+per view.  Each styled sketch has its own seed (``[tree_seed, view_no, style_no]``) and
+lives at ``sketches/<species>/<tree_id>_<view>_<style>.png``; its row says its ``style``.
 
 ``split`` is ``train``/``val``/``test``, assigned per TREE (every view of a tree is in the
 same split), stratified per species: a seeded permutation of the indices, the first
@@ -49,17 +61,17 @@ import json
 import logging
 import os
 import sys
+import tempfile
 import time
 import traceback
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
-from weberpenn.fileio import atomic_write
+from weberpenn.fileio import atomic_write, write_together
 
 from .camera import VIEWS, resolve_yaw
 
@@ -80,6 +92,8 @@ MANIFEST_COLUMNS = (
     "render",
 )
 SPLITS = ("train", "val", "test")
+DEFAULT_STYLES = ("sg",)
+VIEW_CHOICE_KEY = 83  # the third word of the per-view style draw's seed
 
 
 class DatasetError(ValueError):
@@ -99,6 +113,8 @@ class DatasetConfig:
     val_fraction: float = 0.1
     test_fraction: float = 0.1
     render_size: int | None = None  # colour render size; None = ``size``
+    styles: tuple[str, ...] = DEFAULT_STYLES  # drawing styles (render.styles.STYLES)
+    styles_per_view: int = 1  # other styles drawn per view (besides SG)
     workers: int = field(default=1, compare=False)
 
     def __post_init__(self) -> None:
@@ -135,6 +151,15 @@ class DatasetConfig:
             raise DatasetError(
                 f"val_fraction and test_fraction must be in [0, 1) with a sum below 1, got {fr}"
             )
+        from .styles import check_styles
+
+        try:
+            check_styles(self.styles)
+        except ValueError as exc:
+            raise DatasetError(str(exc)) from None
+        spv = self.styles_per_view
+        if isinstance(spv, bool) or int(spv) != spv or not 1 <= int(spv) <= 16:
+            raise DatasetError(f"styles_per_view must be an integer in 1..16, got {spv!r}")
         if isinstance(self.workers, bool) or not 1 <= int(self.workers) <= 64:
             raise DatasetError(f"workers must be in 1..64, got {self.workers!r}")
 
@@ -150,6 +175,11 @@ class DatasetConfig:
         d["species"] = list(self.species)
         d["views"] = list(self.views)
         d["render_size"] = int(self.render_size or self.size)
+        if tuple(self.styles) == DEFAULT_STYLES:  # SG-only datasets keep their old record
+            d.pop("styles")
+            d.pop("styles_per_view")
+        else:
+            d["styles"] = list(self.styles)
         d["format_version"] = FORMAT_VERSION
         return d
 
@@ -224,9 +254,25 @@ def _json_bytes(obj: Any) -> bytes:
     return (json.dumps(obj, indent=1, sort_keys=False) + "\n").encode("utf-8")
 
 
-def paths_for(job: TreeJob, view: str) -> dict[str, str]:
+def view_styles(settings: dict[str, Any], tree_seed_: int, view_no: int) -> list[str]:
+    """The styles one view of one tree is drawn in (see the module docstring)."""
+    styles = list(settings.get("styles", DEFAULT_STYLES))
+    k = int(settings.get("styles_per_view", 1))
+    first = ["sg"] if "sg" in styles else []
+    others = [s for s in styles if s != "sg"]
+    if not others:
+        return first
+    if k >= len(others):
+        return first + others
+    rng = np.random.default_rng([int(tree_seed_), int(view_no), VIEW_CHOICE_KEY])
+    picked = set(rng.choice(len(others), size=k, replace=False).tolist())
+    return first + [s for i, s in enumerate(others) if i in picked]
+
+
+def paths_for(job: TreeJob, view: str, style: str = "sg") -> dict[str, str]:
+    tail = "" if style == "sg" else f"_{style}"
     return {
-        "sketch": f"sketches/{job.species}/{job.tree_id}_{view}.png",
+        "sketch": f"sketches/{job.species}/{job.tree_id}_{view}{tail}.png",
         "params": f"params/{job.species}/{job.tree_id}.json",
         "render": f"renders/{job.species}/{job.tree_id}.png",
     }
@@ -259,13 +305,13 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
         t_mesh = time.perf_counter()
         renderer = SketchRenderer(tree, species=job.species)
         size = int(settings["size"])
+        styled = "styles" in settings
         rows = []
-        for view in settings["views"]:
-            img = renderer.sketch(view, size)
-            p = paths_for(job, view)
-            atomic_write_bytes(root / p["sketch"], png_bytes(img))
-            rows.append(
-                {
+        for view_no, view in enumerate(settings["views"]):
+            for style, img in _draw_view(renderer, view, view_no, job.tree_seed, settings):
+                p = paths_for(job, view, style)
+                atomic_write_bytes(root / p["sketch"], png_bytes(img))
+                row = {
                     "species": job.species,
                     "tree_id": job.tree_id,
                     "index": job.index,
@@ -276,7 +322,7 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
                     "size": size,
                     **p,
                 }
-            )
+                rows.append({**row, "style": style} if styled else row)
         colour = renderer.colour("front", int(settings["render_size"]), supersample=1)
         p = paths_for(job, settings["views"][0])
         atomic_write_bytes(root / p["render"], png_bytes(colour))
@@ -309,22 +355,105 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
         return record
 
 
-def _worker_init(parent_pid: int) -> None:
-    """Each worker process starts mitsuba itself, one Dr.Jit thread per worker, and
-    exits on its own if the builder is killed (so no orphan keeps writing files)."""
-    import threading
+def _draw_view(
+    renderer: Any, view: str, view_no: int, tree_seed_: int, settings: dict[str, Any]
+) -> list[tuple[str, np.ndarray]]:
+    """One view in each of its styles, as (style, uint8 sketch); the SG one is exactly
+    ``renderer.sketch(view, size)``."""
+    size = int(settings["size"])
+    styles = view_styles(settings, tree_seed_, view_no)
+    if styles == ["sg"]:
+        return [("sg", renderer.sketch(view, size))]
+    from .styles import STYLES, Silhouettes, draw
 
-    from .backend import init_mitsuba
+    parts = renderer.parts(view, size)
+    sil = Silhouettes.from_parts(parts)
+    out = []
+    for style in styles:
+        if style == "sg":
+            out.append((style, parts.sketch))
+        else:
+            rng = np.random.default_rng([int(tree_seed_), int(view_no), list(STYLES).index(style)])
+            out.append((style, draw(style, sil, rng, size)))
+    return out
 
-    def watch() -> None:
-        while True:
-            if os.getppid() != parent_pid:
-                os._exit(3)
-            time.sleep(0.2)
 
-    threading.Thread(target=watch, daemon=True).start()
-    logging.basicConfig(level=logging.WARNING)
-    init_mitsuba(threads=1)
+@dataclass(frozen=True)
+class TreeFiles:
+    """One finished piece: the tree's record (its marker, or a failure record) and every
+    file it made, by path relative to ``OUT``.  Pieces return bytes, the builder writes
+    them, so workers on other machines need no shared disk."""
+
+    record: dict[str, Any]
+    files: dict[str, bytes]
+
+
+def build_tree_files(job: TreeJob, settings: dict[str, Any]) -> TreeFiles:
+    """:func:`build_tree` into a scratch folder; the files come back as bytes."""
+    with tempfile.TemporaryDirectory(prefix=f"treesketch_{job.tree_id}_") as tmp:
+        record = build_tree(job, settings, tmp)
+        base = Path(tmp)
+        files = {
+            f.relative_to(base).as_posix(): f.read_bytes()
+            for f in sorted(base.rglob("*"))
+            if f.is_file() and not f.name.endswith(".tmp")
+        }
+    return TreeFiles(record, files)
+
+
+@dataclass(frozen=True)
+class TreeWorker:
+    """The worker factory the executor runs (picklable): called once per worker process,
+    it starts mitsuba (``threads`` Dr.Jit threads; None = all cores) and returns the
+    function that builds one tree."""
+
+    settings: dict[str, Any]
+    threads: int | None = 1
+
+    def __call__(self) -> Callable[[TreeJob], TreeFiles]:
+        from .backend import init_mitsuba
+
+        init_mitsuba(threads=self.threads)
+        return functools.partial(build_tree_files, settings=self.settings)
+
+
+class PieceRunner(Protocol):
+    """What :func:`build_dataset` needs of an executor (``treesketch.executor`` has them):
+    run ``factory()``'s function over ``pieces`` and yield outcomes with ``index``,
+    ``value`` and ``error`` (a string when the piece or its worker was lost)."""
+
+    def run(self, factory: Callable[[], Callable[[Any], Any]], pieces: Sequence[Any]) -> Any: ...
+
+
+def _store(root: Path, job: TreeJob, tf: TreeFiles) -> dict[str, Any]:
+    """Write a built tree: its files all together, then its marker (the tree is finished
+    only once the marker is there, so a kill at any moment leaves it to be redone)."""
+    marker = f"done/{job.tree_id}.json"
+    failed = root / "failed" / f"{job.tree_id}.json"
+    if tf.record.get("status") == "done":
+        write_together({root / k: v for k, v in tf.files.items() if k != marker})
+        atomic_write(root / marker, tf.files.get(marker) or _json_bytes(tf.record))
+        failed.unlink(missing_ok=True)
+    else:
+        name = f"failed/{job.tree_id}.json"
+        with contextlib.suppress(OSError):  # disk trouble: still report the failure
+            atomic_write(failed, tf.files.get(name) or _json_bytes(tf.record))
+    return tf.record
+
+
+def _lost(job: TreeJob, error: str) -> TreeFiles:
+    """The record of a tree whose worker was lost more often than the executor retries."""
+    record = {
+        "tree_id": job.tree_id,
+        "status": "failed",
+        "species": job.species,
+        "index": job.index,
+        "tree_seed": job.tree_seed,
+        "error": error.splitlines()[0] if error else "lost",
+        "traceback": error,
+        "params": None,
+    }
+    return TreeFiles(record, {})
 
 
 # --------------------------------------------------------------------------- the build
@@ -410,7 +539,10 @@ def _load_marker(path: Path) -> dict[str, Any] | None:
 
 def _is_finished(root: Path, job: TreeJob, settings: dict[str, Any]) -> bool:
     m = _load_marker(root / "done" / f"{job.tree_id}.json")
-    if m is None or len(m.get("rows", [])) != len(settings["views"]):
+    n_rows = sum(
+        len(view_styles(settings, job.tree_seed, i)) for i in range(len(settings["views"]))
+    )
+    if m is None or len(m.get("rows", [])) != n_rows:
         return False
     p = paths_for(job, settings["views"][0])
     files = [root / r["sketch"] for r in m["rows"]] + [root / p["params"], root / p["render"]]
@@ -435,13 +567,14 @@ def write_manifest(root: Path, jobs: Sequence[TreeJob]) -> int:
         m = _load_marker(root / "done" / f"{job.tree_id}.json")
         if m is not None:
             rows.extend(m["rows"])
-    lines = "".join(json.dumps({k: r[k] for k in MANIFEST_COLUMNS}) + "\n" for r in rows)
+    cols = MANIFEST_COLUMNS + (("style",) if any("style" in r for r in rows) else ())
+    lines = "".join(json.dumps({k: r[k] for k in cols}) + "\n" for r in rows)
     atomic_write_bytes(root / "manifest.jsonl", lines.encode("utf-8"))
     buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(MANIFEST_COLUMNS), lineterminator="\n")
+    w = csv.DictWriter(buf, fieldnames=list(cols), lineterminator="\n")
     w.writeheader()
     for r in rows:
-        w.writerow({k: r[k] for k in MANIFEST_COLUMNS})
+        w.writerow({k: r[k] for k in cols})
     atomic_write_bytes(root / "manifest.csv", buf.getvalue().encode("utf-8"))
     return len(rows)
 
@@ -457,63 +590,73 @@ def _meshers(root: Path, jobs: Sequence[TreeJob]) -> dict[str, int]:
     return out
 
 
-def read_manifest(out: str | os.PathLike[str], split: str | None = None) -> list[dict[str, Any]]:
-    """The rows of ``OUT/manifest.jsonl`` (only those of ``split`` when given)."""
+def row_style(row: dict[str, Any]) -> str:
+    """A manifest row's drawing style (rows of SG-only datasets have no column: ``sg``)."""
+    return str(row.get("style", "sg"))
+
+
+def read_manifest(
+    out: str | os.PathLike[str],
+    split: str | None = None,
+    styles: Sequence[str] | None = None,
+) -> list[dict[str, Any]]:
+    """The rows of ``OUT/manifest.jsonl`` (only those of ``split`` and of ``styles`` when
+    given)."""
     if split is not None and split not in SPLITS:
         raise DatasetError(f"unknown split {split!r}: use one of {', '.join(SPLITS)}")
+    if styles is not None:
+        from .styles import check_styles
+
+        try:
+            styles = check_styles(styles)
+        except ValueError as exc:
+            raise DatasetError(str(exc)) from None
     f = Path(out) / "manifest.jsonl"
     if not f.is_file():
         raise DatasetError(f"{f}: no manifest (has the dataset been built?)")
     rows = [json.loads(line) for line in f.read_text(encoding="utf-8").splitlines() if line]
-    return rows if split is None else [r for r in rows if r["split"] == split]
+    if split is not None:
+        rows = [r for r in rows if r["split"] == split]
+    if styles is not None:
+        rows = [r for r in rows if row_style(r) in styles]
+    return rows
 
 
 def _run_jobs(
-    cfg: DatasetConfig, jobs: list[TreeJob], settings: dict[str, Any]
+    cfg: DatasetConfig,
+    jobs: list[TreeJob],
+    settings: dict[str, Any],
+    executor: PieceRunner | None,
 ) -> Iterator[dict[str, Any]]:
-    out = str(cfg.out_dir)
-    if int(cfg.workers) <= 1:
-        _worker_init_main()
+    root = cfg.out_dir
+    if executor is None:  # in this process, mitsuba on every core
+        build = TreeWorker(settings, threads=None)()
         for job in jobs:
-            yield build_tree(job, settings, out)
+            yield _store(root, job, build(job))
         return
-    import multiprocessing as mp
-
-    ctx = mp.get_context("spawn")  # a fresh interpreter: mitsuba/Dr.Jit start cleanly
-    with ProcessPoolExecutor(
-        max_workers=int(cfg.workers),
-        mp_context=ctx,
-        initializer=_worker_init,
-        initargs=(os.getpid(),),
-    ) as pool:
-        pending: set[Future[dict[str, Any]]] = set()
-        it = iter(jobs)
-        limit = 4 * int(cfg.workers)  # bounded queue keeps memory flat
-        for job in it:
-            pending.add(pool.submit(build_tree, job, settings, out))
-            if len(pending) >= limit:
-                break
-        while pending:
-            done, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for fut in done:
-                yield fut.result()
-                nxt = next(it, None)
-                if nxt is not None:
-                    pending.add(pool.submit(build_tree, nxt, settings, out))
-
-
-def _worker_init_main() -> None:
-    from .backend import init_mitsuba
-
-    init_mitsuba()
+    for o in executor.run(TreeWorker(settings, threads=1), jobs):
+        job = jobs[o.index]
+        yield _store(root, job, o.value if o.error is None else _lost(job, o.error))
 
 
 def build_dataset(
     cfg: DatasetConfig,
     progress: bool | None = None,
     on_tree: Callable[[dict[str, Any]], None] | None = None,
+    executor: PieceRunner | None = None,
 ) -> BuildSummary:
-    """Build (or resume) the dataset described by ``cfg``; see the module docstring."""
+    """Build (or resume) the dataset described by ``cfg``; see the module docstring.
+
+    ``executor`` spreads the trees (``treesketch.executor``: a local process pool, Ray);
+    None builds them in this process.  Whichever runs them, the files are the same bytes.
+    """
+    if executor is None and int(cfg.workers) > 1:
+        raise DatasetError(
+            f"workers={cfg.workers} needs an executor: pass "
+            f"executor=treesketch.executor.LocalExecutor({cfg.workers}) (the CLI does)"
+        )
+    if executor is not None and int(cfg.workers) > 1:
+        raise DatasetError("give either workers or an executor, not both")
     root = cfg.out_dir
     if root.exists() and not root.is_dir():
         raise DatasetError(f"--out {root} exists and is not a folder")
@@ -538,7 +681,7 @@ def build_dataset(
         built = 0
         variant = "n/a"
         with _Progress(len(todo), enabled=progress) as bar:
-            for rec in _run_jobs(cfg, todo, settings):
+            for rec in _run_jobs(cfg, todo, settings, executor):
                 if rec["status"] == "done":
                     built += 1
                 else:
@@ -555,7 +698,7 @@ def build_dataset(
         if todo:
             from .backend import init_mitsuba
 
-            variant = init_mitsuba().variant if int(cfg.workers) <= 1 else _variant_name()
+            variant = init_mitsuba().variant if executor is None else _variant_name()
         n_rows = write_manifest(root, jobs)
         summary = BuildSummary(
             out=str(root),

@@ -185,3 +185,124 @@ def check_ink(img: np.ndarray) -> float:
             f"the page is almost all dark ({ink:.0%} of it): draw dark lines on a light page"
         )
     return ink
+
+
+# --------------------------------------------------------------------------- normalising
+# Where the renderer puts a tree's sketch in its square frame (measured on SG sketches of
+# every species, `tests/test_reader.py` checks it): the trunk base's ink ends at FRAME_BOTTOM
+# of the side, the trunk axis is the vertical centre line, and the drawing reaches up to
+# FRAME_EDGE from the top or sideways to FRAME_EDGE from an edge, whichever comes first.
+FRAME_BOTTOM = 0.969
+FRAME_EDGE = 0.043
+WORK_SIDE = 512  # drawings are normalised at most this large (bounded time and memory)
+MIN_PAPER = 0.25  # paper darker than this (fraction of white) is refused as a dark page
+INK_CONTRAST = 0.85  # ink is at most this bright relative to the paper around it
+FRAME_TOLERANCE = 0.015  # a drawing already this close to the renderer's frame keeps its scale
+
+
+def flatten_paper(img: np.ndarray) -> np.ndarray:
+    """Grey ``uint8`` -> float 0..1 relative to the paper around each pixel (1 = paper).
+
+    The paper's brightness is estimated with a maximum filter wider than any stroke (so
+    strokes vanish from it) and smoothed; dividing by it removes uneven light, grey or
+    off-white paper and the vignetting of phone photos.  A page whose paper is darker than
+    :data:`MIN_PAPER` is refused.
+    """
+    from scipy import ndimage
+
+    f = np.asarray(img, dtype=np.float32) / 255.0
+    side = max(f.shape)
+    k = max(5, int(round(side / 24)) | 1)
+    paper = ndimage.maximum_filter(f, size=k, mode="nearest")
+    paper = ndimage.uniform_filter(paper, size=k, mode="nearest")
+    level = float(np.median(paper))
+    if level < MIN_PAPER:
+        raise SketchError(
+            f"the page is too dark (paper at {level:.0%} of white): draw or photograph dark "
+            "lines on light paper, in good light"
+        )
+    return np.clip(f / np.maximum(paper, MIN_PAPER / 2), 0.0, 1.0)
+
+
+def _ink_of(flat: np.ndarray) -> np.ndarray:
+    """Ink pixels of a flattened page: darker than Otsu's split and than INK_CONTRAST,
+    without isolated specks (paper grain, sensor noise)."""
+    from skimage.filters import threshold_otsu
+    from skimage.morphology import remove_small_objects
+
+    dark = flat < INK_CONTRAST
+    if not dark.any():
+        return dark
+    t = min(INK_CONTRAST, float(threshold_otsu(flat)) if np.ptp(flat) > 0 else INK_CONTRAST)
+    ink = flat < max(t, 0.5)
+    min_px = max(2, int(round(ink.size * 2e-5)))
+    return remove_small_objects(ink, max_size=min_px - 1)
+
+
+def _axis_and_box(ink: np.ndarray) -> tuple[int, int, int, int, float]:
+    ys = np.flatnonzero(ink.any(axis=1))
+    xs = np.flatnonzero(ink.any(axis=0))
+    top, bottom, left, right = int(ys[0]), int(ys[-1]), int(xs[0]), int(xs[-1])
+    base_rows = ink[max(top, bottom - max(2, (bottom - top) // 40)) : bottom + 1]
+    bx = np.flatnonzero(base_rows.any(axis=0))
+    axis = (bx[0] + bx[-1] + 1) / 2.0
+    return top, bottom, left, right, float(axis)
+
+
+def normalise_drawing(img: np.ndarray, size: int = 256) -> np.ndarray:
+    """A drawing (grey ``uint8``, any size) -> ``(size, size)`` uint8 as the renderer
+    frames a tree: paper white, strokes dark, trunk base on the bottom margin, trunk axis
+    on the centre line, the drawing as large as the frame allows.
+
+    Pencil on grey or off-white paper and phone photos read as ink (:func:`flatten_paper`,
+    Otsu) and come out as black strokes on white, like the training sketches; a drawing in
+    a corner is moved and scaled to the middle.  A sketch already framed as the renderer
+    frames a tree (trunk base on the bottom margin, axis centred, inside the frame) keeps
+    its scale: a tree may be framed by its width seen from another side.  Refuses blank and
+    dark pages.
+    """
+    from PIL import Image
+
+    a = np.asarray(img, dtype=np.uint8)
+    if max(a.shape) > WORK_SIDE:  # bounded work for photos; strokes stay > 1 px
+        s = WORK_SIDE / max(a.shape)
+        shape = (max(MIN_SIDE, round(a.shape[1] * s)), max(MIN_SIDE, round(a.shape[0] * s)))
+        a = np.asarray(Image.fromarray(a).resize(shape, Image.Resampling.BOX))
+    flat = flatten_paper(a)
+    ink = _ink_of(flat)
+    frac = float(ink.mean())
+    if frac < MIN_INK:
+        raise SketchError("the sketch is blank: draw a tree (dark lines on a light page)")
+    if frac > MAX_INK:
+        raise SketchError(f"the page is almost all ink ({frac:.0%}): draw lines, not a fill")
+    clean = np.where(ink, 0.0, 1.0)
+
+    top, bottom, left, right, axis = _axis_and_box(ink)
+    n, m = a.shape
+    framed = (
+        n == m
+        and abs((bottom + 1) / n - FRAME_BOTTOM) <= FRAME_TOLERANCE
+        and abs(axis / n - 0.5) <= FRAME_TOLERANCE
+        and top / n >= FRAME_EDGE - FRAME_TOLERANCE
+        and min(left, n - 1 - right) / n >= FRAME_EDGE - FRAME_TOLERANCE
+    )
+    if framed:
+        scale, axis, bottom = size / n, n / 2.0, int(round(FRAME_BOTTOM * n)) - 1
+    else:
+        h = bottom - top + 1
+        half = max(axis - left, right + 1 - axis, 0.5)
+        scale = min((FRAME_BOTTOM - FRAME_EDGE) * size / h, (0.5 - FRAME_EDGE) * size / half)
+    # the page, scaled, with the trunk base at (size/2, FRAME_BOTTOM * size)
+    out_w = max(1, int(round(a.shape[1] * scale)))
+    out_h = max(1, int(round(a.shape[0] * scale)))
+    x0 = int(round(size / 2 - axis * scale))
+    y0 = int(round(FRAME_BOTTOM * size - (bottom + 1) * scale))
+    pic = Image.fromarray(np.round(clean * 255).astype(np.uint8))
+    resample = Image.Resampling.BOX if scale < 1 else Image.Resampling.BILINEAR
+    pic = pic.resize((out_w, out_h), resample)
+    canvas = Image.new("L", (size, size), 255)
+    canvas.paste(pic, (x0, y0))
+    out = np.asarray(canvas, dtype=np.uint8)
+    if float(ink_mask(out).mean()) < MIN_INK:
+        raise SketchError("the sketch is blank: draw a tree (dark lines on a light page)")
+    return out

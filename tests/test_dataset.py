@@ -96,6 +96,9 @@ def test_plan_seeds_are_deterministic_and_distinct():
         ({"seed": -1}, "seed"),
         ({"val_fraction": 0.6, "test_fraction": 0.5}, "fraction"),
         ({"workers": 0}, "workers"),
+        ({"styles": ("sg", "crayon")}, "unknown drawing style 'crayon'"),
+        ({"styles": ()}, "no drawing style"),
+        ({"styles": ("sg", "pen"), "styles_per_view": 0}, "styles_per_view"),
     ],
 )
 def test_bad_settings_are_clear_errors(kwargs, match):
@@ -112,6 +115,7 @@ def test_bad_settings_are_clear_errors(kwargs, match):
         (["--size", "7"], "size"),
         (["--workers", "0"], "workers"),
         (["--views", ","], "at least one view"),
+        (["--styles", "sg,crayon"], "unknown drawing style 'crayon'"),
     ],
 )
 def test_cli_bad_arguments(tmp_path, args, match):
@@ -237,3 +241,59 @@ def test_resumes_after_being_killed(tmp_path):
     assert res.returncode == 0, res.stdout + res.stderr
     assert f"{n_done} already done" in res.stdout
     _check_dataset(out, DatasetConfig(out=str(out), **SMALL))
+
+
+# --------------------------------------------------------------------------- styles
+def test_sg_only_dataset_records_no_styles(built):
+    out, _, _ = built
+    assert "styles" not in json.loads((out / "dataset.json").read_text())
+    assert all("style" not in r for r in read_manifest(out))
+    assert read_manifest(out, styles=["sg"]) == read_manifest(out)
+    assert read_manifest(out, styles=["pen"]) == []
+
+
+def test_styled_build_keeps_the_sg_sketches_and_adds_one_style_per_view(built, tmp_path):
+    sg_out, _, _ = built
+    cfg = DatasetConfig(
+        out=str(tmp_path / "styled"),
+        **{**SMALL, "species": ("palm",)},
+        styles=("sg", "pen", "pencil", "cloud"),
+    )
+    s = build_dataset(cfg, progress=False)
+    assert s.failed == [] and s.sketches == 2 * 2 * 2
+    out = Path(cfg.out)
+    rows = read_manifest(out)
+    assert all(list(r) == [*MANIFEST_COLUMNS, "style"] for r in rows)
+    assert (out / "manifest.csv").read_text().splitlines()[0].endswith(",style")
+    by_view: dict[tuple[str, str], list[str]] = {}
+    for r in rows:
+        by_view.setdefault((r["tree_id"], r["view"]), []).append(r["style"])
+        with Image.open(out / r["sketch"]) as im:
+            assert im.size == (48, 48) and im.mode == "L"
+    for styles in by_view.values():  # SG, then one of the others
+        assert styles[0] == "sg" and len(styles) == 2 and styles[1] in ("pen", "pencil", "cloud")
+    for r in read_manifest(out, styles=["sg"]):  # the very bytes of an SG-only build
+        assert (out / r["sketch"]).read_bytes() == (sg_out / r["sketch"]).read_bytes()
+    other = [r for r in rows if r["style"] != "sg"]
+    assert other and all(r["sketch"].endswith(f"_{r['style']}.png") for r in other)
+    assert read_manifest(out, split="train", styles=["pen", "pencil", "cloud"]) == [
+        r for r in other if r["split"] == "train"
+    ]
+    settings = json.loads((out / "dataset.json").read_text())
+    assert settings["styles"] == ["sg", "pen", "pencil", "cloud"]
+    before = {r["sketch"]: (out / r["sketch"]).read_bytes() for r in rows}
+    (out / "done" / "palm_0000.json").unlink()
+    again = build_dataset(cfg, progress=False)
+    assert again.built == 1 and again.skipped == 1  # a finished styled tree is recognised
+    assert {k: (out / k).read_bytes() for k in before} == before  # seeded: same bytes
+
+
+def test_every_style_per_view(tmp_path):
+    from render.dataset import view_styles
+
+    st = {"styles": ["sg", "pen", "felt"], "styles_per_view": 5}
+    assert view_styles(st, 123, 0) == ["sg", "pen", "felt"]
+    st = {"styles": ["pen", "felt", "cloud"], "styles_per_view": 1}
+    picks = {tuple(view_styles(st, seed, v)) for seed in range(30) for v in range(4)}
+    assert picks == {("pen",), ("felt",), ("cloud",)}
+    assert view_styles(st, 7, 2) == view_styles(st, 7, 2)

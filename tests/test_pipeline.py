@@ -188,3 +188,32 @@ def test_load_sketch_inputs(tmp_path) -> None:
         load_sketch(b"not an image")
     with pytest.raises(SketchError, match=r"\(H, W\)"):
         load_sketch(np.zeros(10))
+
+
+class Unsure:
+    """Says maple, nearly as sure of palm: species by synthesis must settle it."""
+
+    name = "unsure"
+
+    def estimate(self, sketch: np.ndarray) -> Estimate:
+        return Estimate(
+            species.sample("maple", 1),
+            "maple",
+            {"maple": 1.0, "palm": 0.9, "pine": 0.1},
+            alternatives={"palm": species.sample("palm", 9)},
+        )
+
+
+def test_species_by_synthesis_keeps_the_better_match() -> None:
+    seen = []
+    r = Pipeline(Unsure(), RefineSettings(budget=12)).run(
+        _gt_sketch("palm", 3), progress=seen.append
+    )
+    assert set(r.extras["tried"]) == {"maple", "palm"}  # pine scores too low to try
+    assert r.species == "palm" == min(r.extras["tried"], key=r.extras["tried"].get)
+    assert r.losses["after"] == r.extras["tried"]["palm"]
+    assert r.summary()["tried"] == r.extras["tried"]
+    evals = [p.evaluations for p in seen]
+    assert evals == sorted(evals)  # progress never runs backwards across candidates
+    one = Pipeline(Unsure(), RefineSettings(budget=12, species_tries=1)).run(_gt_sketch("palm", 3))
+    assert one.species == "maple" and set(one.extras["tried"]) == {"maple"}

@@ -172,3 +172,73 @@ def test_more_data_adds_training_trees_and_refuses_leaks(tiny: Path, tmp_path: P
         train(TrainConfig(str(tiny), str(tmp_path / "x.pt"), more_data=(str(tiny) + "/",)))
     with pytest.raises(TrainError, match="no such dataset"):
         train(TrainConfig(str(tiny), str(tmp_path / "y.pt"), more_data=(str(tmp_path / "no"),)))
+
+
+def test_styles_filter_and_fine_tune_from_a_checkpoint(tmp_path: Path) -> None:
+    from render.dataset import DatasetConfig, build_dataset, read_manifest
+
+    ds = tmp_path / "styled"
+    build_dataset(
+        DatasetConfig(
+            out=str(ds),
+            trees_per_species=4,
+            species=("pine", "palm"),
+            views=("front",),
+            size=64,
+            val_fraction=0.25,
+            test_fraction=0.25,
+            styles=("sg", "pen", "felt"),
+            styles_per_view=2,
+        ),
+        progress=False,
+    )
+    n_train = len(read_manifest(ds, "train"))
+    assert n_train == 2 * 2 * 3  # every view in sg, pen and felt
+    common = dict(size=64, batch=4, copies=1, epochs=1, threads=2)
+    lines: list[str] = []
+    first = train(
+        TrainConfig(str(ds), str(tmp_path / "a.pt"), styles=("sg", "pen"), **common),
+        log=lines.append,
+    )
+    assert any(
+        s.startswith("[train] 8 train (12 from") and "/ 4 val sketches in the styles sg, pen" in s
+        for s in lines
+    ), lines
+    # fine-tune on every style from that checkpoint: its normaliser is kept
+    cache = tmp_path / "cache"
+    res = train(
+        TrainConfig(str(ds), str(tmp_path / "b.pt"), init=first["out"], cache=str(cache), **common)
+    )
+    # another run keeping other styles reuses the same caches
+    lines.clear()
+    train(
+        TrainConfig(
+            str(ds),
+            str(tmp_path / "d.pt"),
+            init=first["out"],
+            cache=str(cache),
+            styles=("sg", "felt"),
+            **common,
+        ),
+        log=lines.append,
+    )
+    assert sum("features from" in s for s in lines) == 2, lines
+    from tsn.checkpoint import load_checkpoint
+
+    a, b = load_checkpoint(first["out"]), load_checkpoint(res["out"])
+    assert a.normaliser.to_dict() == b.normaliser.to_dict()
+    assert b.info["n_train"] == n_train and b.info["config"]["init"] == first["out"]
+    with pytest.raises(TrainError, match="at 64 px"):
+        train(TrainConfig(str(ds), str(tmp_path / "c.pt"), init=first["out"], size=96))
+    with pytest.raises(TrainError, match="no such checkpoint"):
+        train(TrainConfig(str(ds), str(tmp_path / "c.pt"), init=str(tmp_path / "none.pt")))
+    with pytest.raises(TrainError, match="unknown drawing style 'crayon'"):
+        train(TrainConfig(str(ds), str(tmp_path / "c.pt"), styles=("crayon",)))
+    with pytest.raises(TrainError, match="no sketches in the styles cloud"):
+        train(TrainConfig(str(ds), str(tmp_path / "c.pt"), styles=("cloud",)))
+    r = CliRunner().invoke(
+        app,
+        ["eval", "tsn", "--data", str(ds), "--checkpoint", res["out"], "--styles", "felt"],
+    )
+    assert r.exit_code == 0, r.output
+    assert "2 sketches of 2 held-out trees" in r.output

@@ -34,7 +34,28 @@ def build(
         "maple,pine,bonsai,palm,cherry", "--species", help="Comma-separated species."
     ),
     size: int = typer.Option(256, "--size", min=32, max=2048, help="Sketch size in pixels."),
-    workers: int = typer.Option(1, "--workers", min=1, max=64, help="Worker processes."),
+    styles: str = typer.Option(
+        "sg",
+        "--styles",
+        help="Comma-separated drawing styles: sg (the paper's chain), pen, cloud, scribble, "
+        "pencil, felt. With sg and others, every view is drawn in sg and in "
+        "--styles-per-view of the others (a seeded choice per view).",
+    ),
+    styles_per_view: int = typer.Option(
+        1, "--styles-per-view", min=1, max=16, help="Other styles drawn per view besides sg."
+    ),
+    workers: int = typer.Option(
+        1, "--workers", min=1, max=64, help="Worker processes (local) or CPUs of a local Ray."
+    ),
+    executor: str = typer.Option(
+        "local", "--executor", help="Where trees are built: local (this machine) or ray."
+    ),
+    address: str | None = typer.Option(
+        None,
+        "--address",
+        help="Ray cluster to use (auto, HOST:PORT, ray://HOST:PORT); "
+        "without it --executor ray starts a local Ray for the run.",
+    ),
     seed: int = typer.Option(0, "--seed", min=0, help="Dataset seed (same seed, same dataset)."),
     val_fraction: float = typer.Option(0.1, "--val-fraction", min=0.0, max=0.9),
     test_fraction: float = typer.Option(0.1, "--test-fraction", min=0.0, max=0.9),
@@ -46,6 +67,8 @@ def build(
     """Sample, grow, mesh and render every tree; write sketches, parameters, renders and a
     manifest with a train/val/test split by tree.  Re-running resumes."""
     from render.dataset import DatasetConfig, DatasetError, build_dataset
+
+    from .executor import ExecutorError, from_options
 
     logging.basicConfig(
         level=logging.INFO if verbose else logging.WARNING,
@@ -61,15 +84,23 @@ def build(
             seed=seed,
             val_fraction=val_fraction,
             test_fraction=test_fraction,
-            workers=workers,
+            styles=_csv(styles, "style"),
+            styles_per_view=styles_per_view,
         )
     except DatasetError as exc:
         raise typer.BadParameter(str(exc)) from None
     try:
-        summary = build_dataset(cfg, progress=progress)
+        runner = from_options(executor, workers, address)
+    except ExecutorError as exc:
+        raise typer.BadParameter(str(exc)) from None
+    try:
+        summary = build_dataset(cfg, progress=progress, executor=runner)
     except DatasetError as exc:
         typer.echo(f"Error: {exc}", err=True)
         raise typer.Exit(2) from None
+    finally:
+        if runner is not None:
+            runner.close()
     typer.echo(summary.text())
 
 

@@ -36,12 +36,23 @@ def rotation(
     size: int = typer.Option(256, "--size", help="Sketch size in pixels."),
     samples: int = typer.Option(10_000, "--samples", help="Hausdorff samples per direction."),
     seed: int = typer.Option(0, "--seed", help="Growth seed for both trees."),
+    executor: str = typer.Option(
+        "local", "--executor", help="Where the angles run: local (this machine) or ray."
+    ),
+    workers: int = typer.Option(
+        1, "--workers", min=1, max=64, help="Worker processes (local) or CPUs of a local Ray."
+    ),
+    address: str | None = typer.Option(
+        None, "--address", help="Ray cluster (auto, HOST:PORT); default: a local Ray."
+    ),
 ) -> None:
     """Turn a tree about its trunk, predict from each view's sketch, Hausdorff at each angle."""
     from tqdm.auto import tqdm
 
     from eval.rotation import plot_cases, plot_sweep, rotation_sweep, write_csv, yaw_angles
     from weberpenn import ParamError, load_params
+
+    from .executor import ExecutorError, from_options
 
     try:
         gt = load_params(params)
@@ -58,16 +69,25 @@ def rotation(
         pipeline = Pipeline(load_estimator("tsn", checkpoint=checkpoint), settings)
     except ValueError as e:
         fail(str(e))
-    with tqdm(total=n, desc="rotation sweep", dynamic_ncols=True) as bar:
-        res = rotation_sweep(
-            gt,
-            pipeline,
-            step=step,
-            size=size,
-            samples=samples,
-            seed=seed,
-            progress=lambda i, total: bar.update(1),
-        )
+    try:
+        runner = from_options(executor, workers, address)
+    except ExecutorError as e:
+        fail(str(e))
+    try:
+        with tqdm(total=n, desc="rotation sweep", dynamic_ncols=True) as bar:
+            res = rotation_sweep(
+                gt,
+                pipeline,
+                step=step,
+                size=size,
+                samples=samples,
+                seed=seed,
+                progress=lambda i, total: bar.update(i - bar.n),
+                executor=runner,
+            )
+    finally:
+        if runner is not None:
+            runner.close()
     out.mkdir(parents=True, exist_ok=True)
     write_csv(res.rows, out / "rotation.csv")
     plot_sweep(res, out / "rotation.png")
@@ -117,6 +137,15 @@ def all_(
     nns: bool = typer.Option(
         True, "--nns/--no-nns", help="With --model tsn: add the nearest-neighbour baseline row."
     ),
+    executor: str = typer.Option(
+        "local", "--executor", help="Where the rotation sweeps' angles run: local or ray."
+    ),
+    workers: int = typer.Option(
+        1, "--workers", min=1, max=64, help="Worker processes (local) or CPUs of a local Ray."
+    ),
+    address: str | None = typer.Option(
+        None, "--address", help="Ray cluster (auto, HOST:PORT); default: a local Ray."
+    ),
 ) -> None:
     """Write the full evaluation report (markdown + PNGs) to --out."""
     from eval.baseline import NNSIndex
@@ -124,11 +153,15 @@ def all_(
     from eval.scoring import tsn_scorer
 
     from .estimators import NNSEstimator, TSNEstimator
+    from .executor import ExecutorError, from_options
     from .pipeline import Pipeline
 
     extras = []
     if model not in ("tsn", "nns"):
         fail(f"--model must be 'tsn' or 'nns', got {model!r}")
+    spread = executor.strip().lower() != "local" or workers != 1 or address is not None
+    if spread and model != "tsn":
+        fail("--executor/--workers/--address spread the sweeps of --model tsn only")
     try:
         for spec in backbone:  # checked before anything is loaded
             name, sep, path = spec.partition("=")
@@ -156,6 +189,10 @@ def all_(
     else:
         rot = [s.strip() for s in rotation_species.split(",") if s.strip()]
     try:
+        runner = from_options(executor, workers, address)
+    except ExecutorError as e:
+        fail(str(e))
+    try:
         path = build_report(
             data,
             out,
@@ -170,9 +207,13 @@ def all_(
             samples=samples,
             max_sketches=max_sketches,
             command="treesketch " + " ".join(shlex.quote(a) for a in sys.argv[1:]),
+            executor=runner,
         )
     except ValueError as e:
         fail(str(e))
+    finally:
+        if runner is not None:
+            runner.close()
     typer.echo(f"wrote {path}")
 
 

@@ -29,19 +29,22 @@ def evaluate(
     batch: int = 32,
     max_sketches: int | None = None,
     bar: bool = True,
+    styles: tuple[str, ...] | None = None,
 ) -> dict[str, Any]:
-    """Scores of a checkpoint on ``split`` of the dataset at ``data``."""
+    """Scores of a checkpoint on ``split`` of the dataset at ``data`` (only its sketches
+    drawn in ``styles`` when given)."""
     from eval.metrics import one_minus_rmse
     from eval.scoring import dataset_sketch, progress_bar, tsn_scorer
     from render.dataset import read_manifest
     from tsn import encoding
     from weberpenn import TreeParams
 
-    rows = read_manifest(data, split=split)
+    rows = read_manifest(data, split=split, styles=styles)
     if max_sketches is not None:
         rows = rows[:max_sketches]
     if not rows:
-        raise ValueError(f"{data}: the {split!r} split is empty")
+        what = f" in the styles {', '.join(styles)}" if styles else ""
+        raise ValueError(f"{data}: the {split!r} split is empty{what}")
     from .estimators import TSNEstimator
 
     model = TSNEstimator.load(checkpoint).model
@@ -116,6 +119,12 @@ def eval_tsn(
         None, "--max-sketches", help="Score only the first N sketches."
     ),
     json_out: Path | None = typer.Option(None, "--json", help="Also write the numbers as JSON."),
+    styles: str | None = typer.Option(
+        None,
+        "--styles",
+        help="Score only sketches drawn in these comma-separated styles (e.g. sg); "
+        "default: every sketch of the split.",
+    ),
 ) -> None:
     """Paper-style table: 1-RMSE per head and overall, species-identification accuracy."""
     from weberpenn.fileio import atomic_write
@@ -123,7 +132,8 @@ def eval_tsn(
     from .cli_common import fail
 
     try:
-        res = evaluate(data, checkpoint, split, max_sketches=max_sketches)
+        keep = None if styles is None else tuple(s.strip() for s in styles.split(",") if s.strip())
+        res = evaluate(data, checkpoint, split, max_sketches=max_sketches, styles=keep)
     except (RuntimeError, ValueError, OSError) as e:  # DatasetError/CheckpointError too
         fail(str(e))
     typer.echo(format_result(res, split))

@@ -1,28 +1,82 @@
-"""`treesketch serve`: the HTTP service (see treesketch/service.py)."""
+"""`treesketch serve`: the job service and its drawing page (see treesketch/service/)."""
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import typer
+
+LOCAL_HOSTS = ("127.0.0.1", "localhost", "::1")
+
+
+def default_data_dir() -> Path:
+    """``$XDG_DATA_HOME/treesketch`` (``~/.local/share/treesketch``)."""
+    base = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")
+    return Path(base) / "treesketch"
 
 
 def serve_command(
     host: str = typer.Option("127.0.0.1", "--host", help="Address to listen on."),
     port: int = typer.Option(8000, "--port", min=1, max=65535, help="Port to listen on."),
+    data: Path = typer.Option(
+        None, "--data", help="Folder for the job database and results (default: user data)."
+    ),
+    workers: int = typer.Option(
+        None, "--workers", min=1, help="Worker processes (default: one per core)."
+    ),
+    estimator: str = typer.Option(
+        "tsn", "--estimator", help="tsn, template, or a TSN checkpoint path."
+    ),
     budget: int = typer.Option(
-        None, "--budget", min=1, help="Default refinement budget per request (default 100)."
+        100, "--budget", min=1, max=1000, help="Default refinement budget of a job."
+    ),
+    max_queue: int = typer.Option(64, "--max-queue", min=1, help="Most jobs waiting."),
+    retention_days: float = typer.Option(
+        30.0, "--retention-days", min=0.0, help="Remove results older than this."
+    ),
+    retention_gb: float = typer.Option(
+        2.0, "--retention-gb", min=0.0, help="Keep results under this total size."
+    ),
+    token: str = typer.Option(
+        None,
+        "--token",
+        envvar="TREESKETCH_TOKEN",
+        help="Require 'Authorization: Bearer TOKEN' (or ?token=) on the API.",
+    ),
+    cors: list[str] = typer.Option(
+        None, "--cors", help="Allow browser calls from this origin (repeatable); off by default."
     ),
 ) -> None:
-    """Serve POST /predict (sketch image -> parameters, species, losses, GLB link),
-    GET /trees/ID.glb and GET /health.
+    """Serve the job API and the drawing page at http://HOST:PORT/.
 
-    Example: `treesketch serve --port 8000`, then
-    `curl -F sketch=@examples/sketch_maple.png localhost:8000/predict`.
+    Example: `treesketch serve --port 8000`, then open http://127.0.0.1:8000/ or
+    `curl -F sketch=@examples/sketch_maple.png -F budget=20 localhost:8000/jobs`.
     """
     import uvicorn
 
-    from .service import create_app
+    from .service import ServiceConfig, create_app
+    from .service.pool import default_workers
 
-    uvicorn.run(create_app(default_budget=budget), host=host, port=port, log_level="info")
+    if host not in LOCAL_HOSTS:
+        typer.echo(
+            f"warning: listening on {host}: other machines can reach this service"
+            + ("" if token else "; set --token (or TREESKETCH_TOKEN) to require a token"),
+            err=True,
+        )
+    config = ServiceConfig(
+        data=data or default_data_dir(),
+        workers=workers or default_workers(),
+        estimator=estimator,
+        default_budget=budget,
+        max_queue=max_queue,
+        retention_days=retention_days,
+        retention_bytes=int(retention_gb * 1024**3),
+        token=token or None,
+        cors=tuple(cors or ()),
+    )
+    typer.echo(f"data: {config.data}; workers: {config.workers}; estimator: {estimator}")
+    uvicorn.run(create_app(config), host=host, port=port, log_level="info")
 
 
 def register(app: typer.Typer) -> None:

@@ -41,6 +41,23 @@ def train_cmd(
     loss: str = typer.Option(
         "mse", "--loss", help="mse: sum of per-head MSE (paper); rmse: sum of per-head RMSE."
     ),
+    styles: str | None = typer.Option(
+        None,
+        "--styles",
+        help="Comma-separated drawing styles to train and validate on (default: every "
+        "sketch of the dataset); leave one out to test on it.",
+    ),
+    cache: Path | None = typer.Option(
+        None,
+        "--cache",
+        help="Folder of the feature caches (default: the work folder); runs on the same "
+        "dataset that keep other --styles can share it.",
+    ),
+    init: Path | None = typer.Option(
+        None,
+        "--init",
+        help="Checkpoint to fine-tune from (same --backbone and --size); keeps its normaliser.",
+    ),
 ) -> None:
     """Train TSN: cached frozen early layers, fine-tuned last layers and six heads."""
     from tsn.train import TrainConfig, TrainError, train
@@ -62,8 +79,14 @@ def train_cmd(
         resume=resume,
         loss=loss,
         more_data=tuple(str(d) for d in more_data),
+        styles=None
+        if styles is None
+        else tuple(s.strip().lower() for s in styles.split(",") if s.strip()),
+        init=str(init) if init else None,
+        cache=str(cache) if cache else None,
     )
     try:
+        cfg.check()
         res = train(cfg, log=lambda s: typer.echo(s))
     except (TrainError, ValueError, OSError) as e:
         fail(str(e))

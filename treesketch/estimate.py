@@ -15,17 +15,31 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from weberpenn import TreeParams
+from weberpenn import TreeParams, species
 
 __all__ = ["Estimate", "Estimator"]
 
 
 @dataclass(frozen=True)
 class Estimate:
+    """``params`` belong to ``species``; ``alternatives`` may hold the estimator's own
+    guess for other species (else :meth:`params_for` projects ``decoded``, the estimate
+    before it was fitted to its species, or ``params`` onto the species asked for)."""
+
     params: TreeParams
     species: str
     species_scores: dict[str, float] = field(default_factory=dict)
     yaw: float | None = None
+    decoded: TreeParams | None = None
+    alternatives: dict[str, TreeParams] = field(default_factory=dict)
+
+    def params_for(self, name: str) -> TreeParams:
+        """A starting dictionary for species ``name``."""
+        if name == self.species:
+            return self.params
+        if name in self.alternatives:
+            return self.alternatives[name]
+        return species.project(name, self.decoded if self.decoded is not None else self.params)
 
     def ranked(self) -> list[tuple[str, float]]:
         """Species by score, best first (the estimate's own species first on ties)."""

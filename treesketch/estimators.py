@@ -44,6 +44,10 @@ class TSNEstimator:
     def __init__(self, model: Any) -> None:
         self.model = model  # tsn.predict.TSNModel
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        # an executor's worker loads the checkpoint itself instead of receiving the weights
+        return (TSNEstimator.load, (str(self.model.loaded.path),))
+
     @classmethod
     def load(cls, checkpoint: str | os.PathLike[str] | None = None) -> TSNEstimator:
         from tsn.predict import CheckpointError, load_model
@@ -56,7 +60,7 @@ class TSNEstimator:
     def estimate(self, sketch: np.ndarray) -> Estimate:
         pred = self.model.predict(sketch)
         scores = self.model.species_id.shares(pred.matrix)
-        return Estimate(pred.params, pred.species, scores, None)
+        return Estimate(pred.params, pred.species, scores, None, decoded=pred.decoded)
 
 
 def _scores_from_distances(best: dict[str, float]) -> dict[str, float]:
@@ -76,6 +80,9 @@ class TemplateEstimator:
             raise ValueError(f"seeds must be >= 1, got {seeds}")
         self.seeds = int(seeds)
         self._templates: list[tuple[str, int, float, Any]] | None = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {"seeds": self.seeds, "_templates": None}  # a worker builds its own
 
     def _build(self) -> list[tuple[str, int, float, Any]]:
         from refine.objective import SketchTarget
@@ -104,7 +111,8 @@ class TemplateEstimator:
         top = min(best, key=lambda s: best[s][0])
         scores = _scores_from_distances({s: v[0] for s, v in best.items()})
         _, seed, yaw = best[top]
-        return Estimate(species.sample(top, seed), top, scores, yaw)
+        others = {s: species.sample(s, v[1]) for s, v in best.items() if s != top}
+        return Estimate(species.sample(top, seed), top, scores, yaw, alternatives=others)
 
 
 class NNSEstimator:

@@ -24,10 +24,10 @@ from typing import Any
 
 import numpy as np
 
-from refine.objective import prepare_sketch, sketch_distance
+from refine.objective import sketch_distance
 from refine.search import Cancelled, RefineResult, RefineSettings
 from refine.search import refine as refine_search
-from render.reader import SketchError, check_ink, read_sketch
+from render.reader import SketchError, normalise_drawing, read_sketch
 from weberpenn import TreeParams, build_mesh, grow
 
 from .estimate import Estimate, Estimator
@@ -117,16 +117,10 @@ def load_sketch(source: Any) -> np.ndarray:
 
 
 def prepare_input(img: np.ndarray) -> np.ndarray:
-    """The sketch every stage sees: padded to a square (white) and area-resized to
-    :data:`SKETCH_SIZE`; blank and all-dark pages are refused."""
-    check_ink(img)
-    h, w = img.shape
-    n = max(h, w)
-    sq = np.full((n, n), 255, np.uint8)
-    sq[(n - h) // 2 : (n - h) // 2 + h, (n - w) // 2 : (n - w) // 2 + w] = img
-    out = np.round(prepare_sketch(sq, SKETCH_SIZE) * 255).astype(np.uint8)
-    check_ink(out)
-    return out
+    """The sketch every stage sees (the estimator and the refinement alike):
+    ``render.reader.normalise_drawing`` at :data:`SKETCH_SIZE` (paper flattened, ink
+    found, re-framed as the renderer frames a tree); blank and dark pages are refused."""
+    return normalise_drawing(img, SKETCH_SIZE)
 
 
 def check_height(height: float | None) -> float | None:
@@ -236,26 +230,43 @@ class Pipeline:
 
         t = time.perf_counter()
         result_refine: RefineResult | None = None
+        tried: dict[str, float] = {}
+        name = est.species
+        done = 0  # evaluations of all candidates so far, so progress only grows
         if cfg.refine:
-            tell("refine")
-            result_refine = refine_search(
-                img,
-                est.params,
-                cfg,
-                species=est.species,
-                yaw=None if cfg.search_yaw else yaw0,
-                progress=lambda n, best: tell("refine", n, best),
-                cancel=cancel,
-            )
+            for i, candidate in enumerate(self.candidates(est)):
+                run_cfg = (
+                    cfg
+                    if i == 0
+                    else cfg.replace(
+                        budget=max(8, cfg.budget // 2),
+                        time_limit=None if cfg.time_limit is None else cfg.time_limit / 2,
+                    )
+                )
+                tell("refine", done)
+                rr = refine_search(
+                    img,
+                    est.params_for(candidate),
+                    run_cfg,
+                    species=candidate,
+                    yaw=None if cfg.search_yaw else yaw0,
+                    progress=lambda n, best, done=done: tell("refine", done + n, best),
+                    cancel=cancel,
+                )
+                done += rr.evaluations
+                tried[candidate] = rr.loss_after
+                if i == 0:
+                    yaw0, loss0 = rr.start_yaw, rr.loss_before
+                if result_refine is None or rr.loss_after < result_refine.loss_after:
+                    result_refine, name = rr, candidate
+            assert result_refine is not None
             params1, yaw1 = result_refine.params, result_refine.yaw
-            yaw0 = result_refine.start_yaw
         else:
             params1, yaw1 = est.params, yaw0
         timings["refine"] = time.perf_counter() - t
 
         t = time.perf_counter()
-        n_done = 0 if result_refine is None else result_refine.evaluations
-        tell("render", n_done)
+        tell("render", done)
         from render.sketch import SketchRenderer
 
         mesh0 = build_mesh(grow(est.params), species=est.species)
@@ -263,10 +274,10 @@ class Pipeline:
         if params1 is est.params:
             mesh1, after = mesh0, before
         else:
-            mesh1 = build_mesh(grow(params1), species=est.species)
+            mesh1 = build_mesh(grow(params1), species=name)
             after = SketchRenderer(mesh1).sketch(yaw1, SKETCH_SIZE)
         if result_refine is not None:
-            loss_before, loss_after = result_refine.loss_before, result_refine.loss_after
+            loss_before, loss_after = loss0, result_refine.loss_after
         else:
             loss_before = loss_after = sketch_distance(img, before, cfg.size)
         timings["render"] = time.perf_counter() - t
@@ -274,14 +285,14 @@ class Pipeline:
         if height is not None:
             t = time.perf_counter()
             params1 = rescale_height(params1, height)
-            mesh1 = build_mesh(grow(params1), species=est.species)
+            mesh1 = build_mesh(grow(params1), species=name)
             timings["height"] = time.perf_counter() - t
 
         confidence, warning = _confidence(loss_after)
         timings["total"] = sum(timings.values())
         return Result(
             params=params1,
-            species=est.species,
+            species=name,
             tree_mesh=mesh1,
             sketch_before=before,
             sketch_after=after,
@@ -294,7 +305,18 @@ class Pipeline:
             refinement=result_refine,
             confidence=confidence,
             warning=warning,
+            extras={"tried": tried} if tried else {},
         )
+
+    def candidates(self, est: Estimate) -> list[str]:
+        """The species to refine: the estimator's, then up to ``species_tries - 1`` others
+        scoring at least ``species_ratio`` times the best score."""
+        ranked = est.ranked()
+        top = max(ranked[0][1], 1e-12)
+        others = [
+            s for s, sc in ranked if s != est.species and sc >= self.settings.species_ratio * top
+        ]
+        return [est.species, *others[: self.settings.species_tries - 1]]
 
 
 def predict_then_refine(

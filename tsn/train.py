@@ -70,6 +70,9 @@ class TrainConfig:
     pretrained: bool = True
     loss: str = "mse"  # "mse": sum of per-head MSE (paper); "rmse": sum of per-head RMSE
     more_data: tuple[str, ...] = ()  # datasets whose every split is added to the training set
+    styles: tuple[str, ...] | None = None  # drawing styles kept (train and val); None = all
+    init: str | None = None  # checkpoint to fine-tune from (its weights and normaliser)
+    cache: str | None = None  # folder of the feature caches; default: the work folder
     extra: dict[str, Any] = field(default_factory=dict)
 
     def check(self) -> None:
@@ -89,10 +92,25 @@ class TrainConfig:
             raise TrainError(f"--loss must be one of {', '.join(LOSSES)}, got {self.loss!r}")
         if self.size % 32:
             raise TrainError(f"--size must be a multiple of 32, got {self.size}")
+        if self.styles is not None:
+            from render.styles import check_styles
+
+            try:
+                self.styles = check_styles(self.styles)
+            except ValueError as e:
+                raise TrainError(f"--styles: {e}") from None
+        if self.init is not None and not Path(self.init).is_file():
+            raise TrainError(f"--init {self.init}: no such checkpoint file")
 
     @property
     def work_dir(self) -> Path:
         return Path(self.work) if self.work else Path(self.out).with_suffix(".work")
+
+    @property
+    def cache_dir(self) -> Path:
+        """Caches hold every sketch of a split (whatever ``styles`` keeps), so runs that
+        keep other styles of the same dataset can share them."""
+        return Path(self.cache) if self.cache else self.work_dir
 
 
 # ----------------------------------------------------------------------------- data
@@ -103,6 +121,23 @@ class Split:
     species: list[str]
     tree_ids: list[str]
     tree_seeds: list[int] = field(default_factory=list)
+    styles: list[str] = field(default_factory=list)  # drawing style of each sketch
+
+    def keep(self, styles: tuple[str, ...] | None) -> np.ndarray:
+        """Indices of the sketches drawn in ``styles`` (all when ``None``)."""
+        if styles is None:
+            return np.arange(len(self.images))
+        return np.flatnonzero([s in styles for s in self.styles])
+
+    def subset(self, idx: np.ndarray) -> Split:
+        return Split(
+            [self.images[i] for i in idx],
+            self.mats[idx],
+            [self.species[i] for i in idx],
+            [self.tree_ids[i] for i in idx],
+            [self.tree_seeds[i] for i in idx],
+            [self.styles[i] for i in idx],
+        )
 
     @staticmethod
     def concat(parts: list[Split]) -> Split:
@@ -112,21 +147,30 @@ class Split:
             [s for p in parts for s in p.species],
             [t for p in parts for t in p.tree_ids],
             [t for p in parts for t in p.tree_seeds],
+            [s for p in parts for s in p.styles],
         )
 
 
-def load_split(data: Path, split: str | None, limit: int | None = None) -> Split:
-    """The sketches and targets of ``split`` of a dataset (``None``: every split)."""
-    from render.dataset import DatasetError, read_manifest
+def load_split(
+    data: Path,
+    split: str | None,
+    limit: int | None = None,
+    styles: tuple[str, ...] | None = None,
+) -> Split:
+    """The sketches and targets of ``split`` of a dataset (``None``: every split), only
+    those drawn in ``styles`` when given."""
+    from render.dataset import DatasetError, read_manifest, row_style
 
     try:
-        rows = read_manifest(data, split=split)
+        rows = read_manifest(data, split=split, styles=styles)
     except DatasetError as e:
         raise TrainError(str(e)) from None
     if limit is not None:
         rows = rows[:limit]
     if not rows:
         what = "it has no sketches" if split is None else f"the {split!r} split is empty"
+        if styles is not None:
+            what += f" in the styles {', '.join(styles)}"
         raise TrainError(f"{data}: {what}")
     images, mats, cache = [], [], {}
     for r in rows:
@@ -141,6 +185,7 @@ def load_split(data: Path, split: str | None, limit: int | None = None) -> Split
         [r["species"] for r in rows],
         [r["tree_id"] for r in rows],
         [int(r["tree_seed"]) for r in rows],
+        [row_style(r) for r in rows],
     )
 
 
@@ -187,6 +232,8 @@ def _cache_key(cfg: TrainConfig, cut: int, split: Split, tag: str, data: str | N
         ).encode()
     )
     h.update(str(Path(data or cfg.data).resolve()).encode())
+    if cfg.init is not None:  # frozen stages come from that checkpoint
+        h.update(("init:" + str(Path(cfg.init).resolve())).encode())
     h.update("|".join(split.tree_ids).encode())
     return h.hexdigest()[:16]
 
@@ -220,7 +267,8 @@ def build_cache(
 ) -> torch.Tensor:
     """``(copies + 1, N, ...)`` fp16: version 0 clean, 1.. augmented (seeded per image;
     ``part`` > 0 for the ``more_data`` datasets, so their augmentations differ)."""
-    path = cfg.work_dir / f"cache_{tag}_{_cache_key(cfg, cut, split, tag, data)}.pt"
+    cfg.cache_dir.mkdir(parents=True, exist_ok=True)
+    path = cfg.cache_dir / f"cache_{tag}_{_cache_key(cfg, cut, split, tag, data)}.pt"
     if path.is_file():
         try:
             t = torch.load(path, map_location="cpu", weights_only=True)
@@ -345,6 +393,22 @@ def _write_csv(rows: list[dict[str, Any]], path: Path) -> None:
     atomic_write_text(path, buf.getvalue())
 
 
+def _load_init(cfg: TrainConfig) -> Any:
+    """The ``--init`` checkpoint, refused when its network or input size differ."""
+    from .checkpoint import CheckpointError, load_checkpoint
+
+    try:
+        start = load_checkpoint(str(cfg.init))
+    except CheckpointError as e:
+        raise TrainError(f"--init: {e}") from None
+    if start.model.backbone_name != cfg.backbone or start.size != cfg.size:
+        raise TrainError(
+            f"--init {cfg.init} is a {start.model.backbone_name} network at {start.size} px; "
+            f"this run asks for --backbone {cfg.backbone} --size {cfg.size}"
+        )
+    return start
+
+
 def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any]:
     """Train (or resume) and return a summary; the best checkpoint is at ``cfg.out``."""
     cfg.check()
@@ -364,11 +428,20 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
             f"{state_path} exists: pass --resume to continue that run, or remove {work}"
         )
 
+    # every style is loaded and cached; the kept ones are picked after caching
     first = load_split(data, "train", cfg.max_sketches)
     more = load_more(cfg, data)
-    trn = Split.concat([first] + [m for _, m in more])
-    val = load_split(data, "val", cfg.max_sketches)
-    normaliser = encoding.Normaliser.fit(trn.mats)
+    trn_all = Split.concat([first] + [m for _, m in more])
+    val_all = load_split(data, "val", cfg.max_sketches)
+    keep_trn, keep_val = trn_all.keep(cfg.styles), val_all.keep(cfg.styles)
+    for name, idx in (("train", keep_trn), ("val", keep_val)):
+        if len(idx) == 0:
+            kept = ", ".join(cfg.styles or ())
+            raise TrainError(f"{data}: the {name!r} split has no sketches in the styles {kept}")
+    trn, val = trn_all.subset(keep_trn), val_all.subset(keep_val)
+    start = _load_init(cfg) if cfg.init else None
+    # a fine-tune keeps its checkpoint's target scale: the heads already speak it
+    normaliser = start.normaliser if start else encoding.Normaliser.fit(trn.mats)
     species_id = fit_species_id(trn, normaliser)
     y_trn = head_targets(normaliser.normalise(trn.mats))
     y_val_norm = normaliser.normalise(val.mats)
@@ -376,11 +449,13 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
     log(
         f"[train] {len(trn.images)} train ({len(first.images)} from {data}"
         + "".join(f", {len(m.images)} from {p}" for p, m in more)
-        + f") / {len(val.images)} val sketches, device {device}"
+        + f") / {len(val.images)} val sketches"
+        + (f" in the styles {', '.join(cfg.styles)}" if cfg.styles else "")
+        + f", device {device}"
     )
 
     try:
-        model = TSN(cfg.backbone, pretrained=cfg.pretrained).to(device)
+        model = (start.model if start else TSN(cfg.backbone, pretrained=cfg.pretrained)).to(device)
     except ModelError as e:
         raise TrainError(str(e)) from None
     cut = BACKBONES[cfg.backbone][1] if cfg.cut is None else int(cfg.cut)
@@ -393,8 +468,10 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
             for i, (p, m) in enumerate(more, start=1)
         ],
         dim=1,
-    )
-    f_val = build_cache(model, val, cut, cfg, device, 0, "val", log)[0]
+    )[:, torch.from_numpy(keep_trn)]
+    f_val = build_cache(model, val_all, cut, cfg, device, 0, "val", log)[0][
+        torch.from_numpy(keep_val)
+    ]
     params = set_trainable(model, cut)
     opt = torch.optim.Adam(params, lr=cfg.lr)
     sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, T_max=cfg.epochs, eta_min=cfg.lr / 100)

@@ -333,6 +333,11 @@ class TreeParams(Mapping[str, Any]):
     def __setattr__(self, key: str, value: Any) -> None:
         raise AttributeError("TreeParams is immutable: use .replace(key=value)")
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        # pickle through the constructor (executors ship parameters to worker processes);
+        # the default path would call __getattr__ before _values exists
+        return (TreeParams, (dict(self._values),))
+
     def __eq__(self, other: object) -> bool:
         if isinstance(other, TreeParams):
             return self._values == other._values

@@ -1,0 +1,471 @@
+"""Drawing styles: the same tree view drawn the way people draw, so labels stay exact.
+
+Every style is a pure function ``style(sil, rng, size) -> (size, size) uint8`` (255 = white
+paper) of one view's two silhouettes (:class:`Silhouettes`, the branch and leaf pictures
+the renderer makes for the paper's chain), a seeded ``numpy.random.Generator`` (which
+draws the style's free choices: wave, stroke width, gaps, ...) and the output size:
+
+- ``sg``: the paper's chain (:mod:`render.edges`), the same pixels as
+  ``SketchRenderer.sketch``; it ignores ``rng``.
+- ``pen``: a clean pen outline: a closed wavy crown contour, trunk and main branches as
+  single strokes of varying width (sometimes the trunk as two lines), no leaf blobs.
+- ``cloud``: an architect's tree: a scalloped cloud outline around the crown, the trunk as
+  two lines, a few main branches inside.
+- ``scribble``: the crown filled with a looping scribble, a filled trunk and branches.
+- ``pencil``: thin, light, broken and doubled lines on off-white or grey textured paper.
+- ``felt``: a felt tip: few thick strokes, a smooth crown outline, the trunk as one stroke.
+
+Each function takes its constants as keyword arguments (pixel sizes are for a 256-pixel
+drawing and scale with the work size); ``STYLES`` maps a name to its function and
+:func:`draw` is the one entry point.  Drawing happens at ``max(size, 256)`` pixels and is
+area-averaged down, as for the SG chain; everything is whole-image numpy/scipy work
+(distance transforms, Gaussian noise fields, one skeletonisation), a few milliseconds
+per style at 256 pixels.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import ndimage
+from scipy.special import ndtri
+
+from .edges import EdgeConfig, branch_sketch, combine, foliage_sketch
+
+__all__ = [
+    "STYLES",
+    "Silhouettes",
+    "StyleFn",
+    "check_styles",
+    "cloud",
+    "draw",
+    "felt",
+    "pen",
+    "pencil",
+    "scribble",
+    "sg",
+]
+
+REFERENCE = 256  # pixel constants are given for this drawing size
+
+
+@dataclass(frozen=True)
+class Silhouettes:
+    """One view's silhouettes, black on white floats (1 = background), square, same size."""
+
+    branches: np.ndarray
+    leaves: np.ndarray
+
+    def __post_init__(self) -> None:
+        b = np.asarray(self.branches)
+        f = np.asarray(self.leaves)
+        if b.ndim != 2 or b.shape[0] != b.shape[1] or b.shape != f.shape:
+            raise ValueError(
+                f"silhouettes must be two square images of one size, got {b.shape} and {f.shape}"
+            )
+
+    @classmethod
+    def from_parts(cls, parts: Any) -> Silhouettes:
+        """From a :class:`render.sketch.SketchParts` (its silhouettes are at work size)."""
+        return cls(parts.branch_silhouette, parts.leaf_silhouette)
+
+    @property
+    def n(self) -> int:
+        return int(np.asarray(self.branches).shape[0])
+
+
+StyleFn = Callable[..., np.ndarray]
+
+
+# --------------------------------------------------------------------------- primitives
+def _noise(rng: np.random.Generator, n: int, sigma: float) -> np.ndarray:
+    """A smooth random field of unit standard deviation (features about ``sigma`` px)."""
+    if sigma <= 3.0:
+        f = ndimage.gaussian_filter(rng.standard_normal((n, n)).astype(np.float32), sigma)
+    else:  # a coarse field, smoothed and interpolated up: the same look, much cheaper
+        step = sigma / 2.0
+        m = int(np.ceil(n / step)) + 4
+        coarse = ndimage.gaussian_filter(rng.standard_normal((m, m)).astype(np.float32), 2.0)
+        at = (np.arange(n, dtype=np.float32) + 0.5) / step + 1.5
+        i0 = np.floor(at).astype(int)
+        w = (at - i0)[:, None]
+        rows = coarse[i0] * (1 - w) + coarse[i0 + 1] * w  # linear, one axis at a time
+        f = rows[:, i0] * (1 - w.T) + rows[:, i0 + 1] * w.T
+    sd = float(f.std())
+    return f / sd if sd > 0 else f
+
+
+def _sdf(mask: np.ndarray) -> np.ndarray:
+    """Signed distance to a mask's edge in pixels (positive inside)."""
+    if not mask.any():
+        return np.full(mask.shape, -1e6, np.float32)
+    if mask.all():
+        return np.full(mask.shape, 1e6, np.float32)
+    inside = ndimage.distance_transform_edt(mask)
+    outside = ndimage.distance_transform_edt(~mask)
+    # pixel centres sit half a pixel from the edge between a mask pixel and its neighbour
+    return np.where(mask, inside - 0.5, 0.5 - outside).astype(np.float32)
+
+
+def _stroke(dist: np.ndarray, width: np.ndarray | float) -> np.ndarray:
+    """Anti-aliased ink (0..1) of a line at distance ``|dist|`` with ``width`` px."""
+    return np.clip(np.asarray(width) / 2.0 + 0.5 - np.abs(dist), 0.0, 1.0).astype(np.float32)
+
+
+def _dist_to(mask: np.ndarray) -> np.ndarray:
+    if not mask.any():
+        return np.full(mask.shape, 1e6, np.float32)
+    return ndimage.distance_transform_edt(~mask).astype(np.float32)
+
+
+def _opening(mask: np.ndarray, radius: float) -> np.ndarray:
+    """The parts of ``mask`` at least ``2 * radius`` px wide (opening by a disc)."""
+    if radius <= 0 or not mask.any():
+        return mask
+    core = ndimage.distance_transform_edt(mask) >= radius
+    return (_dist_to(core) <= radius) & mask
+
+
+def _warp(ink: np.ndarray, rng: np.random.Generator, amp: float, sigma: float) -> np.ndarray:
+    """Displace the drawing by a smooth random field: a hand's wobble."""
+    n = ink.shape[0]
+    if amp <= 0:
+        return ink
+    dy = _noise(rng, n, sigma) * amp
+    dx = _noise(rng, n, sigma) * amp
+    yy, xx = np.mgrid[0:n, 0:n].astype(np.float32)
+    return ndimage.map_coordinates(ink, [yy + dy, xx + dx], order=1, mode="constant", cval=0.0)
+
+
+def _area_resize(img: np.ndarray, size: int) -> np.ndarray:
+    n = img.shape[0]
+    if n == size:
+        return img
+    if n % size == 0:
+        k = n // size
+        return img.reshape(size, k, size, k).mean(axis=(1, 3), dtype=np.float32)
+    from PIL import Image
+
+    im = Image.fromarray(np.ascontiguousarray(img, dtype=np.float32), mode="F")
+    return np.asarray(im.resize((size, size), Image.Resampling.BOX), dtype=np.float32)
+
+
+def _finish(ink: np.ndarray, size: int, paper: np.ndarray | float = 1.0) -> np.ndarray:
+    """Ink (0..1, 1 = black) over paper (0..1 brightness) -> uint8 at ``size``."""
+    img = np.asarray(paper, dtype=np.float32) * (1.0 - np.clip(ink, 0.0, 1.0))
+    return np.round(np.clip(_area_resize(img, size), 0.0, 1.0) * 255.0).astype(np.uint8)
+
+
+@dataclass(frozen=True)
+class _Geometry:
+    """What the styles draw from: masks and distance fields at work size."""
+
+    n: int
+    s: float  # work size / 256
+    branches: np.ndarray  # bool: branch silhouette
+    branch_sdf: np.ndarray
+    leaves: np.ndarray  # bool: leaf silhouette
+    skeleton: np.ndarray  # bool: one-pixel centre lines of the branches
+    radius: np.ndarray  # half width of the branch at each pixel (edt inside)
+
+    def crown(self, sigma_px: float, level: float = 0.12) -> np.ndarray:
+        """A closed, hole-free foliage region around the leaves (what people outline)."""
+        if not self.leaves.any():
+            return self.leaves
+        blur = ndimage.gaussian_filter(self.leaves.astype(np.float32), sigma_px * self.s)
+        m = blur >= level
+        m = ndimage.binary_fill_holes(m)
+        lab, k = ndimage.label(m)
+        if k > 1:  # specks far from the crown are not drawn
+            areas = ndimage.sum_labels(m, lab, index=np.arange(1, k + 1))
+            keep = np.flatnonzero(areas >= 0.02 * areas.max()) + 1
+            m = np.isin(lab, keep)
+        return m
+
+    def main_branches(self, min_width_px: float) -> np.ndarray:
+        """Skeleton pixels of branches at least ``min_width_px`` wide (twigs dropped),
+        kept only when connected to the trunk through such branches."""
+        wide = self.skeleton & (self.radius * 2.0 >= min_width_px * self.s)
+        if not wide.any():
+            return wide
+        lab, k = ndimage.label(wide, structure=np.ones((3, 3)))
+        if k > 1:
+            sizes = ndimage.sum_labels(wide, lab, index=np.arange(1, k + 1))
+            keep = np.flatnonzero(sizes >= max(4.0 * self.s, 0.05 * sizes.max())) + 1
+            wide = np.isin(lab, keep)
+        return wide
+
+
+def _geometry(sil: Silhouettes) -> _Geometry:
+    from skimage.morphology import skeletonize
+
+    b = np.asarray(sil.branches, dtype=np.float32) <= 0.5
+    f = np.asarray(sil.leaves, dtype=np.float32) < 0.9
+    n = sil.n
+    radius = ndimage.distance_transform_edt(b).astype(np.float32) if b.any() else np.zeros((n, n))
+    skel = skeletonize(b) if b.any() else b
+    return _Geometry(n, n / REFERENCE, b, _sdf(b), f, skel, radius)
+
+
+def _skeleton_strokes(
+    g: _Geometry, skel: np.ndarray, widths: tuple[float, ...], scale: float, min_w: float
+) -> np.ndarray:
+    """Strokes along ``skel`` whose width follows the branch width (``scale`` x the
+    silhouette's width, at least ``min_w`` px), in a few width classes."""
+    ink = np.zeros((g.n, g.n), np.float32)
+    if not skel.any():
+        return ink
+    w = np.maximum(2.0 * g.radius * scale, min_w * g.s)
+    edges = [*widths, np.inf]
+    for lo, hi in zip(edges[:-1], edges[1:], strict=True):
+        sel = skel & (w >= lo * g.s) & (w < hi * g.s)
+        if sel.any():
+            width = float(np.median(w[sel]))
+            ink = np.maximum(ink, _stroke(_dist_to(sel), width))
+    return ink
+
+
+# --------------------------------------------------------------------------- the styles
+def sg(sil: Silhouettes, rng: np.random.Generator | None = None, size: int = 256) -> np.ndarray:
+    """The paper's SG chain (the same pixels as ``SketchRenderer.sketch``)."""
+    cfg = EdgeConfig()
+    out = branch_sketch(np.asarray(sil.branches, np.float32), cfg) * foliage_sketch(
+        np.asarray(sil.leaves, np.float32), cfg
+    )
+    return combine(_area_resize(out, int(size)), np.float32(1.0))
+
+
+def pen(
+    sil: Silhouettes,
+    rng: np.random.Generator,
+    size: int = 256,
+    *,
+    crown_sigma_px: tuple[float, float] = (3.0, 6.0),
+    wave_px: tuple[float, float] = (1.0, 3.0),
+    wave_sigma_px: tuple[float, float] = (5.0, 10.0),
+    line_px: tuple[float, float] = (1.4, 2.6),
+    twig_px: float = 1.2,
+    two_line_trunk: float = 0.5,
+    wobble_px: tuple[float, float] = (0.5, 1.5),
+) -> np.ndarray:
+    """Clean pen: wavy closed crown contour, trunk and main branches as strokes."""
+    g = _geometry(sil)
+    s = g.s
+    lw = rng.uniform(*line_px) * s
+    ink = np.zeros((g.n, g.n), np.float32)
+    crown = g.crown(rng.uniform(*crown_sigma_px))
+    if crown.any():
+        wave = _noise(rng, g.n, rng.uniform(*wave_sigma_px) * s) * rng.uniform(*wave_px) * s
+        width = lw * (1.0 + 0.25 * _noise(rng, g.n, 12 * s))
+        ink = np.maximum(ink, _stroke(_sdf(crown) + wave, width))
+    main = g.main_branches(twig_px)
+    if rng.random() < two_line_trunk:  # thick parts as two lines, thin ones as strokes
+        thick = _opening(g.branches, 2.5 * s)
+        ink = np.maximum(ink, _stroke(_sdf(thick), lw))
+        main = main & ~ndimage.binary_dilation(thick, iterations=2)
+        ink = np.maximum(ink, _skeleton_strokes(g, main, (0.0, 2.0, 3.5), 1.0, lw / s))
+    else:
+        ink = np.maximum(ink, _skeleton_strokes(g, main, (0.0, 2.0, 3.5, 6.0, 10.0), 1.0, lw / s))
+    ink = _warp(ink, rng, rng.uniform(*wobble_px) * s, 14 * s)
+    return _finish(ink, size)
+
+
+def cloud(
+    sil: Silhouettes,
+    rng: np.random.Generator,
+    size: int = 256,
+    *,
+    crown_sigma_px: tuple[float, float] = (3.5, 6.0),
+    scallop_px: tuple[float, float] = (8.0, 14.0),
+    line_px: tuple[float, float] = (1.6, 2.6),
+    inner_branches: float = 0.6,
+    wobble_px: tuple[float, float] = (0.5, 1.2),
+) -> np.ndarray:
+    """Architect's cloud: scalloped crown outline, trunk as two lines."""
+    from skimage import measure
+
+    g = _geometry(sil)
+    s = g.s
+    lw = rng.uniform(*line_px) * s
+    ink = np.zeros((g.n, g.n), np.float32)
+    crown = g.crown(rng.uniform(*crown_sigma_px))
+    cloud_mask = crown
+    if crown.any():
+        r0 = rng.uniform(*scallop_px) * s
+        radii = (0.75 * r0, r0, 1.3 * r0)
+        centres = [np.zeros((g.n, g.n), bool) for _ in radii]
+        for c in measure.find_contours(np.pad(crown, 1).astype(np.float32), 0.5):
+            c = c - 1.0
+            seg = np.hypot(*np.diff(c, axis=0).T)
+            arc = np.concatenate([[0.0], np.cumsum(seg)])
+            if arc[-1] < 2 * r0:
+                continue
+            step = r0 * rng.uniform(1.5, 1.8)
+            at = np.arange(rng.uniform(0, step), arc[-1], step)
+            pts = np.stack([np.interp(at, arc, c[:, 0]), np.interp(at, arc, c[:, 1])], axis=1)
+            pts = np.clip(np.round(pts).astype(int), 0, g.n - 1)
+            which = rng.integers(0, len(radii), len(pts))
+            for k in range(len(radii)):
+                sel = pts[which == k]
+                centres[k][sel[:, 0], sel[:, 1]] = True
+        for k, r in enumerate(radii):  # discs on the outline: the union bulges in arcs
+            cloud_mask = cloud_mask | (_dist_to(centres[k]) <= r)
+        ink = np.maximum(ink, _stroke(_sdf(cloud_mask), lw))
+    trunk = _opening(g.branches, 1.5 * s) & ~cloud_mask  # below the cloud: two lines
+    if trunk.any():
+        trunk_sdf = _sdf(trunk | (g.branches & ndimage.binary_dilation(cloud_mask, iterations=3)))
+        ink = np.maximum(ink, _stroke(trunk_sdf, lw) * ~ndimage.binary_erosion(cloud_mask))
+    if rng.random() < inner_branches:
+        main = g.main_branches(2.0) & cloud_mask
+        ink = np.maximum(ink, _skeleton_strokes(g, main, (0.0, 3.0), 0.6, lw / s))
+    ink = _warp(ink, rng, rng.uniform(*wobble_px) * s, 16 * s)
+    return _finish(ink, size)
+
+
+def scribble(
+    sil: Silhouettes,
+    rng: np.random.Generator,
+    size: int = 256,
+    *,
+    crown_sigma_px: tuple[float, float] = (3.0, 5.0),
+    loop_sigma_px: tuple[float, float] = (2.5, 4.5),
+    spacing: tuple[float, float] = (0.6, 1.0),
+    line_px: tuple[float, float] = (1.2, 2.0),
+    coverage: tuple[float, float] = (0.75, 1.0),
+    outline: float = 0.5,
+    wobble_px: tuple[float, float] = (0.5, 1.5),
+) -> np.ndarray:
+    """Scribbled foliage: looping lines fill the crown; trunk and branches filled."""
+    g = _geometry(sil)
+    s = g.s
+    lw = rng.uniform(*line_px) * s
+    ink = np.zeros((g.n, g.n), np.float32)
+    crown = g.crown(rng.uniform(*crown_sigma_px))
+    if crown.any():
+        edge = _sdf(crown) + _noise(rng, g.n, 6 * s) * 2.0 * s
+        # level lines of a smooth random field look like a hand's loops
+        field = _noise(rng, g.n, rng.uniform(*loop_sigma_px) * s) / rng.uniform(*spacing)
+        gy, gx = np.gradient(field)
+        dist = np.abs(field - np.round(field)) / np.maximum(np.hypot(gy, gx), 1e-3)
+        holes = _noise(rng, g.n, 10 * s) < -(2.0 * rng.uniform(*coverage) - 1.0) * 1.5
+        fill = _stroke(dist, lw) * np.clip(edge, 0.0, 1.0) * ~holes
+        ink = np.maximum(ink, fill)
+        if rng.random() < outline:
+            ink = np.maximum(ink, _stroke(edge, lw))
+    trunk = g.branches & (~crown | (g.radius * 2.0 >= 3.0 * s))
+    ink = np.maximum(ink, np.clip(g.branch_sdf + 0.5, 0.0, 1.0) * trunk)
+    ink = np.maximum(ink, _skeleton_strokes(g, g.main_branches(1.0) & ~crown, (0.0,), 1.0, lw / s))
+    ink = _warp(ink, rng, rng.uniform(*wobble_px) * s, 14 * s)
+    return _finish(ink, size)
+
+
+def pencil(
+    sil: Silhouettes,
+    rng: np.random.Generator,
+    size: int = 256,
+    *,
+    paper: tuple[float, float] = (0.70, 0.96),
+    grain: tuple[float, float] = (0.01, 0.035),
+    shading: tuple[float, float] = (0.0, 0.08),
+    darkness: tuple[float, float] = (0.4, 0.75),
+    line_px: tuple[float, float] = (1.1, 1.7),
+    gaps: tuple[float, float] = (0.1, 0.3),
+    double: float = 0.6,
+    wave_px: tuple[float, float] = (1.0, 2.5),
+) -> np.ndarray:
+    """Light pencil: thin, broken, sometimes doubled lines on grey or off-white paper."""
+    g = _geometry(sil)
+    s = g.s
+    n = g.n
+    lw = rng.uniform(*line_px) * s
+    crown = g.crown(rng.uniform(3.0, 6.0))
+    crown_sdf = _sdf(crown) if crown.any() else None
+    thick = _opening(g.branches, 2.0 * s)
+    thick_sdf = _sdf(thick) if thick.any() else None
+    main = g.main_branches(1.2) & ~ndimage.binary_dilation(thick, iterations=2)
+    ink = np.zeros((n, n), np.float32)
+    passes = 2 if rng.random() < double else 1
+    for _ in range(passes):  # a second pass a little off the first: a sketchy line
+        layer = np.zeros((n, n), np.float32)
+        if crown_sdf is not None:
+            wave = _noise(rng, n, 8 * s) * rng.uniform(*wave_px) * s
+            layer = np.maximum(layer, _stroke(crown_sdf + wave, lw))
+        if thick_sdf is not None:
+            layer = np.maximum(layer, _stroke(thick_sdf, lw))
+        layer = np.maximum(layer, _skeleton_strokes(g, main, (0.0, 2.5), 0.6, lw / s))
+        layer = _warp(layer, rng, rng.uniform(0.6, 1.5) * s, 12 * s)
+        broken = _noise(rng, n, 3 * s) > ndtri(rng.uniform(*gaps))  # that fraction lifts
+        ink = np.maximum(ink, layer * broken * rng.uniform(0.7, 1.0))
+    pressure = np.clip(1.0 + 0.25 * _noise(rng, n, 20 * s), 0.5, 1.5)
+    ink = ink * pressure * rng.uniform(*darkness)
+    yy, xx = np.mgrid[0:n, 0:n].astype(np.float32) / n
+    light = rng.uniform(*paper) + rng.uniform(*shading) * (
+        rng.uniform(-1, 1) * (yy - 0.5) + rng.uniform(-1, 1) * (xx - 0.5)
+    )
+    tooth = ndimage.gaussian_filter(rng.standard_normal((n, n)).astype(np.float32), 0.7 * s)
+    sheet = np.clip(light + tooth / max(float(tooth.std()), 1e-6) * rng.uniform(*grain), 0, 1)
+    return _finish(ink, size, sheet)
+
+
+def felt(
+    sil: Silhouettes,
+    rng: np.random.Generator,
+    size: int = 256,
+    *,
+    crown_sigma_px: tuple[float, float] = (6.0, 10.0),
+    line_px: tuple[float, float] = (3.5, 6.0),
+    branch_px: float = 2.5,
+    wobble_px: tuple[float, float] = (0.8, 2.0),
+) -> np.ndarray:
+    """Felt tip: a thick smooth crown outline, the trunk and a few limbs as thick strokes."""
+    g = _geometry(sil)
+    s = g.s
+    lw = rng.uniform(*line_px) * s
+    ink = np.zeros((g.n, g.n), np.float32)
+    crown = g.crown(rng.uniform(*crown_sigma_px), level=0.2)
+    if crown.any():
+        wave = _noise(rng, g.n, 14 * s) * rng.uniform(0.5, 2.0) * s
+        ink = np.maximum(ink, _stroke(_sdf(crown) + wave, lw))
+    main = g.main_branches(branch_px)
+    ink = np.maximum(ink, _skeleton_strokes(g, main, (0.0, 8.0), 1.0, 0.8 * lw / s))
+    ink = _warp(ink, rng, rng.uniform(*wobble_px) * s, 18 * s)
+    return _finish(ink, size)
+
+
+STYLES: dict[str, StyleFn] = {
+    "sg": sg,
+    "pen": pen,
+    "cloud": cloud,
+    "scribble": scribble,
+    "pencil": pencil,
+    "felt": felt,
+}
+
+
+def check_styles(names: tuple[str, ...] | list[str]) -> tuple[str, ...]:
+    """Validate a list of style names (known, not repeated, at least one)."""
+    names = tuple(names)
+    if not names:
+        raise ValueError("no drawing style given")
+    for name in names:
+        if name not in STYLES:
+            raise ValueError(f"unknown drawing style {name!r}: choose from {', '.join(STYLES)}")
+    if len(set(names)) != len(names):
+        raise ValueError(f"drawing style listed twice: {', '.join(names)}")
+    return names
+
+
+def draw(
+    style: str, sil: Silhouettes, rng: np.random.Generator | int | None = 0, size: int = 256
+) -> np.ndarray:
+    """One view drawn in ``style``: (size, size) uint8, 255 = white paper."""
+    check_styles((style,))
+    size = int(size)
+    if not 8 <= size <= sil.n:
+        raise ValueError(f"size must be in 8..{sil.n} (the silhouettes' size), got {size}")
+    if not isinstance(rng, np.random.Generator):
+        rng = np.random.default_rng(rng)
+    return STYLES[style](sil, rng, size)

@@ -1,0 +1,98 @@
+"""A person's drawing, not only our renderer's: pencil on grey paper, a drawing in a corner of
+a big page, a dark page, noise.  The one reader normalises them; the network and the
+refinement see the same normalised image."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from refine.objective import SearchSpace
+from render.reader import FRAME_BOTTOM, SketchError, normalise_drawing
+from treesketch import Pipeline, RefineSettings
+from treesketch.pipeline import prepare_input
+from weberpenn import build_mesh, grow, species
+
+
+@pytest.fixture(scope="module")
+def sketches() -> dict[str, np.ndarray]:
+    from render.sketch import SketchRenderer
+
+    out = {}
+    for name, seed in (("maple", 41), ("pine", 42)):
+        tree = build_mesh(grow(species.sample(name, seed)), species=name)
+        out[name] = SketchRenderer(tree).sketch(0.0, 256)
+    return out
+
+
+@pytest.fixture(scope="module")
+def pipeline() -> Pipeline:
+    return Pipeline("tsn", RefineSettings(refine=False))
+
+
+def pencil_on_grey(img: np.ndarray, seed: int = 0) -> np.ndarray:
+    """Light pencil strokes (about 40% as dark as pen) on grey paper lit from one side,
+    with paper grain."""
+    rng = np.random.default_rng(seed)
+    h, w = img.shape
+    paper = np.linspace(150.0, 205.0, w)[None, :] * np.ones((h, 1))
+    stroke = (255.0 - img.astype(np.float64)) * 0.4
+    return np.clip(paper - stroke + rng.normal(0, 4, (h, w)), 0, 255).astype(np.uint8)
+
+
+def in_corner(img: np.ndarray, page: int = 850) -> np.ndarray:
+    """The drawing at its own size in the top-right corner of a big white page (30% of the
+    page's side)."""
+    out = np.full((page, page), 255, np.uint8)
+    h, w = img.shape
+    out[30 : 30 + h, page - w - 40 : page - 40] = img
+    return out
+
+
+def _unit(params, name: str) -> np.ndarray:
+    return SearchSpace.create(name, params, search_yaw=False).from_params(params)
+
+
+def test_renderer_sketches_pass_unchanged(sketches) -> None:
+    for img in sketches.values():
+        assert np.array_equal(normalise_drawing(img, 256), img)
+
+
+def test_pencil_on_grey_paper_reads_as_ink_and_the_same_species(sketches, pipeline) -> None:
+    for name, img in sketches.items():
+        grey = pencil_on_grey(img)
+        assert (grey < 200).mean() > 0.5  # the old ink rule saw a dark page
+        clean = prepare_input(grey)
+        ink_clean, ink_true = clean < 128, img < 128
+        overlap = (ink_clean & ink_true).sum() / max(ink_true.sum(), 1)
+        assert overlap > 0.9 and ink_clean.mean() < 1.3 * ink_true.mean()
+        on_white, on_grey = pipeline.estimate(img), pipeline.estimate(grey)
+        assert on_grey.species == on_white.species == name
+
+
+def test_drawing_in_a_corner_gives_the_same_tree(sketches, pipeline) -> None:
+    for name, img in sketches.items():
+        page = in_corner(img)
+        framed = prepare_input(page)
+        ys = np.flatnonzero((framed < 128).any(axis=1))
+        assert abs((ys[-1] + 1) / 256 - FRAME_BOTTOM) < 0.02
+        centred, corner = pipeline.estimate(img), pipeline.estimate(page)
+        assert corner.species == centred.species == name
+        diff = np.abs(_unit(corner.params, name) - _unit(centred.params, name))
+        assert diff.mean() < 0.05 and diff.max() < 0.25
+
+
+def test_dark_page_is_a_clear_error() -> None:
+    rng = np.random.default_rng(1)
+    dark = np.clip(rng.normal(30, 8, (300, 300)), 0, 255).astype(np.uint8)
+    with pytest.raises(SketchError, match="too dark"):
+        prepare_input(dark)
+    with pytest.raises(SketchError, match="blank"):
+        prepare_input(np.clip(rng.normal(200, 3, (300, 300)), 0, 255).astype(np.uint8))
+
+
+@pytest.mark.slow
+def test_noise_gets_the_warning() -> None:
+    noise = ((np.random.default_rng(0).random((256, 256)) > 0.6) * 255).astype(np.uint8)
+    r = Pipeline("tsn", RefineSettings(budget=6)).run(noise)
+    assert r.warning is not None and "low confidence" in r.warning

@@ -1,0 +1,69 @@
+"""treesketch.executor on a two-node Ray cluster on this machine (Ray's test cluster):
+pieces run on both nodes, and when one node is killed mid-run its pieces are retried on
+the other and the run completes."""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("ray", reason="the cluster extra (pip install .[cluster])")
+
+from treesketch.executor import RayExecutor  # noqa: E402
+
+pytestmark = pytest.mark.slow
+
+
+class Nap:
+    """Pieces that take a moment, so both nodes get some while the run is going."""
+
+    def __call__(self):
+        def one(x: int) -> int:
+            time.sleep(0.5)
+            return x + 100
+
+        return one
+
+
+def test_two_nodes_and_a_node_killed_mid_run(monkeypatch):
+    import ray
+    from ray.cluster_utils import Cluster
+
+    # the nodes' workers import this module, as a real cluster's nodes import treesketch
+    here = str(Path(__file__).resolve().parent)
+    root = str(Path(__file__).resolve().parents[1])
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([root, here, *sys.path[1:]]))
+    cluster = Cluster(
+        initialize_head=True, head_node_args={"num_cpus": 1, "include_dashboard": False}
+    )
+    try:
+        second = cluster.add_node(num_cpus=1)
+        cluster.wait_for_nodes()
+        ex = RayExecutor(address=cluster.address)
+        try:
+            assert len(ex.nodes()) == 2 and ex.workers == 2
+            head_id = cluster.head_node.node_id
+            second_id = second.node_id
+            outs, killed_after = [], None
+            for o in ex.run(Nap(), list(range(14))):
+                outs.append(o)
+                on_second = sum(1 for x in outs if x.node == second_id)
+                if killed_after is None and on_second >= 2:
+                    cluster.remove_node(second, allow_graceful=False)
+                    killed_after = len(outs)
+            assert killed_after is not None and killed_after < 14
+            assert sorted(o.index for o in outs) == list(range(14))
+            assert all(o.ok for o in outs), [o.error for o in outs if not o.ok]
+            assert sorted(o.value for o in outs) == list(range(100, 114))
+            nodes = {o.node for o in outs}
+            assert nodes == {head_id, second_id}  # ran on both ...
+            assert all(o.node == head_id for o in outs[killed_after + 1 :])  # ... then one
+        finally:
+            ex.close()
+    finally:
+        ray.shutdown()
+        cluster.shutdown()

@@ -1,0 +1,93 @@
+"""Drawing styles (render/styles.py): SG equality, determinism, what each style draws."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from render.sketch import SketchRenderer
+from render.styles import STYLES, Silhouettes, check_styles, draw
+from tests.render_helpers import simple_tree
+
+OTHER = [s for s in STYLES if s != "sg"]
+
+
+@pytest.fixture(scope="module")
+def renderer() -> SketchRenderer:
+    return SketchRenderer(simple_tree(side_branch=False))
+
+
+@pytest.fixture(scope="module")
+def sil(renderer: SketchRenderer) -> Silhouettes:
+    return Silhouettes.from_parts(renderer.parts("front", 256))
+
+
+def test_at_least_five_styles_besides_sg():
+    assert "sg" in STYLES and len(OTHER) >= 5
+
+
+@pytest.mark.parametrize("size", [256, 128])
+def test_sg_style_is_the_renderer_sketch(renderer, sil, size):
+    assert np.array_equal(draw("sg", sil, 0, size), renderer.sketch("front", size))
+
+
+@pytest.mark.parametrize("style", OTHER)
+def test_style_is_seeded_and_draws_the_tree(sil, style):
+    a = draw(style, sil, 3, 256)
+    assert a.dtype == np.uint8 and a.shape == (256, 256)
+    assert np.array_equal(a, draw(style, sil, np.random.default_rng(3), 256))
+    assert not np.array_equal(a, draw(style, sil, 4, 256))
+    paper = np.median(a)
+    ink = a < paper - 40
+    assert 0.005 < ink.mean() < 0.5
+    # nothing far from the tree: ink lies within a few pixels of its silhouettes
+    tree = (np.asarray(sil.branches) < 0.5) | (np.asarray(sil.leaves) < 0.9)
+    near = ndimage.distance_transform_edt(~tree) <= 24  # a cloud's scallops bulge out
+    assert ink[~near].mean() < 0.002
+    # the trunk (below the crown, centre column) is drawn
+    ys, xs = np.nonzero(np.asarray(sil.branches) < 0.5)
+    low = ys > np.percentile(ys, 90)
+    y0, y1 = int(ys[low].min()), int(ys[low].max())
+    x0, x1 = int(xs[low].min()) - 3, int(xs[low].max()) + 4
+    assert (a[y0:y1, x0:x1] < paper - 30).any(axis=1).mean() > 0.6
+
+
+@pytest.mark.parametrize("style", ["pen", "cloud", "felt", "sg"])
+def test_crown_outline_is_closed(sil, style):
+    a = draw(style, sil, 1, 256)
+    white = a > 160
+    lab, _ = ndimage.label(white)
+    ys, xs = np.nonzero(np.asarray(sil.leaves) < 0.9)
+    cy, cx = int(np.median(ys)), int(np.median(xs))
+    inside = lab[cy - 20 : cy + 20, cx + 8 : cx + 20]  # beside the trunk, inside the crown
+    assert lab[0, 0] not in set(inside[inside > 0].tolist())
+
+
+def test_pencil_is_light_on_textured_paper(sil):
+    a = draw("pencil", sil, 0, 256).astype(float)
+    corner = a[:40, :40]
+    assert 150 < corner.mean() < 250 and corner.std() > 1.0  # paper is not flat white
+    assert a.min() > 20  # light strokes, never pure black
+
+
+def test_empty_silhouettes_give_blank_paper():
+    white = np.ones((256, 256), np.float32)
+    sil = Silhouettes(white, white)
+    for style in STYLES:
+        a = draw(style, sil, 0, 128)
+        assert a.shape == (128, 128)
+        assert a.std() < 20 and a.min() > 100
+
+
+def test_bad_arguments(sil):
+    with pytest.raises(ValueError, match="unknown drawing style 'crayon'"):
+        draw("crayon", sil)
+    with pytest.raises(ValueError, match="listed twice"):
+        check_styles(["pen", "pen"])
+    with pytest.raises(ValueError, match="no drawing style"):
+        check_styles([])
+    with pytest.raises(ValueError, match="size must be"):
+        draw("pen", sil, 0, 512)
+    with pytest.raises(ValueError, match="square images"):
+        Silhouettes(np.ones((4, 5)), np.ones((4, 5)))

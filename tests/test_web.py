@@ -1,0 +1,155 @@
+"""The drawing page in a real browser: Debian's chromium driven by Playwright (no browser
+download), against a real server with one worker process (a fixed palm as the first
+estimate, tiny budgets)."""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from service_helpers import serve
+from web_helpers import CHROMIUM, CHROMIUM_ARGS, draw_with_mouse
+
+from treesketch.service import ServiceConfig, create_app
+
+pytestmark = pytest.mark.slow
+
+INK = """() => {
+  const c = document.getElementById('pad');
+  const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+  let n = 0;
+  for (let i = 0; i < d.length; i += 4) if (d[i] < 128) n++;
+  return n;
+}"""
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    config = ServiceConfig(
+        data=tmp_path_factory.mktemp("web"),
+        workers=1,
+        estimator="service_helpers:palm_estimator",
+    )
+    with serve(create_app(config)) as url:
+        yield url
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Any]:
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        yield b
+        b.close()
+
+
+@pytest.fixture
+def page(browser: Any, server: str) -> Iterator[Any]:
+    """A page that may talk to the server only: anything else (a CDN) fails the test."""
+    context = browser.new_context(viewport={"width": 1200, "height": 900}, accept_downloads=True)
+    outside: list[str] = []
+
+    def guard(route: Any) -> None:
+        if route.request.url.startswith(server):
+            route.continue_()
+        else:
+            outside.append(route.request.url)
+            route.abort()
+
+    context.route("**/*", guard)
+    pg = context.new_page()
+    errors: list[str] = []
+    pg.on("pageerror", lambda e: errors.append(str(e)))
+    pg.goto(server + "/")
+    yield pg
+    context.close()
+    assert not outside, f"the page fetched from outside the server: {outside}"
+    assert not errors, errors
+
+
+def test_draw_submit_view_and_download(page: Any, tmp_path: Path) -> None:
+    draw_with_mouse(page)
+    assert page.evaluate(INK) > 3000
+    page.fill("#budget", "3")
+    page.click("#submit")
+    page.wait_for_selector("body[data-model=loaded]", timeout=180_000)
+    assert page.get_attribute("body", "data-state") == "done"
+    assert page.get_attribute("body", "data-meshes") == "2"
+    assert page.inner_text("#species").lower() == "palm"
+    assert "%" in page.inner_text("#confidence")
+    assert page.evaluate("document.getElementById('progress').value") == 1
+
+    # the 3D view shows the tree: non-background pixels in its middle
+    from PIL import Image
+
+    shot = np.asarray(Image.open(io.BytesIO(page.locator("#view canvas").screenshot())))[..., :3]
+    h, w = shot.shape[:2]
+    middle = shot[h // 4 : 3 * h // 4, w // 4 : 3 * w // 4].astype(int)
+    background = np.array([0xE8, 0xEE, 0xF0])
+    tree = np.abs(middle - background).sum(axis=2) > 40
+    assert tree.mean() > 0.02, f"only {tree.mean():.3%} of the view's middle shows the tree"
+
+    for img in ("#before", "#after"):
+        assert page.evaluate(f"document.querySelector('{img}').naturalWidth") > 0
+
+    with page.expect_download() as dl:
+        page.click("#dl-glb")
+    path = tmp_path / "tree.glb"
+    dl.value.save_as(path)
+    import trimesh
+
+    data = path.read_bytes()
+    assert data[:4] == b"glTF"
+    scene = trimesh.load(io.BytesIO(data), file_type="glb")
+    assert len(scene.geometry) == 2
+
+
+def test_cancel_from_the_page(page: Any) -> None:
+    draw_with_mouse(page)
+    page.fill("#budget", "1000")
+    page.click("#submit")
+    page.wait_for_function(
+        "document.getElementById('status').textContent.startsWith('Refining')", timeout=120_000
+    )
+    page.click("#cancel")
+    page.wait_for_selector("body[data-state=cancelled]", timeout=10_000)
+    assert page.inner_text("#status") == "Cancelled."
+    assert not page.is_disabled("#submit")
+
+
+def test_undo_clear_and_eraser(page: Any) -> None:
+    draw_with_mouse(page)
+    full = page.evaluate(INK)
+    page.click("#undo")
+    assert 0 < page.evaluate(INK) < full
+    page.click("#eraser")
+    box = page.locator("#pad").bounding_box()
+    page.mouse.move(box["x"] + 5, box["y"] + box["height"] / 2)
+    page.mouse.down()
+    page.mouse.move(box["x"] + box["width"] - 5, box["y"] + box["height"] / 2, steps=20)
+    page.mouse.up()
+    erased = page.evaluate(INK)
+    page.click("#clear")
+    assert page.evaluate(INK) == 0
+    assert erased < full
+    page.click("#pen")
+    page.click("#submit")  # an empty page is refused on the page itself
+    assert "empty" in page.inner_text("#status")
+
+
+def test_phone_sized_screen(browser: Any, server: str) -> None:
+    context = browser.new_context(viewport={"width": 390, "height": 844}, has_touch=True)
+    pg = context.new_page()
+    pg.goto(server + "/")
+    box = pg.locator("#pad").bounding_box()
+    assert 300 < box["width"] <= 390
+    assert pg.evaluate("document.scrollingElement.scrollWidth") <= 390  # no sideways scroll
+    # a touch draws too
+    pg.touchscreen.tap(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    assert pg.evaluate(INK) > 0
+    context.close()

@@ -1,0 +1,25 @@
+"""The job service: ``create_app(ServiceConfig(data=...))`` -> a FastAPI app.
+
+- ``POST /jobs`` (multipart: ``sketch`` file; fields ``refine``, ``budget``,
+  ``time_limit``, ``height``, ``estimator``) -> 202 with the job's id and links; 503 with
+  ``Retry-After`` when the queue is full.
+- ``GET /jobs/{id}``: state (queued, running, done, failed, cancelled, expired), place in
+  the queue, progress, and when done the result; ``GET /jobs/{id}/events``: the same as
+  Server-Sent Events until the job finishes; ``DELETE /jobs/{id}``: cancel.
+- ``GET /jobs/{id}/tree.glb`` (and ``tree.json``, ``tree_sapling.py``, ``compare.png``,
+  ``sketch_before.png``, ``sketch_after.png``); 410 once expired.
+- ``GET /jobs?limit=``, ``GET /health``, ``GET /status``; ``POST /predict`` submits and
+  waits (and cancels if the client leaves); ``GET /`` is the drawing page.
+
+Jobs live in SQLite (WAL) under the data folder with their artefacts; on restart, jobs
+that were running are marked failed and queued ones run.  Modules: ``store`` (the
+database), ``pool`` and ``worker`` (processes), ``runner`` (the pipeline run), ``limits``
+(checks before work), ``app`` (routes).
+"""
+
+from .app import ServiceConfig, create_app
+from .limits import Limits
+from .runner import ARTEFACTS, JobOptions
+from .store import JobStore
+
+__all__ = ["ARTEFACTS", "JobOptions", "JobStore", "Limits", "ServiceConfig", "create_app"]

@@ -1,0 +1,367 @@
+"""The HTTP front: FastAPI routes over the job store and the worker pool.
+
+Every route is ``async`` and does no pipeline work: database reads and writes are short
+and run in the thread pool, refinements run in the worker processes.  So ``/health`` and
+``/jobs/{id}`` answer at once however busy the workers are.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import hmac
+import json
+import time
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from fastapi import FastAPI, HTTPException, Request
+from fastapi.responses import FileResponse, JSONResponse, Response, StreamingResponse
+from starlette.concurrency import run_in_threadpool
+from starlette.types import ASGIApp, Receive, Scope, Send
+
+from .limits import LimitError, Limits, check_image, parse_options, read_form
+from .pool import WorkerPool, default_workers
+from .runner import ARTEFACTS
+from .store import Job, JobStore
+
+__all__ = ["ServiceConfig", "create_app"]
+
+STATIC = Path(__file__).parent / "static"
+EVENT_TICK = 0.25  # seconds between checks in the events stream and /predict
+
+
+@dataclass(frozen=True)
+class ServiceConfig:
+    """Everything the service is started with (the CLI's options)."""
+
+    data: Path
+    workers: int = field(default_factory=default_workers)
+    estimator: str = "tsn"
+    estimators: tuple[str, ...] = ("template",)  # what a job may ask for besides the default
+    max_queue: int = 64
+    limits: Limits = Limits()
+    default_budget: int = 100
+    default_time_limit: float = 50.0
+    retention_days: float | None = 30.0
+    retention_bytes: int | None = 2 * 1024**3
+    token: str | None = None
+    cors: tuple[str, ...] = ()
+    cancel_grace: float = 3.0
+    retry_after: int = 10
+    vendor: Path | None = None  # node_modules holding three (default: beside the page)
+
+    @property
+    def allowed_estimators(self) -> tuple[str, ...]:
+        return tuple(dict.fromkeys((self.estimator, *self.estimators)))
+
+
+class TokenGuard:
+    """Plain ASGI middleware: every path but the page, its files and ``/health`` needs the
+    token (``Authorization: Bearer`` or ``?token=``).  Not Starlette's ``BaseHTTPMiddleware``,
+    which hides a client's disconnect from the route (``/predict`` must see it)."""
+
+    def __init__(self, app: ASGIApp, token: str, open_paths: tuple[str, ...]) -> None:
+        self.app, self.token, self.open_paths = app, token.encode(), open_paths
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        path = scope.get("path", "")
+        if (
+            scope["type"] != "http"
+            or path in self.open_paths
+            or path.startswith(("/static/", "/vendor/"))
+        ):
+            await self.app(scope, receive, send)
+            return
+        request = Request(scope)
+        given = request.headers.get("authorization", "").removeprefix("Bearer ").strip()
+        given = given or request.query_params.get("token", "")
+        if hmac.compare_digest(given.encode(), self.token):
+            await self.app(scope, receive, send)
+            return
+        response = JSONResponse(
+            {"detail": "a token is needed: 'Authorization: Bearer TOKEN' or ?token="},
+            status_code=401,
+        )
+        await response(scope, receive, send)
+
+
+def _links(job_id: str) -> dict[str, str]:
+    base = f"/jobs/{job_id}"
+    links = {"self": base, "events": f"{base}/events"}
+    links.update({name: f"{base}/{name}" for name in ARTEFACTS})
+    return links
+
+
+def _view(job: Job, position: int | None, live: dict[str, Any] | None) -> dict[str, Any]:
+    budget = job.options.get("budget")
+    progress = live or job.progress
+    if job.state == "queued" or progress is None:
+        progress = {"evaluations": 0, "budget": budget, "best_loss": None, "elapsed": 0.0}
+    if job.state == "running" and job.started is not None:
+        progress = {**progress, "elapsed": time.time() - job.started}
+    if job.state == "done" and job.summary:
+        progress = {
+            "evaluations": job.summary["evaluations"],
+            "budget": budget,
+            "best_loss": job.summary["losses"]["after"],
+            "elapsed": job.summary["timings"].get("job"),
+        }
+    out: dict[str, Any] = {
+        "id": job.id,
+        "state": job.state,
+        "position": position,
+        "created": job.created,
+        "started": job.started,
+        "finished": job.finished,
+        "options": job.options,
+        "progress": progress,
+        "error": job.error,
+        "links": _links(job.id),
+    }
+    if job.state == "done":
+        out["result"] = job.summary
+    return out
+
+
+def create_app(config: ServiceConfig) -> FastAPI:
+    """The app; its worker pool starts and stops with the app's lifespan."""
+    store = JobStore(config.data)
+    pool = WorkerPool(
+        store,
+        config.workers,
+        config.estimator,
+        cancel_grace=config.cancel_grace,
+        retention=(
+            None if config.retention_days is None else config.retention_days * 86400.0,
+            config.retention_bytes,
+        ),
+    )
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        await run_in_threadpool(pool.start)
+        try:
+            yield
+        finally:
+            await run_in_threadpool(pool.stop)
+
+    app = FastAPI(
+        title="TreeSketch",
+        description="A sketch of a tree -> a 3D Weber-Penn tree, as jobs with live progress.",
+        lifespan=lifespan,
+    )
+    app.state.store, app.state.pool, app.state.config = store, pool, config
+
+    if config.cors:
+        from fastapi.middleware.cors import CORSMiddleware
+
+        app.add_middleware(
+            CORSMiddleware,
+            allow_origins=list(config.cors),
+            allow_methods=["GET", "POST", "DELETE"],
+            allow_headers=["Authorization", "Content-Type"],
+        )
+
+    open_paths = ("/", "/health", "/favicon.ico")
+
+    @app.get("/favicon.ico", include_in_schema=False)
+    async def favicon() -> Response:
+        return Response(status_code=204)
+
+    if config.token:
+        app.add_middleware(TokenGuard, token=config.token, open_paths=open_paths)
+
+    async def get_job(job_id: str) -> Job:
+        job = await run_in_threadpool(store.get, job_id)
+        if job is None:
+            raise HTTPException(404, f"no job {job_id!r}")
+        return job
+
+    async def view(job: Job) -> dict[str, Any]:
+        position = (
+            await run_in_threadpool(store.position, job.id) if job.state == "queued" else None
+        )
+        return _view(job, position, pool.live(job.id) if job.state == "running" else None)
+
+    async def submit(request: Request) -> Job:
+        try:
+            fields, data = await read_form(
+                request.headers.get("content-type", ""),
+                request.headers.get("content-length"),
+                request.stream(),
+                config.limits,
+            )
+            options = parse_options(
+                fields,
+                config.limits,
+                config.allowed_estimators,
+                config.estimator,
+                config.default_budget,
+                config.default_time_limit,
+            )
+            if data is None:
+                raise LimitError(422, "no sketch: send the image as a file field named 'sketch'")
+            await run_in_threadpool(check_image, data, config.limits)
+        except LimitError as exc:
+            headers = {"Connection": "close"} if exc.status == 413 else None
+            raise HTTPException(exc.status, str(exc), headers=headers) from exc
+        job = await run_in_threadpool(store.create, data, options.to_dict(), config.max_queue)
+        if job is None:
+            raise HTTPException(
+                503,
+                f"the queue is full ({config.max_queue} jobs waiting); try again later",
+                headers={"Retry-After": str(config.retry_after)},
+            )
+        pool.wakeup()
+        return job
+
+    @app.get("/", include_in_schema=False)
+    async def index() -> Response:
+        page = STATIC / "index.html"
+        if not page.is_file():
+            raise HTTPException(404, "the page is not installed")
+        return FileResponse(page, media_type="text/html")
+
+    @app.get("/health")
+    async def health() -> dict[str, Any]:
+        workers = pool.status()
+        return {
+            "status": "ok",
+            "estimator": config.estimator,
+            "workers": sum(w["alive"] for w in workers),
+            "busy": sum(w["job"] is not None for w in workers),
+        }
+
+    @app.get("/status")
+    async def status() -> dict[str, Any]:
+        counts = await run_in_threadpool(store.counts)
+        return {
+            "jobs": counts,
+            "queue": {"waiting": counts["queued"], "max": config.max_queue},
+            "workers": pool.status(),
+            "workers_replaced": pool.replaced,
+            "worker_error": pool.error,
+            "estimators": list(config.allowed_estimators),
+            "limits": {
+                "max_upload_bytes": config.limits.max_upload_bytes,
+                "max_pixels": config.limits.max_pixels,
+                "max_budget": config.limits.max_budget,
+                "default_budget": config.default_budget,
+            },
+        }
+
+    @app.post("/jobs", status_code=202)
+    async def create_job(request: Request) -> JSONResponse:
+        job = await submit(request)
+        body = await view(job)
+        return JSONResponse(body, status_code=202, headers={"Location": f"/jobs/{job.id}"})
+
+    @app.get("/jobs")
+    async def list_jobs(limit: int = 20) -> dict[str, Any]:
+        if not 1 <= limit <= 500:
+            raise HTTPException(422, f"limit must be in 1..500, got {limit}")
+        jobs = await run_in_threadpool(store.recent, limit)
+        return {"jobs": [_view(j, None, None) for j in jobs]}
+
+    @app.get("/jobs/{job_id}")
+    async def get_one(job_id: str) -> dict[str, Any]:
+        return await view(await get_job(job_id))
+
+    @app.delete("/jobs/{job_id}")
+    async def cancel(job_id: str) -> JSONResponse:
+        job = await get_job(job_id)
+        if job.state == "queued" and await run_in_threadpool(store.cancel_queued, job_id):
+            return JSONResponse(await view(await get_job(job_id)))
+        if job.state in ("queued", "running") and pool.cancel(job_id):
+            body = await view(job)
+            body["cancelling"] = True
+            return JSONResponse(body, status_code=202)
+        job = await get_job(job_id)
+        if job.is_finished:
+            raise HTTPException(409, f"job {job_id} is already {job.state}")
+        return JSONResponse(await view(job), status_code=202)
+
+    @app.get("/jobs/{job_id}/events")
+    async def events(job_id: str, request: Request) -> StreamingResponse:
+        await get_job(job_id)
+
+        async def stream() -> AsyncIterator[bytes]:
+            last: str | None = None
+            yield b"retry: 1000\n\n"
+            while True:
+                job = await get_job(job_id)
+                body = await view(job)
+                kind = job.state if job.is_finished else "progress"
+                text = json.dumps(body)
+                if text != last:
+                    last = text
+                    yield f"event: {kind}\ndata: {text}\n\n".encode()
+                if job.is_finished or await request.is_disconnected():
+                    return
+                await asyncio.sleep(EVENT_TICK)
+
+        return StreamingResponse(
+            stream(),
+            media_type="text/event-stream",
+            headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"},
+        )
+
+    @app.get("/jobs/{job_id}/{name}")
+    async def artefact(job_id: str, name: str) -> Response:
+        if name not in ARTEFACTS:
+            raise HTTPException(404, f"no artefact {name!r}; there are {', '.join(ARTEFACTS)}")
+        job = await get_job(job_id)
+        if job.state == "expired":
+            raise HTTPException(410, f"job {job_id} has expired; its files were removed")
+        if job.state != "done":
+            raise HTTPException(409, f"job {job_id} is {job.state}, not done")
+        path = store.result_dir(job_id) / name
+        if not path.is_file():
+            raise HTTPException(410, f"job {job_id}'s {name} is gone")
+        return FileResponse(
+            path,
+            media_type=ARTEFACTS[name],
+            filename=f"{job_id[:8]}_{name}",
+            content_disposition_type="attachment" if not name.endswith(".png") else "inline",
+        )
+
+    @app.post("/predict")
+    async def predict(request: Request) -> dict[str, Any]:
+        """Submit and wait: the job's result, or its error.  If the client goes away the
+        job is cancelled."""
+        job = await submit(request)
+        t0 = time.monotonic()
+        while True:
+            await asyncio.sleep(EVENT_TICK)
+            if await request.is_disconnected():
+                if not await run_in_threadpool(store.cancel_queued, job.id):
+                    pool.cancel(job.id)
+                raise HTTPException(499, "client disconnected")
+            job = await get_job(job.id)
+            if job.is_finished:
+                break
+        if job.state == "done":
+            assert job.summary is not None
+            return {
+                "id": job.id,
+                **job.summary,
+                "glb": f"/jobs/{job.id}/tree.glb",
+                "links": _links(job.id),
+                "seconds": time.monotonic() - t0,
+            }
+        input_error = bool(job.summary and job.summary.get("input_error"))
+        status = 422 if input_error else 500 if job.state == "failed" else 409
+        raise HTTPException(status, job.error or f"job {job.state}")
+
+    if STATIC.is_dir():
+        from fastapi.staticfiles import StaticFiles
+
+        app.mount("/static", StaticFiles(directory=STATIC), name="static")
+        vendor = config.vendor or STATIC / "node_modules"
+        if (vendor / "three").is_dir():
+            app.mount("/vendor/three", StaticFiles(directory=vendor / "three"), name="three")
+
+    return app

@@ -1,0 +1,109 @@
+"""What a worker does with one job: the pipeline run and the artefact files.
+
+This is the only module of the service that touches the pipeline, through the seam:
+``treesketch.Pipeline(estimator, settings).run(sketch, height, progress, cancel)`` and
+``treesketch.result_files``.  A :class:`Runner` loads its estimator once per worker
+process; ``Runner.run`` turns a stored sketch and the job's options into artefact bytes
+and the result's summary.
+
+An estimator ``spec`` is whatever ``treesketch.load_estimator`` takes (``"tsn"``,
+``"template"``, a checkpoint path) or ``"package.module:name"`` naming an estimator
+object or class (how tests and researchers plug in their own without touching the
+service).
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+__all__ = ["ARTEFACTS", "JobOptions", "Runner", "load_estimator_spec"]
+
+# file name -> (output kind of treesketch.result_files, media type), in the page's order
+ARTEFACT_KINDS: dict[str, tuple[str, str]] = {
+    "tree.glb": ("glb", "model/gltf-binary"),
+    "tree.json": ("json", "application/json"),
+    "tree_sapling.py": ("preset", "text/x-python"),
+    "compare.png": ("compare", "image/png"),
+    "sketch_before.png": ("sketch_before", "image/png"),
+    "sketch_after.png": ("sketch_after", "image/png"),
+}
+ARTEFACTS: dict[str, str] = {name: media for name, (_, media) in ARTEFACT_KINDS.items()}
+
+
+@dataclass(frozen=True)
+class JobOptions:
+    """A job's options, validated (see ``limits.parse_options``)."""
+
+    refine: bool = True
+    budget: int = 100
+    time_limit: float | None = 50.0
+    height: float | None = None
+    estimator: str = "tsn"  # a spec the server allows
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> JobOptions:
+        return cls(**d)
+
+    def settings(self) -> Any:
+        """The pipeline's ``RefineSettings`` for these options (validated)."""
+        from treesketch import RefineSettings
+
+        return RefineSettings().replace(
+            refine=self.refine, budget=self.budget, time_limit=self.time_limit
+        )
+
+
+def load_estimator_spec(spec: str) -> Any:
+    """An estimator from a spec (see the module text); ValueError when there is none."""
+    from treesketch import load_estimator
+
+    if ":" in spec and not Path(spec).exists():
+        module, _, name = spec.partition(":")
+        obj: Any = importlib.import_module(module)
+        for part in name.split("."):
+            obj = getattr(obj, part)
+        if isinstance(obj, type):
+            obj = obj()
+        if not hasattr(obj, "estimate"):
+            raise ValueError(f"{spec} is not an estimator (it has no estimate method)")
+        return obj
+    return load_estimator(spec)
+
+
+class Runner:
+    """One worker's pipeline: the default estimator loaded once, at start; another that
+    a job asks for (from the server's short allowed list) loaded on first use and kept."""
+
+    def __init__(self, spec: str) -> None:
+        self.spec = spec
+        self.estimators: dict[str, Any] = {spec: load_estimator_spec(spec)}
+
+    def estimator(self, spec: str) -> Any:
+        if spec not in self.estimators:
+            self.estimators[spec] = load_estimator_spec(spec)
+        return self.estimators[spec]
+
+    def run(
+        self,
+        sketch: bytes,
+        options: JobOptions,
+        progress: Callable[[Any], None],
+        cancel: Callable[[], bool],
+    ) -> tuple[dict[str, bytes], dict[str, Any]]:
+        """(artefacts by file name, summary) of one job.  Raises ``treesketch.Cancelled``
+        within one evaluation of ``cancel()`` turning True, ``ValueError``
+        (``SketchError``) for a sketch or option the pipeline rejects."""
+        from treesketch import Pipeline, result_files
+
+        pipeline = Pipeline(self.estimator(options.estimator), options.settings())
+        result = pipeline.run(sketch, height=options.height, progress=progress, cancel=cancel)
+        kinds = {kind: name for name, (kind, _) in ARTEFACT_KINDS.items()}
+        files = result_files(result, kinds)
+        return {kinds[k]: data for k, data in files.items() if k in kinds}, result.summary()

@@ -1,0 +1,273 @@
+"""The job store: one SQLite database (WAL mode) plus a results folder per job.
+
+A job is one row: its options, its state, its latest progress and, when done, its
+summary (species, scores, parameters, distances, ...).  The artefacts (GLB, JSON,
+preset, PNGs) lie in ``results/<id>/``, written atomically by the worker that made them;
+the uploaded sketch lies in ``uploads/<id>.img``.
+
+States: ``queued`` -> ``running`` -> ``done`` | ``failed`` | ``cancelled``; a finished
+job whose artefacts were removed by the retention limits becomes ``expired`` (the API
+answers 410 for its artefacts).
+
+Each thread keeps its own connection, so the store may be used from any thread and from
+several processes; WAL lets readers (status pages) go on while a writer commits.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import sqlite3
+import threading
+import time
+import uuid
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from weberpenn.fileio import atomic_write
+
+__all__ = ["FINISHED", "STATES", "Job", "JobStore"]
+
+STATES = ("queued", "running", "done", "failed", "cancelled", "expired")
+FINISHED = ("done", "failed", "cancelled", "expired")
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS jobs (
+    id TEXT PRIMARY KEY,
+    seq INTEGER NOT NULL,
+    state TEXT NOT NULL,
+    created REAL NOT NULL,
+    started REAL,
+    finished REAL,
+    options TEXT NOT NULL,
+    progress TEXT,
+    summary TEXT,
+    error TEXT,
+    bytes INTEGER NOT NULL DEFAULT 0
+);
+CREATE INDEX IF NOT EXISTS jobs_state_seq ON jobs (state, seq);
+CREATE INDEX IF NOT EXISTS jobs_created ON jobs (created);
+"""
+
+
+@dataclass(frozen=True)
+class Job:
+    """One row of the store, as plain data."""
+
+    id: str
+    state: str
+    created: float
+    started: float | None
+    finished: float | None
+    options: dict[str, Any]
+    progress: dict[str, Any] | None
+    summary: dict[str, Any] | None
+    error: str | None
+    bytes: int
+
+    @property
+    def is_finished(self) -> bool:
+        return self.state in FINISHED
+
+
+def _job(row: sqlite3.Row) -> Job:
+    def load(text: str | None) -> Any:
+        return None if text is None else json.loads(text)
+
+    return Job(
+        id=row["id"],
+        state=row["state"],
+        created=row["created"],
+        started=row["started"],
+        finished=row["finished"],
+        options=load(row["options"]),
+        progress=load(row["progress"]),
+        summary=load(row["summary"]),
+        error=row["error"],
+        bytes=int(row["bytes"]),
+    )
+
+
+class JobStore:
+    """Jobs in ``root/jobs.sqlite``, uploads in ``root/uploads``, results in ``root/results``."""
+
+    def __init__(self, root: str | Path) -> None:
+        self.root = Path(root).expanduser()
+        self.uploads = self.root / "uploads"
+        self.results = self.root / "results"
+        for d in (self.root, self.uploads, self.results):
+            d.mkdir(parents=True, exist_ok=True)
+        self.path = self.root / "jobs.sqlite"
+        self._local = threading.local()
+        with self._db() as db:
+            db.execute("PRAGMA journal_mode=WAL")
+            db.executescript(_SCHEMA)
+
+    @contextmanager
+    def _db(self) -> Iterator[sqlite3.Connection]:
+        """This thread's connection (opened once per thread and process: a status poll
+        then costs a query, not a connect)."""
+        db = getattr(self._local, "db", None)
+        if db is None or self._local.pid != os.getpid():
+            db = sqlite3.connect(self.path, timeout=30.0, isolation_level=None)
+            db.row_factory = sqlite3.Row
+            db.execute("PRAGMA synchronous=NORMAL")
+            self._local.db, self._local.pid = db, os.getpid()
+        try:
+            yield db
+        except BaseException:
+            if db.in_transaction:
+                db.execute("ROLLBACK")
+            raise
+
+    # -- paths -------------------------------------------------------------------------
+    def upload_path(self, job_id: str) -> Path:
+        return self.uploads / f"{job_id}.img"
+
+    def result_dir(self, job_id: str) -> Path:
+        return self.results / job_id
+
+    # -- writing -----------------------------------------------------------------------
+    def create(self, sketch_png: bytes, options: dict[str, Any], max_queued: int) -> Job | None:
+        """Queue a job (its sketch saved first); None when ``max_queued`` jobs already wait."""
+        job_id = uuid.uuid4().hex
+        atomic_write(self.upload_path(job_id), sketch_png)
+        now = time.time()
+        with self._db() as db:
+            db.execute("BEGIN IMMEDIATE")
+            (queued,) = db.execute("SELECT COUNT(*) FROM jobs WHERE state='queued'").fetchone()
+            if queued >= max_queued:
+                db.execute("ROLLBACK")
+                self.upload_path(job_id).unlink(missing_ok=True)
+                return None
+            (seq,) = db.execute("SELECT COALESCE(MAX(seq), 0) + 1 FROM jobs").fetchone()
+            db.execute(
+                "INSERT INTO jobs (id, seq, state, created, options, bytes) VALUES (?,?,?,?,?,?)",
+                (job_id, seq, "queued", now, json.dumps(options), len(sketch_png)),
+            )
+            db.execute("COMMIT")
+        job = self.get(job_id)
+        assert job is not None
+        return job
+
+    def claim_next(self) -> Job | None:
+        """The oldest queued job, now marked running; None when nothing waits."""
+        with self._db() as db:
+            db.execute("BEGIN IMMEDIATE")
+            row = db.execute(
+                "SELECT id FROM jobs WHERE state='queued' ORDER BY seq LIMIT 1"
+            ).fetchone()
+            if row is None:
+                db.execute("ROLLBACK")
+                return None
+            db.execute(
+                "UPDATE jobs SET state='running', started=? WHERE id=?", (time.time(), row["id"])
+            )
+            db.execute("COMMIT")
+        return self.get(row["id"])
+
+    def set_progress(self, job_id: str, progress: dict[str, Any]) -> None:
+        with self._db() as db:
+            db.execute(
+                "UPDATE jobs SET progress=? WHERE id=? AND state='running'",
+                (json.dumps(progress), job_id),
+            )
+
+    def finish(self, job_id: str, summary: dict[str, Any]) -> None:
+        size = sum(p.stat().st_size for p in self.result_dir(job_id).glob("*") if p.is_file())
+        with self._db() as db:
+            db.execute(
+                "UPDATE jobs SET state='done', finished=?, summary=?, bytes=bytes+? "
+                "WHERE id=? AND state='running'",
+                (time.time(), json.dumps(summary), size, job_id),
+            )
+
+    def fail(
+        self, job_id: str, message: str, state: str = "failed", input_error: bool = False
+    ) -> bool:
+        """Mark a queued or running job failed (or cancelled); False if it had finished.
+        ``input_error``: the sketch or an option was at fault, not the program."""
+        with self._db() as db:
+            cur = db.execute(
+                "UPDATE jobs SET state=?, finished=?, error=?, summary=? "
+                "WHERE id=? AND state IN ('queued', 'running')",
+                (state, time.time(), message, json.dumps({"input_error": input_error}), job_id),
+            )
+            return cur.rowcount > 0
+
+    def cancel_queued(self, job_id: str) -> bool:
+        """Cancel a job that has not started; False if it is not waiting."""
+        with self._db() as db:
+            cur = db.execute(
+                "UPDATE jobs SET state='cancelled', finished=?, error=? "
+                "WHERE id=? AND state='queued'",
+                (time.time(), "cancelled before it started", job_id),
+            )
+            return cur.rowcount > 0
+
+    def recover(self) -> list[str]:
+        """At start-up: jobs left running by a stopped server are failed (their worker is
+        gone and a re-run could take as long again); queued jobs stay queued.  Returns the
+        failed ids."""
+        with self._db() as db:
+            ids = [r["id"] for r in db.execute("SELECT id FROM jobs WHERE state='running'")]
+        for job_id in ids:
+            self.fail(job_id, "the server stopped while this job was running; submit it again")
+        return ids
+
+    def expire(self, max_age_s: float | None, max_bytes: int | None) -> list[str]:
+        """Remove the artefacts of finished jobs older than ``max_age_s`` and, oldest
+        first, of as many more as needed to keep the total under ``max_bytes``."""
+        now = time.time()
+        with self._db() as db:
+            rows = db.execute(
+                "SELECT id, created, bytes FROM jobs "
+                "WHERE state IN ('done', 'failed', 'cancelled') ORDER BY seq"
+            ).fetchall()
+            (total,) = db.execute("SELECT COALESCE(SUM(bytes), 0) FROM jobs").fetchone()
+        gone: list[str] = []
+        for row in rows:
+            too_old = max_age_s is not None and now - row["created"] > max_age_s
+            too_big = max_bytes is not None and total > max_bytes
+            if not (too_old or too_big):
+                continue
+            total -= row["bytes"]
+            gone.append(row["id"])
+        for job_id in gone:
+            shutil.rmtree(self.result_dir(job_id), ignore_errors=True)
+            self.upload_path(job_id).unlink(missing_ok=True)
+            with self._db() as db:
+                db.execute("UPDATE jobs SET state='expired', bytes=0 WHERE id=?", (job_id,))
+        return gone
+
+    # -- reading -----------------------------------------------------------------------
+    def get(self, job_id: str) -> Job | None:
+        with self._db() as db:
+            row = db.execute("SELECT * FROM jobs WHERE id=?", (job_id,)).fetchone()
+        return None if row is None else _job(row)
+
+    def position(self, job_id: str) -> int | None:
+        """How many queued jobs are ahead of this one (0: next); None if not queued."""
+        with self._db() as db:
+            row = db.execute(
+                "SELECT (SELECT COUNT(*) FROM jobs q WHERE q.state='queued' AND q.seq < j.seq) "
+                "AS ahead FROM jobs j WHERE j.id=? AND j.state='queued'",
+                (job_id,),
+            ).fetchone()
+        return None if row is None else int(row["ahead"])
+
+    def recent(self, limit: int) -> list[Job]:
+        with self._db() as db:
+            rows = db.execute("SELECT * FROM jobs ORDER BY seq DESC LIMIT ?", (limit,)).fetchall()
+        return [_job(r) for r in rows]
+
+    def counts(self) -> dict[str, int]:
+        with self._db() as db:
+            rows = db.execute("SELECT state, COUNT(*) AS n FROM jobs GROUP BY state").fetchall()
+        out = dict.fromkeys(STATES, 0)
+        out.update({r["state"]: int(r["n"]) for r in rows})
+        return out

@@ -1,0 +1,101 @@
+"""The worker process: loads the estimator once, then runs the jobs it is sent.
+
+It talks to the pool over one duplex pipe.  In: ``(job_id, options dict)`` or ``None``
+(stop).  Out: ``("ready", pid)`` once loaded, then per job any number of
+``("progress", job_id, {...})`` and one of ``("done", job_id, summary)``,
+``("cancelled", job_id, "")`` or ``("failed", job_id, {"message", "input"})`` (``input``:
+the sketch or an option was at fault, not the program).
+
+Cancelling: the pool sets the shared ``cancel`` value to 1; the pipeline's progress
+callback sees it at the next evaluation and the run stops.  The worker writes the job's
+artefacts itself (``results/<id>/``, all or nothing) so that no big bytes cross the pipe.
+"""
+
+from __future__ import annotations
+
+import gc
+import json
+import math
+import time
+import traceback
+from multiprocessing.connection import Connection
+from pathlib import Path
+from typing import Any
+
+__all__ = ["worker_main"]
+
+WORKER_NICE = 5
+PROGRESS_EVERY = 0.1  # seconds between progress messages (the pipe is cheap, the DB is not)
+
+
+class _Reporter:
+    """The progress callback of one job: at most one message per PROGRESS_EVERY."""
+
+    def __init__(self, conn: Connection, job_id: str, t0: float) -> None:
+        self.conn, self.job_id, self.t0, self.last = conn, job_id, t0, 0.0
+
+        self.stage = ""
+
+    def __call__(self, p: Any) -> None:
+        """``p``: a ``treesketch.Progress``; a new stage is always told."""
+        now = time.perf_counter()
+        if p.stage != self.stage or now - self.last >= PROGRESS_EVERY:
+            self.last, self.stage = now, p.stage
+            best = p.best_loss if math.isfinite(p.best_loss) else None
+            info = {
+                "stage": p.stage,
+                "evaluations": p.evaluations,
+                "best_loss": best,
+                "elapsed": now - self.t0,
+            }
+            self.conn.send(("progress", self.job_id, info))
+
+
+def worker_main(spec: str, conn: Connection, cancel: Any, root: str) -> None:
+    """Entry point of a spawned worker (``cancel``: a shared ``multiprocessing.Value``)."""
+    import os
+
+    from treesketch import Cancelled
+    from weberpenn.fileio import write_together
+
+    from .runner import JobOptions, Runner
+
+    # below the HTTP front: a status poll must not wait behind a refinement for a core
+    os.nice(WORKER_NICE)
+    try:
+        runner = Runner(spec)
+    except Exception as exc:  # noqa: BLE001 - reported to the pool, which shows it
+        conn.send(("broken", 0, f"cannot load the estimator {spec!r}: {exc}"))
+        return
+    conn.send(("ready", os.getpid(), ""))
+    results = Path(root) / "results"
+    uploads = Path(root) / "uploads"
+    while True:
+        try:
+            msg = conn.recv()
+        except (EOFError, OSError):  # the pool went away
+            return
+        if msg is None:
+            return
+        job_id, options = msg
+        t0 = time.perf_counter()
+        progress = _Reporter(conn, job_id, t0)
+        try:
+            opts = JobOptions.from_dict(options)
+            sketch = (uploads / f"{job_id}.img").read_bytes()
+            files, summary = runner.run(sketch, opts, progress, lambda: bool(cancel.value))
+            summary = json.loads(json.dumps(summary, default=float))  # plain JSON types
+            out = results / job_id
+            write_together({out / name: data for name, data in files.items()})
+            summary["timings"]["job"] = time.perf_counter() - t0
+            conn.send(("done", job_id, summary))
+        except Cancelled:
+            conn.send(("cancelled", job_id, ""))
+        except ValueError as exc:  # SketchError and option errors: the input's fault
+            conn.send(("failed", job_id, {"message": str(exc), "input": True}))
+        except Exception as exc:  # noqa: BLE001 - one bad job must not end the worker
+            traceback.print_exc()
+            conn.send(
+                ("failed", job_id, {"message": f"{type(exc).__name__}: {exc}", "input": False})
+            )
+        gc.collect()
