@@ -123,7 +123,7 @@ class Camera:
 
         Sub-pixel samples are a regular ``ss x ss`` grid, so results are deterministic.
         """
-        size, ss = _check_size(size), int(supersample)
+        size, ss = check_size(size), int(supersample)
         if ss < 1:
             raise ValueError(f"supersample must be >= 1, got {supersample!r}")
         n = size * ss
@@ -149,7 +149,7 @@ class Camera:
         return np.stack([col, row], axis=1)
 
 
-def _check_size(size: int) -> int:
+def check_size(size: int) -> int:
     if isinstance(size, bool) or int(size) != size or not 8 <= int(size) <= 4096:
         raise ValueError(f"image size must be an integer in [8, 4096], got {size!r}")
     return int(size)

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from .camera import VIEWS, Framing, _check_size, resolve_yaw
+from .camera import VIEWS, Framing, check_size, resolve_yaw
 from .edges import EdgeConfig, branch_sketch, combine, foliage_sketch, thin_mask
 
 __all__ = ["VIEWS", "EdgeConfig", "SketchParts", "SketchRenderer", "sketch"]
@@ -73,7 +73,7 @@ class SketchRenderer:
         128-pixel sketch is exactly a downsized 256-pixel one; larger ones are drawn at
         their own size with the pixel constants scaled up.
         """
-        size = _check_size(size)
+        size = check_size(size)
         cfg = self.config
         work = max(size, int(cfg.reference_size))
         ss = int(cfg.supersample)
@@ -108,7 +108,7 @@ class SketchRenderer:
     ) -> np.ndarray:
         """(size, size, 3) uint8 shaded picture with the species' bark and leaf colours
         (``supersample``^2 rays per pixel; default ``config.supersample``)."""
-        size = _check_size(size)
+        size = check_size(size)
         ss = int(self.config.supersample if supersample is None else supersample)
         if not 1 <= ss <= 8:
             raise ValueError(f"supersample must be in 1..8, got {supersample!r}")
