@@ -192,5 +192,13 @@ meshes = [o for o in bpy.data.objects if o.type == "MESH"]
 assert meshes, "no GLB imported"
 lo, hi = world_z(meshes)
 assert abs(lo) < 0.02 * (hi - lo) and hi - lo > 0.5, (lo, hi)
-step(f"GLB from a Grease Pencil drawing: z {lo:.2f}..{hi:.2f}")
+images = {
+    n.image
+    for o in meshes
+    for m in o.data.materials
+    for n in m.node_tree.nodes
+    if n.type == "TEX_IMAGE" and n.image
+}
+assert len(images) == 2 and all(i.packed_file for i in images), "textures not packed"
+step(f"GLB from a Grease Pencil drawing: z {lo:.2f}..{hi:.2f}; {len(images)} textures packed")
 step(f"ALL OK (Blender {bpy.app.version_string})")

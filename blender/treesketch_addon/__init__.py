@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import os
 import queue
+import shutil
 import tempfile
 import threading
 from pathlib import Path
@@ -174,7 +175,11 @@ def add_result(context, out: backend.Outputs, yaw: float | None = None) -> list:
         if _prefs(context).copy_presets:
             _copy_to_sapling_menu(out.preset)
     else:
+        images = set(bpy.data.images)
         bpy.ops.import_scene.gltf(filepath=str(out.glb))
+        for img in set(bpy.data.images) - images:
+            if img.source == "FILE" and not img.packed_file:
+                img.pack()  # the prediction's folder is removed afterwards
         turn = 0.0  # the GLB already faces the drawn view
     new = [o for o in bpy.data.objects if o not in before]
     for o in new:
@@ -236,21 +241,20 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
                 _enable_sapling()  # before the prediction, not after a minute of it
             image = drawing_file(context, folder)
         except backend.PredictError as exc:
+            shutil.rmtree(folder, ignore_errors=True)
             settings.status = str(exc)
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
+        self._folder = folder
         self._out = backend.Outputs.in_folder(folder)
         if self.wait or bpy.app.background:
             try:
                 job = prediction_job(context, image, self._out)
                 job(on_line=lambda s: print("treesketch:", s))
-                new = add_result(context, self._out)
             except (backend.PredictError, RuntimeError) as exc:
-                settings.status = str(exc).splitlines()[0]
-                self.report({"ERROR"}, str(exc))
-                return {"CANCELLED"}
-            settings.status = f"added {len(new)} object(s)"
-            return {"FINISHED"}
+                shutil.rmtree(folder, ignore_errors=True)
+                return self._failed(settings, exc)
+            return self._finish(context)
         self._lines = queue.Queue()
         self._error = None
         job = prediction_job(context, image, self._out)
@@ -288,10 +292,25 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
         context.window_manager.event_timer_remove(self._timer)
         settings.running = False
         if self._error is not None:
-            settings.status = str(self._error).splitlines()[0]
-            self.report({"ERROR"}, str(self._error))
-            return {"CANCELLED"}
-        new = add_result(context, self._out)
+            shutil.rmtree(self._folder, ignore_errors=True)
+            return self._failed(settings, self._error)
+        return self._finish(context)
+
+    def _failed(self, settings, exc: BaseException) -> set:
+        settings.status = str(exc).splitlines()[0]
+        self.report({"ERROR"}, str(exc))
+        return {"CANCELLED"}
+
+    def _finish(self, context) -> set:
+        """Add the tree, then drop the prediction's files (the GLB's images are packed
+        into the .blend by the importer; the preset was copied to Sapling's menu)."""
+        settings = context.scene.treesketch
+        try:
+            new = add_result(context, self._out)
+        except (backend.PredictError, RuntimeError, OSError) as exc:
+            return self._failed(settings, exc)
+        finally:
+            shutil.rmtree(self._folder, ignore_errors=True)
         settings.progress, settings.status = 1.0, f"added {len(new)} object(s)"
         return {"FINISHED"}
 
