@@ -130,7 +130,7 @@ def _thin_leaf_mesh(leaves: trimesh.Trimesh, per_leaf: int, keep: int) -> trimes
     c = v.mean(axis=1, keepdims=True)
     v = c + (v - c) * _leaf_growth(n, keep)
     nf = len(leaves.faces) // n
-    f = np.asarray(leaves.faces).reshape(n, nf, 3)[:1] - 0  # same template for every leaf
+    f = np.asarray(leaves.faces).reshape(n, nf, 3)[:1]  # leaf 0's faces: every leaf's template
     faces = (f + (np.arange(keep) * per_leaf)[:, None, None]).reshape(-1, 3)
     out = trimesh.Trimesh(vertices=v.reshape(-1, 3), faces=faces, process=False)
     uv = getattr(leaves.visual, "uv", None)
