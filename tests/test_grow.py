@@ -251,15 +251,9 @@ def test_length_ratio_of_children():
         assert ln == pytest.approx(0.4 * trunk_len, rel=1e-9)
 
 
-def test_exploding_splits_are_capped_with_a_warning():
+def test_exploding_splits_are_refused():
     from weberpenn import ParamError
-    from weberpenn.params import MAX_LEAVES, MAX_STEMS
 
-    try:
-        p = species.sample("bonsai", seed=2).replace(segSplits=(1.0, 1.0, 1.0, 1.0))
-    except ParamError:
-        pytest.skip("the parameter table now rejects this dictionary outright")
-    with pytest.warns(RuntimeWarning, match="limits"):
-        sk = grow(p)
-    assert sk.n_stems <= MAX_STEMS and sk.n_leaves <= MAX_LEAVES
-    _check_structure(sk)
+    p = species.sample("bonsai", seed=2).replace(segSplits=(1.0, 1.0, 1.0, 1.0))
+    with pytest.raises(ParamError, match="stems"):
+        grow(p)

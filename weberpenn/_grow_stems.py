@@ -26,6 +26,7 @@ from ._grow_math import (
     track_x_and_yz,
 )
 from ._grow_shapes import find_taper, shape_ratio
+from .limits import check_grow
 
 
 @dataclass
@@ -55,7 +56,6 @@ class Splines:
     rad_s: np.ndarray  # (N,)
     offset_len: np.ndarray  # (N,)
     parent: np.ndarray  # (N,) local index of the spline a clone split from, -1 = root
-    capped: bool = False  # splitting stopped at the stem limit
 
 
 @dataclass
@@ -75,6 +75,7 @@ class Cfg:
 
     def __init__(self, p: Mapping[str, Any]):
         r = math.radians
+        self.params = p  # for errors that name the keys responsible
         self.levels = int(p["levels"])
         self.length = [float(x) for x in p["length"]]
         self.length_v = [float(x) for x in p["lengthV"]]
@@ -167,11 +168,12 @@ def grow_level(
     fam: Families,
     scale: np.ndarray,
     rng: np.random.Generator,
-    max_splines: int,
+    stems_before: int,
 ) -> Splines:
     """Grow every family of level ``n`` (param index ``m = min(n, 3)``) segment by segment.
 
-    Splits stop once the level holds ``max_splines`` splines (``Splines.capped`` says so).
+    ``stems_before`` stems exist in the tree already; a split that takes the tree past
+    :data:`weberpenn.limits.MAX_STEMS` raises :class:`ParamError` before it is made.
     """
     m = min(n, 3)
     res = cfg.curve_res[m]
@@ -198,7 +200,7 @@ def grow_level(
     parent = np.full(f, -1, dtype=np.int64)
 
     seg_splits = cfg.seg_splits[m]
-    capped = False
+    check_grow(cfg.params, n, stems_before + f, f * (res + 1))
     cv1, cv2 = cfg.curve_v1[m], cfg.curve_v2[m]
     att_up = cfg.attract_up[m]
     att_out = cfg.attract_out[m]
@@ -226,9 +228,9 @@ def grow_level(
             nsplit = (sval > 0.0).astype(np.int64)
         else:
             nsplit = (u < sval).astype(np.int64)
-        if nsplit.sum() > max_splines - nsp:
-            nsplit = np.where(np.cumsum(nsplit) <= max(max_splines - nsp, 0), nsplit, 0)
-            capped = True
+        if nsplit.any():
+            grown = nsp + int(nsplit.sum())
+            check_grow(cfg.params, n, stems_before + grown, grown * (res + 1))
         if k == k_back and cfg.curve_back[m] != 0.0:
             curv = curv + 2.0 * cfg.curve_back[m] / res
 
@@ -354,7 +356,7 @@ def grow_level(
             parent = np.concatenate([parent, new["parent"]])
             seg_len = np.concatenate([seg_len, new["seg_len"]])
 
-    return Splines(pts, rad, start, famid, seg_len, rad_s, offset_len, parent, capped)
+    return Splines(pts, rad, start, famid, seg_len, rad_s, offset_len, parent)
 
 
 # --------------------------------------------------------------------------- ordering
@@ -365,7 +367,7 @@ def spline_order(spl: Splines) -> np.ndarray:
 
 # --------------------------------------------------------------------------- pruning
 def prune_scales(
-    cfg: Cfg, n: int, fam: Families, seed: int, pseed: int, max_splines: int
+    cfg: Cfg, n: int, fam: Families, seed: int, pseed: int, stems_before: int
 ) -> np.ndarray:
     """Sapling's pruning: bisect each family's length scale until its spline ends fit
     inside the envelope (regrowing with the same draws), then blend by ``pruneRatio``."""
@@ -381,7 +383,7 @@ def prune_scales(
         near = active & ((cmax - cmin) < 0.01)
         cs = np.where(near, (cs - 1.0) * cfg.prune_ratio + 1.0, cs)
         used = np.where(active, cs, used)
-        spl = grow_level(cfg, n, fam, used, rng_for(seed, pseed, n, 0), max_splines)
+        spl = grow_level(cfg, n, fam, used, rng_for(seed, pseed, n, 0), stems_before)
         end = spl.pts[:, res]
         ratio = (sv - end[:, 2]) / (sv * max(1.0 - cfg.prune_base, 1e-6))
         env = cfg.prune_width * shape_ratio(

@@ -20,9 +20,10 @@ Deliberate differences from Sapling: a stem's end radius is capped at its start 
 (Sapling's ``(startRad * (1 - taper)) ** ratioPower`` exceeds the start radius when the
 start radius is above 1, so radii would grow towards the tip); operator options that the
 TreeSketchNet dictionary does not store take Sapling's defaults (rMode 'rotate',
-autoTaper on, closeTip off, splitByLen off); a tree that would exceed the parameter
-table's stem or leaf limits (``MAX_STEMS``, ``MAX_LEAVES``) stops splitting or sprouting
-there, with a ``RuntimeWarning``.  The trunk-split rule is checked draw for
+autoTaper on, closeTip off, splitByLen off).  A dictionary whose tree would exceed
+:mod:`weberpenn.limits` (stems, control points, leaves, or the vertices and triangles of
+its mesh) is refused with a :class:`~weberpenn.params.ParamError` naming the keys
+responsible, as soon as growing reaches the limit.  The trunk-split rule is checked draw for
 draw against Sapling's own statistics by ``benchmarks/compare_sapling.py``.
 
 The implementation is vectorised: all stems of a level grow together, one Bezier
@@ -32,7 +33,6 @@ segment at a time, with local frames as rotation matrices (Sapling's quaternions
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping
 from typing import Any
 
@@ -41,7 +41,8 @@ import numpy as np
 from ._grow_children import child_points, fabricate, trunk
 from ._grow_leaves import leaf_transforms
 from ._grow_stems import Cfg, ChildPoints, grow_level, prune_scales, rng_for, spline_order
-from .params import MAX_LEAVES, MAX_STEMS, TreeParams, validate
+from .limits import MAX_LEAVES, MAX_STEMS, check_grow, check_leaves, check_mesh, mesh_size
+from .params import TreeParams, validate
 from .skeleton import Skeleton
 
 __all__ = ["Skeleton", "grow"]
@@ -71,8 +72,7 @@ def grow(params: TreeParams | Mapping[str, Any], seed: int = 0) -> Skeleton:
     base = cfg.base_size
     fam = trunk(cfg)
     cp = _no_child_points()
-    budget = MAX_STEMS  # stems left before the hard limit (only absurd inputs reach it)
-    truncated = False
+    res_u, bevel_res, leaf_shape = int(p["resU"]), int(p["bevelRes"]), str(p["leafShape"])
     for n in range(cfg.levels):
         m = min(n, 3)
         if n > 0:
@@ -84,11 +84,10 @@ def grow(params: TreeParams | Mapping[str, Any], seed: int = 0) -> Skeleton:
         if n == cfg.levels - 1:
             base = 0.0
         if cfg.prune:
-            scale = prune_scales(cfg, n, fam, seed, pseed, budget)
+            scale = prune_scales(cfg, n, fam, seed, pseed, next_gid)
         else:
             scale = np.ones(len(fam.pos))
-        spl = grow_level(cfg, n, fam, scale, rng_for(seed, pseed, n, 0), budget)
-        truncated |= spl.capped
+        spl = grow_level(cfg, n, fam, scale, rng_for(seed, pseed, n, 0), next_gid)
         order = spline_order(spl)
         gid = np.empty(len(order), dtype=np.int64)
         gid[order] = next_gid + np.arange(len(order))
@@ -107,25 +106,24 @@ def grow(params: TreeParams | Mapping[str, Any], seed: int = 0) -> Skeleton:
         )
         parents_out.append(par)
         next_gid += len(order)
-        budget -= len(order)
+        # the branch mesh so far, exactly: refuse before growing (or meshing) any more
+        check_mesh(*mesh_size(np.concatenate(counts), res_u, bevel_res, 0, leaf_shape), p)
         last = n == cfg.levels - 1
         if last and cfg.leaves == 0:
             cp = _no_child_points()
             break
-        cap = MAX_LEAVES // max(1, -cfg.leaves) if last else budget
+        per_point = max(1, -cfg.leaves)
+        cap = MAX_LEAVES // per_point if last else MAX_STEMS - next_gid
         cp, cut = child_points(
             cfg, n, spl, order, gid, fam.children, base, rng_for(seed, pseed, n, 1), cap
         )
-        truncated |= cut
+        if cut and last:
+            check_leaves(p, (cap + 1) * per_point)
+        elif cut:
+            check_grow(p, n + 1, next_gid + cap + 1, 0)
 
-    if truncated:
-        warnings.warn(
-            f"the tree was cut at the generator's limits ({MAX_STEMS} stems, {MAX_LEAVES} "
-            "leaves): its parameters make it explode (segSplits, curveRes or branches)",
-            RuntimeWarning,
-            stacklevel=2,
-        )
     leaf_pos, leaf_mat = leaf_transforms(p, cp)
+    check_mesh(*mesh_size(np.concatenate(counts), res_u, bevel_res, len(leaf_pos), leaf_shape), p)
     points = np.concatenate(all_pts).astype(np.float64)
     radii = np.concatenate(all_rad).astype(np.float64)
     cnt = np.concatenate(counts)
