@@ -8,9 +8,12 @@ roll, ``scaleV``/``scaleV0``/``leafScaleV`` realised offsets and multipliers, an
 ``rotateV``/``downAngleV``/``leafRotateV``/``leafDownAngleV`` realised offsets.
 
 What stays random in Sapling and has no realised key (whether a segment splits,
-``lengthV`` and the whorl jitter of ``nrings``) comes from a numpy ``Generator`` seeded by
-``seed`` and ``params['seed']``; each split draw is shifted by ``rSplits2`` (modulo 1), so
-it stays uniform (Sapling's statistics) while ``rSplits2`` still changes the tree.  (The
+``lengthV`` and the whorl jitter of ``nrings``) comes from random streams that follow the
+tree's structure (:mod:`weberpenn._grow_random`): the trunk's key comes from ``seed`` and
+``params['seed']``, every other stem's from its parent's and its place on the parent,
+so a small change of one value changes the stems it touches, not every later draw of
+the level (``benchmarks/step_curve.py`` measures it).  Each split draw is shifted by
+``rSplits2`` (modulo 1), so it stays uniform (Sapling's statistics) while ``rSplits2`` still changes the tree.  (The
 third-party Render Tree code compares *every* split draw with ``rSplits2``, so a level
 splits at every segment or never; that loses Sapling's stem counts, which the project
 compares against.)  So ``grow`` is a pure function: the same input gives byte-identical
@@ -40,7 +43,8 @@ import numpy as np
 
 from ._grow_children import child_points, fabricate, trunk
 from ._grow_leaves import leaf_transforms
-from ._grow_stems import Cfg, ChildPoints, grow_level, prune_scales, rng_for, spline_order
+from ._grow_random import root_key
+from ._grow_stems import Cfg, ChildPoints, grow_level, prune_scales, spline_order
 from .limits import MAX_LEAVES, MAX_STEMS, check_grow, check_leaves, check_mesh, mesh_size
 from .params import TreeParams, validate
 from .skeleton import Skeleton
@@ -50,7 +54,8 @@ __all__ = ["Skeleton", "grow"]
 
 def _no_child_points() -> ChildPoints:
     z = np.zeros(0)
-    return ChildPoints(np.zeros((0, 3)), np.zeros((0, 3, 3)), z, z, z, z, z, z.astype(np.int64))
+    i = z.astype(np.int64)
+    return ChildPoints(np.zeros((0, 3)), np.zeros((0, 3, 3)), z, z, z, z, z, i, z.astype(np.uint64))
 
 
 # --------------------------------------------------------------------------- public API
@@ -70,7 +75,7 @@ def grow(params: TreeParams | Mapping[str, Any], seed: int = 0) -> Skeleton:
     parents_out: list[np.ndarray] = []
     next_gid = 0
     base = cfg.base_size
-    fam = trunk(cfg)
+    fam = trunk(cfg, root_key(seed, pseed))
     cp = _no_child_points()
     res_u, bevel_res, leaf_shape = int(p["resU"]), int(p["bevelRes"]), str(p["leafShape"])
     for n in range(cfg.levels):
@@ -83,11 +88,8 @@ def grow(params: TreeParams | Mapping[str, Any], seed: int = 0) -> Skeleton:
             base *= cfg.base_size_s
         if n == cfg.levels - 1:
             base = 0.0
-        if cfg.prune:
-            scale = prune_scales(cfg, n, fam, seed, pseed, next_gid)
-        else:
-            scale = np.ones(len(fam.pos))
-        spl = grow_level(cfg, n, fam, scale, rng_for(seed, pseed, n, 0), next_gid)
+        scale = prune_scales(cfg, n, fam, next_gid) if cfg.prune else np.ones(len(fam.pos))
+        spl = grow_level(cfg, n, fam, scale, next_gid)
         order = spline_order(spl)
         gid = np.empty(len(order), dtype=np.int64)
         gid[order] = next_gid + np.arange(len(order))
@@ -114,9 +116,7 @@ def grow(params: TreeParams | Mapping[str, Any], seed: int = 0) -> Skeleton:
             break
         per_point = max(1, -cfg.leaves)
         cap = MAX_LEAVES // per_point if last else MAX_STEMS - next_gid
-        cp, cut = child_points(
-            cfg, n, spl, order, gid, fam.children, base, rng_for(seed, pseed, n, 1), cap
-        )
+        cp, cut = child_points(cfg, n, spl, order, gid, fam.children, base, fam.key, cap)
         if cut and last:
             check_leaves(p, (cap + 1) * per_point)
         elif cut:
