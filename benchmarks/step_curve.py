@@ -1,24 +1,30 @@
 """Distance against parameter step: how far the tree moves when one value moves a little.
 
     .venv/bin/python benchmarks/step_curve.py --out step.json [--species maple pine]
+        [--metric points|mesh] [--points 3]
     .venv/bin/python benchmarks/step_curve.py --table before.json after.json
 
-For each species, the point ``x`` is ``species.sample(name, 0)`` in the unit cube of the
-species' free continuous unfixed values (``refine.objective.SearchSpace``, no yaw).  For
-every dimension ``k`` and step ``d`` in ``--deltas`` the tree at ``x`` and at
-``x + d e_k`` (``x - d e_k`` where that leaves the cube) are grown with seed 0 and
-compared by ``eval.hausdorff.hausdorff`` (symmetric max, normalised by the diagonal of
-the tree at ``x``).  A generator whose random draws follow the tree's structure moves
+For each species, the point ``x`` is ``species.sample(name, i)`` (``i < --points``) in
+the unit cube of the species' free continuous unfixed values
+(``refine.objective.SearchSpace``, no yaw).  For every dimension ``k`` and step ``d`` in
+``--deltas`` the tree at ``x`` and at ``x + d e_k`` (``x - d e_k`` where that leaves the
+cube) are grown with seed 0 and compared (symmetric max distance, normalised by the
+diagonal of the tree at ``x``; see ``--metric``).  A generator whose random draws follow the tree's structure moves
 the tree a little for a small step; one whose draws are reshuffled by a small change
 jumps to another tree (up to the seed floor) however small the step.  The seed floor is
 the same parameters at ``x`` grown with seeds 0 and 1.
 
-To keep the run short, both trees are meshed coarsely (``resU`` 1, ``bevelRes`` 0: the
-same skeleton, four-sided tubes) and every vertex of each is measured to the other's
-surface (``samples=1``: vertices only, plus one face point).
+``--metric mesh``: both trees are meshed coarsely (``resU`` 1, ``bevelRes`` 0: the same
+skeleton, four-sided tubes) and every vertex of each is measured to the other's surface
+(``samples=1``: vertices only, plus one face point); minutes per species on 2 cores.
+``--metric points`` (default): the symmetric Hausdorff distance between the two
+skeletons' point sets (every stem control point and every leaf position, exact with
+KD-trees), normalised by the diagonal of the tree at ``x``'s points; seconds per
+species, and it moves exactly when stems or leaves move.
 
-``--table`` prints Markdown: per species and step, the median and the fraction of
-dimensions whose distance is above half the seed floor (a jump), for each JSON given.
+``--table`` prints Markdown: per species and step, the mean over dimensions and the
+number of dimensions whose distance is a jump (above half the seed floor and 0.01), for
+each JSON given; ``--per-key D`` adds one row per key at step ``D``.
 """
 
 from __future__ import annotations
@@ -36,6 +42,8 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+from scipy.spatial import cKDTree  # noqa: E402
+
 from eval.hausdorff import bbox_diagonal, hausdorff  # noqa: E402
 from refine.objective import SearchSpace  # noqa: E402
 from weberpenn import build_mesh, grow, species  # noqa: E402
@@ -44,28 +52,61 @@ from weberpenn.fileio import atomic_write  # noqa: E402
 DELTAS = (0.001, 0.003, 0.01, 0.03, 0.1)
 
 
-def _mesh(params, seed: int = 0):
-    return build_mesh(grow(params.replace(resU=1, bevelRes=0), seed=seed)).combined()
+class _Mesh:
+    """Coarse combined mesh; distance = eval.hausdorff's symmetric max (vertices)."""
+
+    def __init__(self, params, seed: int = 0):
+        p = params.replace(resU=1, bevelRes=0)
+        self.mesh = build_mesh(grow(p, seed=seed)).combined()
+        self.diag = bbox_diagonal(self.mesh.vertices)
+
+    def distance(self, other: _Mesh, diag: float) -> float:
+        return hausdorff(other.mesh, self.mesh, samples=1, diagonal=diag).max_norm
 
 
-def run_species(name: str, deltas: tuple[float, ...]) -> dict:
-    base = species.sample(name, 0)
-    space = SearchSpace.create(name, base, search_yaw=False)
-    x = space.from_params(base)
-    p0 = space.to_params(x)
-    m0 = _mesh(p0)
-    diag = bbox_diagonal(m0.vertices)
-    floor = hausdorff(_mesh(p0, seed=1), m0, samples=1, diagonal=diag).max_norm
+class _Points:
+    """Skeleton point set (control points + leaf positions); exact point-set Hausdorff."""
+
+    def __init__(self, params, seed: int = 0):
+        sk = grow(params, seed=seed)
+        self.pts = np.vstack([sk.points, sk.leaf_positions])
+        self.tree = cKDTree(self.pts)
+        self.diag = bbox_diagonal(self.pts)
+
+    def distance(self, other: _Points, diag: float) -> float:
+        d = max(self.tree.query(other.pts)[0].max(), other.tree.query(self.pts)[0].max())
+        return float(d) / diag
+
+
+def run_species(
+    name: str, deltas: tuple[float, ...], metric: str = "points", points: int = 1
+) -> dict:
+    """Rows ``key#i`` for the base points ``species.sample(name, i)``, ``i < points``."""
+    tree = _Points if metric == "points" else _Mesh
     rows = {}
-    for k, label in enumerate(space.labels):
-        out = []
-        for d in deltas:
-            y = x.copy()
-            y[k] = x[k] + d if x[k] + d <= 1.0 else x[k] - d
-            out.append(hausdorff(_mesh(space.to_params(y)), m0, samples=1, diagonal=diag).max_norm)
-        rows[label] = out
-        print(f"{name:7s} {label:18s} " + " ".join(f"{v:.4f}" for v in out), flush=True)
-    return {"seed_floor": floor, "deltas": list(deltas), "keys": rows}
+    floors = []
+    for i in range(points):
+        base = species.sample(name, i)
+        space = SearchSpace.create(name, base, search_yaw=False)
+        x = space.from_params(base)
+        p0 = space.to_params(x)
+        m0 = tree(p0)
+        diag = m0.diag
+        floors.append(m0.distance(tree(p0, seed=1), diag))
+        for k, label in enumerate(space.labels):
+            out = []
+            for d in deltas:
+                y = x.copy()
+                y[k] = x[k] + d if x[k] + d <= 1.0 else x[k] - d
+                out.append(m0.distance(tree(space.to_params(y)), diag))
+            rows[f"{label}#{i}"] = out
+            print(f"{name:7s} {label:18s} #{i} " + " ".join(f"{v:.4f}" for v in out), flush=True)
+    return {"seed_floor": float(np.mean(floors)), "deltas": list(deltas), "keys": rows}
+
+
+def _jump(r: dict) -> float:
+    """A distance this large is a jump to another realisation, not a small move."""
+    return max(0.5 * r["seed_floor"], 0.01)
 
 
 def table(paths: list[str]) -> str:
@@ -73,8 +114,9 @@ def table(paths: list[str]) -> str:
     deltas = runs[0][1]["deltas"]
     head = "| species | run | seed floor | " + " | ".join(f"d={d:g}" for d in deltas) + " |"
     lines = [
-        "Median over the species' dimensions of the normalised max distance (fraction of "
-        "dimensions above half the seed floor in brackets).",
+        "Mean over the species' dimensions of the normalised max distance; in brackets the "
+        "number of dimensions (of all) whose distance is a jump (above half the seed floor "
+        "and above 0.01).",
         "",
         head,
         "|---|---|---:|" + "---:|" * len(deltas),
@@ -87,8 +129,8 @@ def table(paths: list[str]) -> str:
             cells = []
             for j in range(len(deltas)):
                 vals = [v[j] for v in r["keys"].values()]
-                jump = np.mean([v > 0.5 * r["seed_floor"] for v in vals])
-                cells.append(f"{statistics.median(vals):.4f} ({jump:.0%})")
+                jumps = sum(v > _jump(r) for v in vals)
+                cells.append(f"{statistics.mean(vals):.4f} ({jumps}/{len(vals)})")
             lines.append(f"| {sp} | {label} | {r['seed_floor']:.4f} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
@@ -112,6 +154,8 @@ def main() -> None:
     ap.add_argument("--species", nargs="*", default=list(species.SPECIES))
     ap.add_argument("--deltas", nargs="*", type=float, default=list(DELTAS))
     ap.add_argument("--out", type=Path)
+    ap.add_argument("--metric", choices=("points", "mesh"), default="points")
+    ap.add_argument("--points", type=int, default=1, help="base points per species")
     ap.add_argument("--table", nargs="*", help="JSON files to compare (Markdown to stdout)")
     ap.add_argument("--per-key", type=float, help="with --table: one row per key at this step")
     args = ap.parse_args()
@@ -124,9 +168,9 @@ def main() -> None:
     if args.out is None:
         ap.error("--out is required unless --table is given")
     t0 = time.perf_counter()
-    res = {"species": {}, "deltas": list(args.deltas)}
+    res = {"species": {}, "deltas": list(args.deltas), "metric": args.metric}
     for name in args.species:
-        res["species"][name] = run_species(name, tuple(args.deltas))
+        res["species"][name] = run_species(name, tuple(args.deltas), args.metric, args.points)
         res["species"][name]["seconds"] = time.perf_counter() - t0
     atomic_write(args.out, json.dumps(res, indent=1))
     print(f"wrote {args.out} in {time.perf_counter() - t0:.0f} s")

@@ -29,6 +29,9 @@ _M1 = np.uint64(0xBF58476D1CE4E5B9)
 _M2 = np.uint64(0x94D049BB133111EB)
 
 
+_MASK = (1 << 64) - 1
+
+
 def _mix(x: np.ndarray) -> np.ndarray:
     x = x ^ (x >> np.uint64(30))
     x = x * _M1
@@ -37,12 +40,24 @@ def _mix(x: np.ndarray) -> np.ndarray:
     return x ^ (x >> np.uint64(31))
 
 
+def _mix_int(x: int) -> int:
+    """``_mix`` of one Python int (cheaper than a numpy call for a scalar counter)."""
+    x &= _MASK
+    x = ((x ^ (x >> 30)) * 0xBF58476D1CE4E5B9) & _MASK
+    x = ((x ^ (x >> 27)) * 0x94D049BB133111EB) & _MASK
+    return x ^ (x >> 31)
+
+
 def derive(key: np.ndarray, purpose: int, counter: np.ndarray | int = 0) -> np.ndarray:
     """New keys from ``key`` (uint64 array), ``purpose`` and ``counter`` (broadcast)."""
     with np.errstate(over="ignore"):
         k = np.asarray(key, dtype=np.uint64)
-        c = np.asarray(counter, dtype=np.int64).astype(np.uint64)
-        inner = _mix(c * _GOLDEN + np.uint64(purpose) * _M2 + _GOLDEN)
+        if isinstance(counter, int):
+            g = 0x9E3779B97F4A7C15
+            inner = np.uint64(_mix_int(counter * g + purpose * 0x94D049BB133111EB + g))
+        else:
+            c = np.asarray(counter, dtype=np.int64).astype(np.uint64)
+            inner = _mix(c * _GOLDEN + np.uint64(purpose) * _M2 + _GOLDEN)
         return _mix((k ^ inner) + _GOLDEN)
 
 
