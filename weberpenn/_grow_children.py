@@ -9,7 +9,16 @@ import math
 import numpy as np
 
 from ._grow_bezier import evaluate, handles
-from ._grow_math import TAU, apply, declination, euler_compat, mat_x, mat_z, track_frames
+from ._grow_math import (
+    TAU,
+    apply,
+    declination,
+    euler_compat,
+    mat_x,
+    mat_z,
+    run_rank,
+    track_frames,
+)
 from ._grow_random import CHILD, TIP, WHORL, derive, uniform
 from ._grow_shapes import shape_ratio
 from ._grow_stems import Cfg, ChildPoints, Families, Splines
@@ -159,9 +168,7 @@ def child_points(
     radius = (1.0 - tt) * spl.rad[ps, slot] + tt * spl.rad[ps, slot + 1]
 
     # each child stem's key: its parent's, and its rank among the parent's child points
-    new_run = np.concatenate([[True], ps[1:] != ps[:-1]]) if len(ps) else np.zeros(0, bool)
-    run_start = np.nonzero(new_run)[0]
-    rank = np.arange(len(ps)) - run_start[np.cumsum(new_run) - 1]
+    rank = run_rank(ps)
     # tips: one per spline
     ts = s_ord[tip_sel]
     tip_co = spl.pts[ts, res]
@@ -192,9 +199,10 @@ def child_points(
 
 
 # --------------------------------------------------------------------------- fabricate
-def _running_rotate(rot: float, count: int) -> np.ndarray:
-    """Sapling's accumulated azimuth for the i-th child: i*rot, or alternating if rot < 0."""
-    i = np.arange(count, dtype=np.float64)
+def _running_rotate(rot: float, count: int | np.ndarray) -> np.ndarray:
+    """Sapling's accumulated azimuth for the i-th child: (i+1)*rot, or alternating if
+    rot < 0; ``count`` children numbered 0.., or each child's number ``i`` given."""
+    i = np.asarray(np.arange(count) if np.ndim(count) == 0 else count, dtype=np.float64)
     if rot < 0.0:
         return abs(rot) * np.where(i % 2 == 0, -1.0, 1.0)
     return (i + 1.0) * rot
@@ -261,7 +269,12 @@ def fabricate(cfg: Cfg, n: int, cp: ChildPoints, base: float) -> Families:
     else:
         down_v = np.full(c, dav) if dav < 0.0 else -dav * (1.0 - rel) ** 2
     down = np.where(tip, 0.0, cfg.down_angle[m] + down_v)
-    b_rot = rot_a if rotate_mode else _running_rotate(cfg.rotate[m], c) + cfg.rotate_v[m]
+    # the azimuth accumulates along each parent stem (Sapling: along the whole level, so
+    # one extra child anywhere turned every later branch of the level)
+    if not rotate_mode:
+        b_rot = _running_rotate(cfg.rotate[m], run_rank(cp.src)) + cfg.rotate_v[m]
+    else:
+        b_rot = rot_a
     sd = np.sin(down)
     tp = np.stack([sd * np.sin(b_rot), -sd * np.cos(b_rot), np.cos(down)], axis=1)
     if rotate_mode:

@@ -19,7 +19,11 @@ splits at every segment or never; that loses Sapling's stem counts, which the pr
 compares against.)  So ``grow`` is a pure function: the same input gives byte-identical
 arrays.
 
-Deliberate differences from Sapling: a stem's end radius is capped at its start radius
+Deliberate differences from Sapling: the azimuth of successive children
+(``rotate``) and leaves (``leafRotate + leafRotateV``) accumulates along each parent stem,
+not along the whole level or tree (Sapling's running total turned the n-th leaf by n
+times any change of ``leafRotateV``, and one extra child turned every later branch); a
+stem's end radius is capped at its start radius
 (Sapling's ``(startRad * (1 - taper)) ** ratioPower`` exceeds the start radius when the
 start radius is above 1, so radii would grow towards the tip); operator options that the
 TreeSketchNet dictionary does not store take Sapling's defaults (rMode 'rotate',
