@@ -53,9 +53,9 @@ def _leaf_faces(n_leaves: int, shape: str) -> int:
     return n_leaves * (2 if shape == "rect" else 4)
 
 
-def _check_budget(max_faces: int) -> int:
+def check_budget(max_faces: int) -> int:
     if isinstance(max_faces, bool) or not isinstance(max_faces, int | np.integer):
-        raise TypeError(f"max_faces must be an integer, got {max_faces!r}")
+        raise ValueError(f"max_faces must be an integer, got {max_faces!r}")
     if max_faces < MIN_FACES:
         raise ValueError(f"max_faces={max_faces} is too small: at least {MIN_FACES} triangles")
     return int(max_faces)
@@ -170,7 +170,7 @@ def lod(tree_mesh: TreeMesh, max_faces: int) -> TreeMesh:
     ``meta["lod"]`` records what was given up: ``res_u``, ``bevel_res``, ``leaf_shape``,
     ``leaves`` kept, and ``decimated`` (True when step 3 ran).
     """
-    budget = _check_budget(max_faces)
+    budget = check_budget(max_faces)
     if tree_mesh.n_faces <= budget:
         return tree_mesh
     sk = tree_mesh.skeleton
