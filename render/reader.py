@@ -293,7 +293,8 @@ def normalise_drawing(img: np.ndarray, size: int = 256) -> np.ndarray:
         pic = pic.resize((out_w, out_h), resample)
     canvas = Image.new("L", (size, size), 255)
     canvas.paste(pic, (x0, y0))
-    out = np.asarray(canvas, dtype=np.uint8)
+    # binary, like the renderer's sketches (and so normalising twice changes nothing)
+    out = np.where(np.asarray(canvas) < 128, 0, 255).astype(np.uint8)
     if float(ink_mask(out).mean()) < MIN_INK:
         raise SketchError("the sketch is blank: draw a tree (dark lines on a light page)")
     return out
