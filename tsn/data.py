@@ -33,6 +33,7 @@ def crop_square(img: np.ndarray, margin: float = MARGIN) -> np.ndarray:
     crop = img[ys[0] : ys[-1] + 1, xs[0] : xs[-1] + 1]
     h, w = crop.shape
     n = int(round(max(h, w) / (1 - 2 * margin)))
+    n += (n - w) % 2  # equal margins left and right: a mirrored drawing gives the mirror
     out = np.full((n, n), 255, np.uint8)
     y0, x0 = (n - h) // 2, (n - w) // 2
     out[y0 : y0 + h, x0 : x0 + w] = crop
