@@ -141,7 +141,8 @@ class RefineSettings:
 
     Species by synthesis (``treesketch.Pipeline``): up to ``species_tries`` species are
     refined, the estimator's best and any other whose score is at least ``species_ratio``
-    times the best's (each other one with half the budget and half the time); the tree
+    times the best's (the others with half the budget; 60% of the time limit for the
+    estimator's species and the rest shared by the others); the tree
     whose sketch matches best wins.  ``species_tries`` 1 refines the estimator's species
     only.
     """

@@ -180,6 +180,17 @@ def _confidence(loss: float, ink: float) -> tuple[float, str | None]:
     )
 
 
+def _share(cfg: RefineSettings, i: int, n: int) -> RefineSettings:
+    """Candidate ``i`` of ``n`` species' settings: the estimator's species (``i`` 0) the
+    whole budget and, when others are tried, 60% of the time; the others half the budget
+    and an equal part of the remaining 40%, so the whole run keeps to ``time_limit``."""
+    if n == 1:
+        return cfg
+    share = 0.6 if i == 0 else 0.4 / (n - 1)
+    limit = None if cfg.time_limit is None else cfg.time_limit * share
+    return cfg.replace(budget=cfg.budget if i == 0 else max(8, cfg.budget // 2), time_limit=limit)
+
+
 class Pipeline:
     """An estimator and the refinement settings; :meth:`run` turns a sketch into a tree."""
 
@@ -243,15 +254,9 @@ class Pipeline:
         name = est.species
         done = 0  # evaluations of all candidates so far, so progress only grows
         if cfg.refine:
-            for i, candidate in enumerate(self.candidates(est)):
-                run_cfg = (
-                    cfg
-                    if i == 0
-                    else cfg.replace(
-                        budget=max(8, cfg.budget // 2),
-                        time_limit=None if cfg.time_limit is None else cfg.time_limit / 2,
-                    )
-                )
+            names = self.candidates(est)
+            for i, candidate in enumerate(names):
+                run_cfg = _share(cfg, i, len(names))
                 tell("refine", done)
                 rr = refine_search(
                     img,
