@@ -83,7 +83,11 @@ def main(argv: list[str] | None = None) -> int:
     for key in sorted(by_pair, key=lambda k: (names.index(k[0]), names.index(k[1]))):
         v = by_pair[key]
         n = len(next(iter(v.values())))
-        print(f"| {key[0]}/{key[1]} | {n} | " + " | ".join(f"{np.mean(v[m]):.0%}" for m in METRICS) + " |")
+        print(
+            f"| {key[0]}/{key[1]} | {n} | "
+            + " | ".join(f"{np.mean(v[m]):.0%}" for m in METRICS)
+            + " |"
+        )
     _ = itertools
     return 0
 

@@ -15,6 +15,8 @@ Parts:
   (markers aside: they hold timings) is the same bytes as the in-process build.
 * ``scaling``: a Ray cluster of one node with 1 CPU, then of two nodes with 1 CPU each:
   trees/s and how many trees each node built.
+* ``kill-external`` (with ``--address`` and ``--raylet-pid``): the same on a cluster made
+  with ``ray start``, killing the given raylet with ``kill -9``.
 * ``kill``: the two-node cluster again; once the second node has built 2 trees it is
   killed (its raylet and workers, no goodbye); the build completes on the head node,
   and the result is compared byte for byte with the in-process build.
@@ -213,15 +215,44 @@ def part_kill(cfg_kw: dict, tmp: Path) -> dict:
     }
 
 
+def part_kill_external(cfg_kw: dict, tmp: Path, address: str, raylet_pid: int) -> dict:
+    """Like ``kill``, on a cluster started with ``ray start``: ``kill -9`` of the given
+    raylet (a node other than the head) once 3 trees are done."""
+    import signal
+
+    events: list[str] = []
+    t0 = time.perf_counter()
+
+    def maybe_kill(o: Outcome[Any]) -> None:
+        done = sum(ex.nodes.values())
+        if not events and len(ex.nodes) >= 2 and done >= 3:
+            os.kill(raylet_pid, signal.SIGKILL)
+            events.append(
+                f"raylet pid {raylet_pid} killed after {done} trees, "
+                f"at {time.perf_counter() - t0:.1f} s"
+            )
+
+    inner = RayExecutor(address=address)
+    alive = len(inner.nodes())
+    ex = Watch(inner, on_outcome=maybe_kill)
+    try:
+        r = build(cfg_kw, tmp / "killed_external", ex)
+    finally:
+        inner.close()
+    return {**r, "alive_before": alive, "per_node": dict(ex.nodes), "events": events}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--parts", default="overhead,dataset,scaling,kill")
     ap.add_argument("--pieces", type=int, default=200, help="empty pieces (overhead)")
     ap.add_argument("--trees-per-species", type=int, default=3)
     ap.add_argument("--size", type=int, default=256)
+    ap.add_argument("--address", default=None, help="part kill-external: a `ray start` cluster")
+    ap.add_argument("--raylet-pid", type=int, default=0, help="part kill-external: node to kill")
     args = ap.parse_args()
     parts = [p.strip() for p in args.parts.split(",") if p.strip()]
-    unknown = set(parts) - {"overhead", "dataset", "scaling", "kill"}
+    unknown = set(parts) - {"overhead", "dataset", "scaling", "kill", "kill-external"}
     if unknown:
         ap.error(f"unknown parts: {', '.join(sorted(unknown))}")
     cfg_kw = {"trees_per_species": args.trees_per_species, "size": args.size}
@@ -284,6 +315,22 @@ def main() -> None:
                 f"{r['trees']} trees built, {r['failed']} failed, in {r['seconds']:.1f} s; "
                 f"outcomes from the head node {r['head']}, from the second node {r['second']}; "
                 f"digest {r['digest']}{same}"
+            )
+
+        if "kill-external" in parts:
+            if not args.address or args.raylet_pid <= 0:
+                ap.error("part kill-external needs --address and --raylet-pid")
+            print(f"\n## A `ray start` node killed mid-run, {n_trees} trees\n")
+            r = part_kill_external(cfg_kw, tmp, args.address, args.raylet_pid)
+            if ref is None:
+                ref = build(cfg_kw, tmp / "reference", None)["digest"]
+            per_node = ", ".join(f"{k[:8]}: {v}" for k, v in r["per_node"].items())
+            print(
+                f"{r['alive_before']} nodes alive at the start; "
+                f"{'; '.join(r['events']) or 'nothing was killed'}; {r['trees']} trees built, "
+                f"{r['failed']} failed, in {r['seconds']:.1f} s; trees per node: {per_node}; "
+                f"digest {r['digest']}, in-process {ref}: "
+                f"{'same bytes' if r['digest'] == ref else 'DIFFERENT'}"
             )
 
 

@@ -20,14 +20,22 @@ cannot tell.
 
     nice -n 10 .venv/bin/python benchmarks/bench_refine.py --data /work/data/ds_v1 \
         --per-species 5 --json /work/data/bench_refine.json
+
+``--executor ray [--address ADDR]`` (or ``--workers N`` local processes) spreads the cases;
+each case is the same computation wherever it runs, but a refinement stopped by
+``--time-limit`` rather than by ``--budget`` depends on the machine's speed.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import sys
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -44,7 +52,9 @@ from refine.objective import SearchSpace  # noqa: E402
 from render.dataset import read_manifest  # noqa: E402
 from render.reader import read_sketch  # noqa: E402
 from treesketch import Estimate, Pipeline, RefineSettings, load_estimator  # noqa: E402
+from treesketch.executor import ExecutorError, from_options  # noqa: E402
 from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
+from weberpenn.fileio import atomic_write  # noqa: E402
 
 VIEW_ORDER = ("front", "left", "back", "right")
 
@@ -79,6 +89,87 @@ class KnownStart:
             e = self.inner.estimate(sketch)
             return Estimate(e.params, e.species, e.species_scores, self.yaw)
         return Estimate(self.tree, self.species_name, {self.species_name: 1.0}, self.yaw)
+
+
+@dataclass(frozen=True)
+class CaseWorker:
+    """Worker factory (picklable) for an executor: one case is one held-out sketch,
+    estimated, refined and measured.  The estimator travels with it (a TSN estimator
+    reloads its checkpoint in the worker)."""
+
+    data: str
+    inner: Any
+    settings: RefineSettings
+    shift: float
+    known_yaw: bool
+    samples: int
+    align_step: float
+
+    def __call__(self) -> Callable[[tuple[int, dict]], dict]:
+        return functools.partial(run_case, self)
+
+
+def run_case(cfg: CaseWorker, case: tuple[int, dict]) -> dict:
+    k, row = case
+    data = Path(cfg.data)
+    name = row["species"]
+    img = read_sketch(data / row["sketch"])
+    gt = load_params(data / row["params"])
+    gt_mesh = build_mesh(grow(gt), species=name)
+    known = float(row["yaw"]) if cfg.known_yaw else None
+    if cfg.inner is None:
+        est = KnownStart(None, perturbed(name, gt, cfg.shift, k), name, known)
+    else:
+        est = KnownStart(cfg.inner, yaw=known)
+    run = Pipeline(est, cfg.settings).run(img)
+    r, start, guessed = run.refinement, run.estimate.params, run.species
+    view_yaw = float(row["yaw"])
+    m0 = build_mesh(grow(start), species=guessed)
+    m1 = rotate_about_trunk(build_mesh(grow(r.params), species=guessed), view_yaw - r.yaw)
+    gt_c, diag = gt_mesh.combined(), bbox_diagonal(gt_mesh.bounds())
+    m0_view = rotate_about_trunk(m0, view_yaw)  # TSN shows its tree as a front view
+    h0 = hausdorff(m0_view.combined(), gt_c, cfg.samples, diag)  # branches + leaves
+    h0_gt = hausdorff(m0.combined(), gt_c, cfg.samples, diag)
+    h1 = hausdorff(m1.combined(), gt_c, cfg.samples, diag)
+    # the same, each tree turned about its trunk to its best fit (shape alone)
+    t0, a0 = aligned_tree_hausdorff(m0, gt_mesh, cfg.samples, cfg.align_step)
+    t1, a1 = aligned_tree_hausdorff(m1, gt_mesh, cfg.samples, cfg.align_step)
+    return {
+        "tree_id": row["tree_id"],
+        "view": row["view"],
+        "species": name,
+        "species_pred": guessed,
+        "loss_before": r.loss_before,
+        "loss_after": r.loss_after,
+        "seconds": r.seconds,
+        "evaluations": r.evaluations,
+        "stopped_by": r.stopped_by,
+        "yaw_view": view_yaw,
+        "yaw_found": r.yaw,
+        "haus_max_before": h0.max_norm,
+        "haus_max_after": h1.max_norm,
+        "haus_mean_before": h0.mean_norm,
+        "haus_mean_after": h1.mean_norm,
+        "haus_max_before_gt_frame": h0_gt.max_norm,
+        "haus_mean_before_gt_frame": h0_gt.mean_norm,
+        "aligned_max_before": a0.max_norm,
+        "aligned_max_after": a1.max_norm,
+        "aligned_turn_before": t0,
+        "aligned_turn_after": t1,
+        "params_start": start.to_dict(),
+        "params_refined": r.params.to_dict(),
+    }
+
+
+def case_line(rec: dict) -> str:
+    return (
+        f"{rec['tree_id']:>12} {rec['view']:>5} loss {rec['loss_before']:.4f}->"
+        f"{rec['loss_after']:.4f} {rec['seconds']:5.1f}s {rec['evaluations']:3d} ev  haus max "
+        f"{rec['haus_max_before']:.4f}->{rec['haus_max_after']:.4f} (gt frame "
+        f"{rec['haus_max_before_gt_frame']:.4f}) mean {rec['haus_mean_before']:.4f}->"
+        f"{rec['haus_mean_after']:.4f} aligned max {rec['aligned_max_before']:.4f}->"
+        f"{rec['aligned_max_after']:.4f}"
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -118,6 +209,9 @@ def main(argv: list[str] | None = None) -> int:
         "--align-step", type=float, default=15.0, help="turns tried for the aligned distance"
     )
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--executor", default="local", help="where the cases run: local or ray")
+    ap.add_argument("--workers", type=int, default=1, help="local processes or local Ray CPUs")
+    ap.add_argument("--address", default=None, help="Ray cluster (auto, HOST:PORT)")
     args = ap.parse_args(argv)
     if args.markdown is not None:
         recs = json.loads(args.markdown.read_text())["records"]
@@ -140,73 +234,45 @@ def main(argv: list[str] | None = None) -> int:
         settings = settings.replace(prior_weight=args.prior_weight)
     if args.hold is not None:
         settings = settings.replace(hold=tuple(k for k in args.hold.split(",") if k))
-    records = []
+    try:
+        settings.validate()  # a bad option fails here, not in every case
+    except ValueError as exc:
+        ap.error(str(exc))
     only = None if args.species is None else set(args.species.split(","))
-    for k, row in enumerate(pick_rows(args.data, args.per_species)):
-        name = row["species"]
-        if only is not None and name not in only:
-            continue
-        img = read_sketch(args.data / row["sketch"])
-        gt = load_params(args.data / row["params"])
-        gt_mesh = build_mesh(grow(gt), species=name)
-        known = float(row["yaw"]) if args.known_yaw else None
-        if inner is None:
-            est = KnownStart(None, perturbed(name, gt, args.shift, k), name, known)
-        else:
-            est = KnownStart(inner, yaw=known)
-        run = Pipeline(est, settings).run(img)
-        r, start, guessed = run.refinement, run.estimate.params, run.species
-        view_yaw = float(row["yaw"])
-        m0 = build_mesh(grow(start), species=guessed)
-        m1 = rotate_about_trunk(build_mesh(grow(r.params), species=guessed), view_yaw - r.yaw)
-        gt_c, diag = gt_mesh.combined(), bbox_diagonal(gt_mesh.bounds())
-        m0_view = rotate_about_trunk(m0, view_yaw)  # TSN shows its tree as a front view
-        h0 = hausdorff(m0_view.combined(), gt_c, args.samples, diag)  # branches + leaves
-        h0_gt = hausdorff(m0.combined(), gt_c, args.samples, diag)
-        h1 = hausdorff(m1.combined(), gt_c, args.samples, diag)
-        # the same, each tree turned about its trunk to its best fit (shape alone)
-        t0, a0 = aligned_tree_hausdorff(m0, gt_mesh, args.samples, args.align_step)
-        t1, a1 = aligned_tree_hausdorff(m1, gt_mesh, args.samples, args.align_step)
-        rec = {
-            "tree_id": row["tree_id"],
-            "view": row["view"],
-            "species": name,
-            "species_pred": guessed,
-            "loss_before": r.loss_before,
-            "loss_after": r.loss_after,
-            "seconds": r.seconds,
-            "evaluations": r.evaluations,
-            "stopped_by": r.stopped_by,
-            "yaw_view": view_yaw,
-            "yaw_found": r.yaw,
-            "haus_max_before": h0.max_norm,
-            "haus_max_after": h1.max_norm,
-            "haus_mean_before": h0.mean_norm,
-            "haus_mean_after": h1.mean_norm,
-            "haus_max_before_gt_frame": h0_gt.max_norm,
-            "haus_mean_before_gt_frame": h0_gt.mean_norm,
-            "aligned_max_before": a0.max_norm,
-            "aligned_max_after": a1.max_norm,
-            "aligned_turn_before": t0,
-            "aligned_turn_after": t1,
-            "params_start": start.to_dict(),
-            "params_refined": r.params.to_dict(),
-        }
-        records.append(rec)
-        print(
-            f"{rec['tree_id']:>12} {rec['view']:>5} loss {r.loss_before:.4f}->{r.loss_after:.4f}"
-            f" {r.seconds:5.1f}s {r.evaluations:3d} ev  haus max {h0.max_norm:.4f}->"
-            f"{h1.max_norm:.4f} (gt frame {h0_gt.max_norm:.4f}) mean {h0.mean_norm:.4f}->"
-            f"{h1.mean_norm:.4f}"
-            f" aligned max {a0.max_norm:.4f}->{a1.max_norm:.4f}",
-            flush=True,
+    cases = [
+        (k, row)
+        for k, row in enumerate(pick_rows(args.data, args.per_species))
+        if only is None or row["species"] in only
+    ]
+    worker = CaseWorker(
+        str(args.data), inner, settings, args.shift, args.known_yaw, args.samples, args.align_step
+    )
+    try:
+        runner = from_options(args.executor, args.workers, args.address)
+    except ExecutorError as exc:
+        ap.error(str(exc))
+    records_by_k: dict[int, dict] = {}
+    try:
+        outcomes = (
+            ((i, worker()(case), None) for i, case in enumerate(cases))
+            if runner is None
+            else ((o.index, o.value, o.error) for o in runner.run(worker, cases))
         )
+        for i, rec, error in outcomes:
+            if error is not None:  # reported, not retried: the rest of the run goes on
+                print(f"{cases[i][1]['tree_id']:>12} failed: {error.splitlines()[0]}", flush=True)
+                continue
+            records_by_k[cases[i][0]] = rec
+            print(case_line(rec), flush=True)
+    finally:
+        if runner is not None:
+            runner.close()
+    records = [records_by_k[k] for k in sorted(records_by_k)]
     summary = summarise(records)
     print(json.dumps(summary, indent=1))
     if args.json is not None:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        tmp = args.json.with_suffix(".tmp")
-        tmp.write_text(
+        atomic_write(
+            args.json,
             json.dumps(
                 {
                     "args": vars(args) | {"data": str(args.data), "json": str(args.json)},
@@ -214,9 +280,8 @@ def main(argv: list[str] | None = None) -> int:
                     "records": records,
                 },
                 indent=1,
-            )
+            ),
         )
-        tmp.replace(args.json)
     return 0
 
 

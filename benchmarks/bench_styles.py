@@ -96,7 +96,7 @@ def loso(args: argparse.Namespace) -> dict:
                 data=str(data),
                 out=str(work / f"loso_{x}.pt"),
                 work=str(work / f"loso_{x}.work"),
-                cache=str(work / "cache"),
+                cache=args.cache or str(work / "cache"),
                 init=args.init,
                 styles=keep,
                 size=args.size,
@@ -165,6 +165,7 @@ def main() -> None:
     lo.add_argument("--hold-out", default="pencil,cloud")
     lo.add_argument("--init", default=str(ROOT / "checkpoints" / "tsn_lite0.pt"))
     lo.add_argument("--work", default="/tmp/bench_styles")
+    lo.add_argument("--cache", default=None, help="feature cache folder (default WORK/cache)")
     lo.add_argument("--epochs", type=int, default=3)
     lo.add_argument("--copies", type=int, default=0)
     lo.add_argument("--lr", type=float, default=3e-4)

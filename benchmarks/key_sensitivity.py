@@ -35,7 +35,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from bench_refine import pick_rows  # noqa: E402
 
 from eval.hausdorff import bbox_diagonal, hausdorff  # noqa: E402
-from refine.objective import SearchSpace, SketchObjective, SketchTarget  # noqa: E402
+from refine.objective import SearchSpace, SketchObjective, framed, make_target  # noqa: E402
 from refine.search import RefineSettings  # noqa: E402
 from render.sketch import SketchRenderer  # noqa: E402
 from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
@@ -51,7 +51,8 @@ def measure(data: Path, per_species: int, step: float, samples: int) -> list[dic
         yaw = float(row["yaw"])
         sketch = SketchRenderer(gt_mesh).sketch(yaw, RefineSettings().size)
         space = SearchSpace.create(name, gt, search_yaw=False, yaw=yaw)
-        obj = SketchObjective(SketchTarget.from_image(sketch, RefineSettings().size), space)
+        size = RefineSettings().size
+        obj = SketchObjective(make_target(framed(sketch, size), size), space)
         x0 = space.from_params(gt)
         for i, u in enumerate(space.dims):
             x = x0.copy()

@@ -304,11 +304,11 @@ def build_report(
         rotation_step, rotation_refine_budget, samples, split, command,
         time.perf_counter() - t_start,
     )  # fmt: skip
-    from weberpenn.params import atomic_write_text
+    from weberpenn.fileio import atomic_write
 
     path = out / "README.md"
-    atomic_write_text(path, md)
-    atomic_write_text(
+    atomic_write(path, md)
+    atomic_write(
         out / "results.json",
         json.dumps(
             {

@@ -29,15 +29,19 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from render.reader import SketchError, read_sketch
+from render.reader import SketchError, normalise_drawing, read_sketch
 from weberpenn import TreeParams, build_mesh, grow, species
 from weberpenn.params import SPECS
 
 __all__ = [
     "DISCRETE_NEIGHBOUR_KEYS",
+    "METRICS",
     "SearchSpace",
     "SketchObjective",
     "SketchTarget",
+    "framed",
+    "make_target",
+    "metric_distance",
     "prepare_sketch",
     "sketch_distance",
 ]
@@ -133,6 +137,9 @@ class SketchTarget:
         """Fraction of line pixels at full resolution."""
         return self.levels[0].n / self.levels[0].mask.size
 
+    def distance(self, other: SketchTarget) -> float:
+        return target_distance(self, other)
+
 
 def _level_distance(a: _Level, b: _Level, chamfer_weight: float, silhouette_weight: float) -> float:
     side = a.mask.shape[0]
@@ -179,6 +186,39 @@ def sketch_distance(
         SketchTarget.from_image(b, size, scales),
         chamfer_weight,
         silhouette_weight,
+    )
+
+
+# --------------------------------------------------------------------------- metrics
+METRICS = ("shape", "ink")
+
+
+def framed(img: Any, size: int) -> np.ndarray:
+    """A sketch as every comparison sees it: ``render.reader.normalise_drawing`` at ``size``
+    (ink on white, framed by its own drawn extent).  The input and every candidate go
+    through it, so both sides of the distance share one framing."""
+    a = img if isinstance(img, np.ndarray) and img.dtype == np.uint8 and img.ndim == 2 else None
+    if a is None:
+        a = np.round(prepare_sketch(img, max(8, min(np.shape(img)[:2]))) * 255).astype(np.uint8)
+    return normalise_drawing(a, size)
+
+
+def make_target(img: Any, size: int, metric: str = "shape") -> Any:
+    """A prepared sketch for the chosen metric (``ShapeTarget`` or :class:`SketchTarget`);
+    both compare with ``.distance(other)``."""
+    from .shape import ShapeTarget
+
+    if metric == "shape":
+        return ShapeTarget.from_image(img, size)
+    if metric == "ink":
+        return SketchTarget.from_image(img, size)
+    raise ValueError(f"unknown metric {metric!r}; choose one of {', '.join(METRICS)}")
+
+
+def metric_distance(a: Any, b: Any, size: int = 128, metric: str = "shape") -> float:
+    """The distance the refinement minimises, between two sketches framed alike."""
+    return make_target(framed(a, size), size, metric).distance(
+        make_target(framed(b, size), size, metric)
     )
 
 
@@ -332,12 +372,10 @@ class SketchObjective:
     differ only in yaw re-render without regrowing.
     """
 
-    target: SketchTarget
+    target: Any  # SketchTarget or refine.shape.ShapeTarget (``make_target``)
     space: SearchSpace
-    scales: int = 3
+    metric: str = "shape"
     decimals: int = 6
-    chamfer_weight: float = 10.0
-    silhouette_weight: float = 1.0
     prior: np.ndarray | None = None  # unit-cube point (first estimate) the prior pulls to
     prior_weight: float = 0.0
     yaw_prior: float = 0.0  # degrees: the view assumed unless the sketch says otherwise
@@ -376,8 +414,16 @@ class SketchObjective:
         return self._renderer.sketch(self.space.yaw(x), self.target.size)
 
     def loss_of_sketch(self, img: np.ndarray) -> float:
-        cand = SketchTarget.from_image(img, self.target.size, self.scales)
-        return target_distance(self.target, cand, self.chamfer_weight, self.silhouette_weight)
+        """Distance of a candidate's rendered sketch to the target (framed as the target
+        was; a tree too small to draw anything gets the largest distance)."""
+        size = self.target.size
+        try:
+            cand = make_target(framed(img, size), size, self.metric)
+        except SketchError:
+            return self.target.distance(
+                make_target(np.full((size, size), 255, np.uint8), size, self.metric)
+            )
+        return self.target.distance(cand)
 
     def penalty(self, x: Sequence[float]) -> float:
         """``prior_weight`` times the squared distance from ``prior`` over the searched

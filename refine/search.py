@@ -25,9 +25,11 @@ from weberpenn.params import SPECS
 
 from .objective import (
     DISCRETE_NEIGHBOUR_KEYS,
+    METRICS,
     SearchSpace,
     SketchObjective,
-    SketchTarget,
+    framed,
+    make_target,
 )
 
 __all__ = [
@@ -133,7 +135,9 @@ class RefineSettings:
     adds ``prior_weight * |x - x_start|^2`` (unit cube, yaw excluded) to what is minimised;
     ``yaw_weight`` (when the yaw is searched) adds ``yaw_weight * (turn from the front
     view / 180)^2``, so the front view is kept unless another fits clearly better;
-    ``size`` is the side in pixels the search renders and compares at.
+    ``size`` is the side in pixels the search renders and compares at; ``metric`` is the
+    sketch distance: ``"shape"`` (style-blind, ``refine.shape``) or ``"ink"`` (line
+    pixels, ``refine.objective.sketch_distance``).
 
     Species by synthesis (``treesketch.Pipeline``): up to ``species_tries`` species are
     refined, the estimator's best and any other whose score is at least ``species_ratio``
@@ -160,6 +164,7 @@ class RefineSettings:
     yaw_weight: float = YAW_WEIGHT
     species_tries: int = 2
     species_ratio: float = 0.5
+    metric: str = "shape"
 
     def replace(self, **changes: Any) -> RefineSettings:
         return dataclasses.replace(self, **changes).validate()
@@ -200,6 +205,8 @@ class RefineSettings:
             )
         if not (isinstance(self.species_ratio, int | float) and 0 <= self.species_ratio <= 1):
             raise ValueError(f"species_ratio must be in [0, 1], got {self.species_ratio!r}")
+        if self.metric not in METRICS:
+            raise ValueError(f"metric must be one of {', '.join(METRICS)}, got {self.metric!r}")
         if not isinstance(self.global_evals, int) or self.global_evals < 0:
             raise ValueError(f"global_evals must be an integer >= 0, got {self.global_evals!r}")
         return self
@@ -239,7 +246,7 @@ def refine(
     from weberpenn import species as _species
 
     name = _species.canonical(species) if species else guess_species(initial_params)
-    target = SketchTarget.from_image(sketch, cfg.size)
+    target = make_target(framed(sketch, cfg.size), cfg.size, cfg.metric)
     deadline = None if cfg.time_limit is None else t0 + float(cfg.time_limit)
     if yaw is None and not cfg.search_yaw:
         yaw = 0.0
@@ -255,6 +262,7 @@ def refine(
     obj = SketchObjective(
         target,
         space,
+        metric=cfg.metric,
         prior=space.from_params(initial_params, 0.0),
         prior_weight=float(cfg.prior_weight),
         yaw_prior=0.0,

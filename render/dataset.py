@@ -49,6 +49,13 @@ after all its files, so killing the builder at any moment leaves no half-written
 re-run skips finished trees, redoes unfinished ones, and rewrites the manifest.  The same
 settings give the same files (PNG bytes included).  A lock file stops two builders from
 writing the same directory.
+
+Trees are independent pieces: ``build_dataset(cfg, executor=...)`` hands them to an
+executor (``treesketch.executor``: a local process pool, Ray).  Its workers build a tree
+in a scratch folder and send the files back as bytes (:class:`TreeFiles`); only this
+process writes into ``OUT`` (a tree's files together, then its marker), so the workers
+need no shared disk, and a lost worker leaves nothing behind.  Whichever executor runs
+them, the files are the same bytes.
 """
 
 from __future__ import annotations
@@ -237,10 +244,6 @@ def plan(cfg: DatasetConfig) -> list[TreeJob]:
 
 
 # --------------------------------------------------------------------------- file helpers
-def atomic_write_bytes(path: Path, data: bytes) -> None:
-    atomic_write(path, data)
-
-
 def png_bytes(img: np.ndarray) -> bytes:
     """Deterministic PNG encoding (no timestamps or metadata)."""
     from PIL import Image
@@ -310,7 +313,7 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
         for view_no, view in enumerate(settings["views"]):
             for style, img in _draw_view(renderer, view, view_no, job.tree_seed, settings):
                 p = paths_for(job, view, style)
-                atomic_write_bytes(root / p["sketch"], png_bytes(img))
+                atomic_write(root / p["sketch"], png_bytes(img))
                 row = {
                     "species": job.species,
                     "tree_id": job.tree_id,
@@ -325,8 +328,8 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
                 rows.append({**row, "style": style} if styled else row)
         colour = renderer.colour("front", int(settings["render_size"]), supersample=1)
         p = paths_for(job, settings["views"][0])
-        atomic_write_bytes(root / p["render"], png_bytes(colour))
-        atomic_write_bytes(root / p["params"], _json_bytes(params.to_dict()))
+        atomic_write(root / p["render"], png_bytes(colour))
+        atomic_write(root / p["params"], _json_bytes(params.to_dict()))
         marker = {
             "tree_id": job.tree_id,
             "status": "done",
@@ -336,7 +339,7 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
             "seconds_total": round(time.perf_counter() - t0, 4),
             "rows": rows,
         }
-        atomic_write_bytes(root / "done" / f"{job.tree_id}.json", _json_bytes(marker))
+        atomic_write(root / "done" / f"{job.tree_id}.json", _json_bytes(marker))
         (root / "failed" / f"{job.tree_id}.json").unlink(missing_ok=True)
         return marker
     except Exception as exc:  # one bad tree never stops the run
@@ -351,7 +354,7 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
             "params": params.to_dict() if params is not None else None,
         }
         with contextlib.suppress(OSError):  # disk trouble: still report the failure
-            atomic_write_bytes(root / "failed" / f"{job.tree_id}.json", _json_bytes(record))
+            atomic_write(root / "failed" / f"{job.tree_id}.json", _json_bytes(record))
         return record
 
 
@@ -526,7 +529,7 @@ def _check_settings(root: Path, settings: dict[str, Any]) -> None:
                 "use the same settings to resume, or another --out"
             )
     else:
-        atomic_write_bytes(f, _json_bytes(settings))
+        atomic_write(f, _json_bytes(settings))
 
 
 def _load_marker(path: Path) -> dict[str, Any] | None:
@@ -569,13 +572,13 @@ def write_manifest(root: Path, jobs: Sequence[TreeJob]) -> int:
             rows.extend(m["rows"])
     cols = MANIFEST_COLUMNS + (("style",) if any("style" in r for r in rows) else ())
     lines = "".join(json.dumps({k: r[k] for k in cols}) + "\n" for r in rows)
-    atomic_write_bytes(root / "manifest.jsonl", lines.encode("utf-8"))
+    atomic_write(root / "manifest.jsonl", lines.encode("utf-8"))
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=list(cols), lineterminator="\n")
     w.writeheader()
     for r in rows:
         w.writerow({k: r[k] for k in cols})
-    atomic_write_bytes(root / "manifest.csv", buf.getvalue().encode("utf-8"))
+    atomic_write(root / "manifest.csv", buf.getvalue().encode("utf-8"))
     return len(rows)
 
 
@@ -717,7 +720,7 @@ def build_dataset(
             "seconds_last_run": round(summary.seconds, 2),
             "meshers": _meshers(root, jobs),
         }
-        atomic_write_bytes(root / "DONE", _json_bytes(done))
+        atomic_write(root / "DONE", _json_bytes(done))
     return summary
 
 

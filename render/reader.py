@@ -197,7 +197,6 @@ FRAME_EDGE = 0.043
 WORK_SIDE = 512  # drawings are normalised at most this large (bounded time and memory)
 MIN_PAPER = 0.25  # paper darker than this (fraction of white) is refused as a dark page
 INK_CONTRAST = 0.85  # ink is at most this bright relative to the paper around it
-FRAME_TOLERANCE = 0.015  # a drawing already this close to the renderer's frame keeps its scale
 
 
 def flatten_paper(img: np.ndarray) -> np.ndarray:
@@ -256,10 +255,10 @@ def normalise_drawing(img: np.ndarray, size: int = 256) -> np.ndarray:
 
     Pencil on grey or off-white paper and phone photos read as ink (:func:`flatten_paper`,
     Otsu) and come out as black strokes on white, like the training sketches; a drawing in
-    a corner is moved and scaled to the middle.  A sketch already framed as the renderer
-    frames a tree (trunk base on the bottom margin, axis centred, inside the frame) keeps
-    its scale: a tree may be framed by its width seen from another side.  Refuses blank and
-    dark pages.
+    a corner is moved and scaled to the middle.  The refinement frames every candidate's
+    sketch the same way, so drawing and candidates always compare at one framing (the
+    renderer's own frame fits a tree's width over all sides, not the drawn one).  Refuses
+    blank and dark pages.
     """
     from PIL import Image
 
@@ -278,31 +277,24 @@ def normalise_drawing(img: np.ndarray, size: int = 256) -> np.ndarray:
     clean = np.where(ink, 0.0, 1.0)
 
     top, bottom, left, right, axis = _axis_and_box(ink)
-    n, m = a.shape
-    framed = (
-        n == m
-        and abs((bottom + 1) / n - FRAME_BOTTOM) <= FRAME_TOLERANCE
-        and abs(axis / n - 0.5) <= FRAME_TOLERANCE
-        and top / n >= FRAME_EDGE - FRAME_TOLERANCE
-        and min(left, n - 1 - right) / n >= FRAME_EDGE - FRAME_TOLERANCE
-    )
-    if framed:
-        scale, axis, bottom = size / n, n / 2.0, int(round(FRAME_BOTTOM * n)) - 1
-    else:
-        h = bottom - top + 1
-        half = max(axis - left, right + 1 - axis, 0.5)
-        scale = min((FRAME_BOTTOM - FRAME_EDGE) * size / h, (0.5 - FRAME_EDGE) * size / half)
+    h = bottom - top + 1
+    half = max(axis - left, right + 1 - axis, 0.5)
+    scale = min((FRAME_BOTTOM - FRAME_EDGE) * size / h, (0.5 - FRAME_EDGE) * size / half)
+    if abs(scale - 1.0) < 0.02:  # already framed: move it, do not resample it
+        scale = 1.0
     # the page, scaled, with the trunk base at (size/2, FRAME_BOTTOM * size)
     out_w = max(1, int(round(a.shape[1] * scale)))
     out_h = max(1, int(round(a.shape[0] * scale)))
     x0 = int(round(size / 2 - axis * scale))
     y0 = int(round(FRAME_BOTTOM * size - (bottom + 1) * scale))
     pic = Image.fromarray(np.round(clean * 255).astype(np.uint8))
-    resample = Image.Resampling.BOX if scale < 1 else Image.Resampling.BILINEAR
-    pic = pic.resize((out_w, out_h), resample)
+    if scale != 1.0:
+        resample = Image.Resampling.BOX if scale < 1 else Image.Resampling.BILINEAR
+        pic = pic.resize((out_w, out_h), resample)
     canvas = Image.new("L", (size, size), 255)
     canvas.paste(pic, (x0, y0))
-    out = np.asarray(canvas, dtype=np.uint8)
+    # binary, like the renderer's sketches (and so normalising twice changes nothing)
+    out = np.where(np.asarray(canvas) < 128, 0, 255).astype(np.uint8)
     if float(ink_mask(out).mean()) < MIN_INK:
         raise SketchError("the sketch is blank: draw a tree (dark lines on a light page)")
     return out

@@ -19,11 +19,12 @@ import numpy as _np
 if not hasattr(_np, "bool"):
     _np.bool = bool  # Debian Blender 3.4's glTF importer calls np.bool (gone in numpy 2)
 
+import bpy  # type: ignore[import-not-found]  # noqa: E402, I001 - bpy first (bpy module)
 import addon_utils  # type: ignore[import-not-found]  # noqa: E402
-import bpy  # type: ignore[import-not-found]  # noqa: E402
 
 ZIP, GLB, HEIGHT, CLI = sys.argv[sys.argv.index("--") + 1 :]
 OBJ = GLB[: -len(".glb")] + ".obj"
+PRESET = GLB[: -len(".glb")] + "_sapling.py"
 HEIGHT = float(HEIGHT)
 T0 = time.time()
 
@@ -64,6 +65,38 @@ lo, hi = world_z(meshes)
 assert abs(lo) < 0.01 * HEIGHT and abs(hi - lo - HEIGHT) < 0.01 * HEIGHT, (lo, hi, HEIGHT)
 step(f"OBJ upright: z {lo:.3f}..{hi:.3f}")
 
+# 1c. our preset through Sapling's own Import Preset: every level and the leaves.
+# Sapling is bundled up to Blender 4.1 (an online extension from 4.2): required there.
+addon_utils.enable("add_curve_sapling", default_set=True)
+SAPLING = "add_curve_sapling" in bpy.context.preferences.addons
+assert SAPLING or bpy.app.version >= (4, 2), "Sapling Tree Gen missing from this Blender"
+if not SAPLING:
+    step("Sapling not bundled in this Blender (an extension since 4.2): Sapling checks skipped")
+folder = bpy.utils.user_resource("SCRIPTS", path="presets/operator/add_curve_sapling", create=True)
+with open(PRESET, encoding="utf-8") as src, open(f"{folder}/ts_test.py", "w") as dst:
+    dst.write(src.read())
+# ours (limitImport off inside), then Sapling's default Limit Import forced on
+levels = {}
+for limit in (False, True) if SAPLING else ():
+    clear()
+    bpy.ops.sapling.importdata(filename="ts_test.py")
+    if limit:  # what a preset without our key gets
+        import add_curve_sapling  # type: ignore[import-not-found]
+
+        add_curve_sapling.settings["limitImport"] = True
+    assert bpy.ops.curve.tree_add() == {"FINISHED"}
+    leaf_objs = [o for o in bpy.data.objects if o.type == "MESH"]
+    levels[limit] = (
+        sum(len(o.data.splines) for o in bpy.data.objects if o.type == "CURVE"),
+        sum(len(o.data.polygons) for o in leaf_objs),
+    )
+if SAPLING:
+    assert levels[False][1] > 0, f"Import Preset dropped the leaves: {levels}"
+    assert levels[True][1] == 0  # the check is live: Limit Import on drops them
+    step(
+        f"Sapling Import Preset (splines, leaf faces): ours {levels[False]}, Limit on {levels[True]}"
+    )
+
 # 2. install the add-on from its zip, enable, draw the panel
 bpy.ops.preferences.addon_install(filepath=ZIP, overwrite=True)
 addon_utils.enable("treesketch_addon", default_set=True)
@@ -98,33 +131,55 @@ panel.draw(type("P", (), {"layout": Layout(log)})(), bpy.context)
 assert ("operator", "treesketch.predict") in log and ("prop", "image_path") in log, log
 step(f"add-on installed, panel draws {len(log)} items")
 
-# 3a. the bundled drawing -> native Sapling tree
+# 3a. the bundled drawing -> native Sapling tree (the GLB where Sapling is missing)
 clear()
 settings = bpy.context.scene.treesketch
-settings.source, settings.result, settings.refine = "IMAGE", "SAPLING", False
+settings.source, settings.refine = "IMAGE", False
+settings.result = "SAPLING" if SAPLING else "GLB"
 assert bpy.ops.treesketch.predict(wait=True) == {"FINISHED"}, settings.status
-curves = [o for o in bpy.data.objects if o.type == "CURVE"]
-leaves = [o for o in bpy.data.objects if o.type == "MESH"]
-assert curves, "no Sapling tree added"
-splines = sum(len(o.data.splines) for o in curves)
-assert leaves and len(leaves[0].data.polygons) > 0, "Sapling made no leaves (Limit Import?)"
-step(
-    f"Sapling tree from the bundled drawing: {splines} splines, {len(leaves[0].data.polygons)} leaves"
-)
+if SAPLING:
+    curves = [o for o in bpy.data.objects if o.type == "CURVE"]
+    leaves = [o for o in bpy.data.objects if o.type == "MESH"]
+    assert curves, "no Sapling tree added"
+    splines = sum(len(o.data.splines) for o in curves)
+    assert leaves and len(leaves[0].data.polygons) > 0, "Sapling made no leaves (Limit Import?)"
+    n_leaves = len(leaves[0].data.polygons)
+    step(f"Sapling tree from the bundled drawing: {splines} splines, {n_leaves} leaves")
+else:
+    lo, hi = world_z([o for o in bpy.data.objects if o.type == "MESH"])
+    step(f"GLB from the bundled drawing: z {lo:.2f}..{hi:.2f}")
+    settings.result = "SAPLING"  # without Sapling: a plain message before any work
+    try:  # an operator that reports an error raises it when called from Python
+        bpy.ops.treesketch.predict(wait=True)
+        raise AssertionError("a Sapling tree was asked for without Sapling and not refused")
+    except RuntimeError as exc:
+        assert "Sapling Tree Gen is not installed" in str(exc), exc
+    step("asking for a Sapling tree without Sapling: refused up front with a plain message")
 
 # 3b. a Grease Pencil drawing -> the GLB
 clear()
-bpy.ops.object.gpencil_add(type="EMPTY")
-gp = bpy.context.active_object
-frame = gp.data.layers.active.frames[0] if gp.data.layers.active.frames else None
-frame = frame or gp.data.layers.active.frames.new(1)
+if bpy.app.version >= (4, 3, 0):  # Grease Pencil v3
+    bpy.ops.object.grease_pencil_add(type="EMPTY")
+    gp = bpy.context.active_object
+    layer = gp.data.layers.active or gp.data.layers.new("ink")
+    drawing = (layer.current_frame() or layer.frames.new(1)).drawing
 
+    def stroke(points):
+        drawing.add_strokes([len(points)])
+        for p, (x, z) in zip(drawing.strokes[-1].points, points, strict=True):
+            p.position = (x, 0.0, z)
 
-def stroke(points):
-    s = frame.strokes.new()
-    s.points.add(len(points))
-    for p, (x, z) in zip(s.points, points, strict=True):
-        p.co = (x, 0.0, z)
+else:  # Blender up to 4.2: legacy Grease Pencil
+    bpy.ops.object.gpencil_add(type="EMPTY")
+    gp = bpy.context.active_object
+    frames = gp.data.layers.active.frames
+    frame = frames[0] if len(frames) else frames.new(1)
+
+    def stroke(points):
+        s = frame.strokes.new()
+        s.points.add(len(points))
+        for p, (x, z) in zip(s.points, points, strict=True):
+            p.co = (x, 0.0, z)
 
 
 stroke([(-0.15, 0.0), (-0.1, 1.5)])  # trunk, two lines
@@ -137,5 +192,13 @@ meshes = [o for o in bpy.data.objects if o.type == "MESH"]
 assert meshes, "no GLB imported"
 lo, hi = world_z(meshes)
 assert abs(lo) < 0.02 * (hi - lo) and hi - lo > 0.5, (lo, hi)
-step(f"GLB from a Grease Pencil drawing: z {lo:.2f}..{hi:.2f}")
+images = {
+    n.image
+    for o in meshes
+    for m in o.data.materials
+    for n in m.node_tree.nodes
+    if n.type == "TEX_IMAGE" and n.image
+}
+assert len(images) == 2 and all(i.packed_file for i in images), "textures not packed"
+step(f"GLB from a Grease Pencil drawing: z {lo:.2f}..{hi:.2f}; {len(images)} textures packed")
 step(f"ALL OK (Blender {bpy.app.version_string})")

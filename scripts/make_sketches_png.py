@@ -22,8 +22,8 @@ from PIL import Image, ImageDraw
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from render.dataset import atomic_write_bytes  # noqa: E402
 from render.sketch import VIEWS, SketchRenderer  # noqa: E402
+from weberpenn.fileio import atomic_write  # noqa: E402
 
 EXAMPLE_SEED = 100000
 
@@ -78,10 +78,10 @@ def main() -> None:
     ap.add_argument("--example", default=str(ROOT / "examples" / "sketch_maple.png"))
     args = ap.parse_args()
     grid = make_grid(args.seed, args.tile)
-    atomic_write_bytes(Path(args.out), _png(grid))
+    atomic_write(Path(args.out), _png(grid))
     print(f"wrote {args.out} ({Path(args.out).stat().st_size // 1024} KB)")
     ex = SketchRenderer(_tree("maple", EXAMPLE_SEED)).sketch("front", 256)
-    atomic_write_bytes(Path(args.example), _png(Image.fromarray(ex)))
+    atomic_write(Path(args.example), _png(Image.fromarray(ex)))
     print(f"wrote {args.example} (maple, seed {EXAMPLE_SEED}, front, 256 px)")
 
 

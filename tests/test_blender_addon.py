@@ -44,12 +44,14 @@ def test_cli_command(backend, tmp_path):
 
 def test_run_cli_lines_and_failure(backend, tmp_path):
     script = tmp_path / "fake"
-    script.write_text("#!/bin/sh\necho 'refining 3/10'\necho done\nexit $1\n")
+    script.write_text(
+        "#!/bin/sh\nprintf '\\033[2Krefining   1/10\\r\\033[2Krefining 3/10\\n'\necho done\nexit $1\n"
+    )
     script.chmod(0o755)
     lines = []
     backend.run_cli([str(script), "0"], on_line=lines.append)
-    assert lines == ["refining 3/10", "done"]
-    assert backend.progress_fraction(lines[0]) == pytest.approx(0.3)
+    assert lines == ["refining 1/10", "refining 3/10", "done"]  # bar redraws, codes gone
+    assert backend.progress_fraction(lines[1]) == pytest.approx(0.3)
     assert backend.progress_fraction("no numbers") is None
     with pytest.raises(backend.PredictError, match="done"):
         backend.run_cli([str(script), "3"])

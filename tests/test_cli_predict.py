@@ -125,3 +125,22 @@ def test_bad_inputs(tmp_path, sketch_png) -> None:
     res = runner.invoke(app, ["predict", str(blank), "--out", str(tmp_path / "b.glb")])
     assert res.exit_code == 2 and "blank" in res.output
     assert not (tmp_path / "b.glb").exists()
+
+
+def test_export_options(tmp_path, sketch_png) -> None:
+    import trimesh
+
+    out = tmp_path / "lod"
+    args = ["predict", str(sketch_png), "--no-refine", "--quiet", "--max-faces", "3000"]
+    args += ["--out", str(out / "tree.obj"), "--summary", str(out / "summary.json")]
+    res = runner.invoke(app, args)
+    assert res.exit_code == 0, res.output
+    names = sorted(p.name for p in out.iterdir())
+    assert "tree.obj" in names and "tree.mtl" in names and "summary.json" in names
+    assert any(n.endswith(".png") for n in names)  # the textures travel with the OBJ
+    scene = trimesh.load(out / "tree.obj", force="scene")
+    assert sum(len(g.faces) for g in scene.geometry.values()) <= 3000
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["export"]["max_faces"] == 3000 and "yaw" in summary
+    bad = runner.invoke(app, [*args[:5], "10", "--out", str(tmp_path / "x.glb")])
+    assert bad.exit_code == 2 and "max_faces" in bad.output

@@ -91,3 +91,37 @@ def test_parameters_pickle_for_worker_processes():
     p = species.sample("palm", seed=1)
     q = pickle.loads(pickle.dumps(p))
     assert q == p and type(q) is type(p) and q.to_dict() == p.to_dict()
+
+
+@pytest.mark.parametrize(
+    ("address", "match"), [("127.0.0.1:1", "no Ray cluster answers"), ("nowhere", "HOST:PORT")]
+)
+def test_an_unreachable_cluster_fails_fast(address, match):
+    pytest.importorskip("ray")
+    from treesketch.executor import RayExecutor
+
+    with pytest.raises(ExecutorError, match=match):
+        RayExecutor(address=address)
+
+
+def test_tsn_estimate_does_not_depend_on_the_callers_torch_threads():
+    """Ray gives its workers one thread, this process has all cores: the estimate must
+    be the same values either way."""
+    import torch
+
+    from render.sketch import SketchRenderer
+    from treesketch.estimators import TSNEstimator
+    from weberpenn import build_mesh, grow, species
+
+    est = TSNEstimator.load()
+    img = SketchRenderer(build_mesh(grow(species.sample("palm", seed=1)))).sketch(30.0, 256)
+    before = torch.get_num_threads()
+    try:
+        torch.set_num_threads(1)
+        one = est.estimate(img).params.to_dict()
+        torch.set_num_threads(2)
+        two = est.estimate(img).params.to_dict()
+        assert torch.get_num_threads() == 2  # the caller's setting is left as it was
+    finally:
+        torch.set_num_threads(before)
+    assert one == two

@@ -123,3 +123,20 @@ def test_rotation_sweep_same_values_as_local(rex):
         assert p.to_dict() == q.to_dict()
     for s, t in zip(local.sketches, remote.sketches, strict=True):
         assert np.array_equal(s, t)
+
+
+def test_cli_dataset_build_through_ray(rex, tmp_path):
+    """`--executor ray` (here it joins the Ray this module started) builds the same files
+    as the in-process default."""
+    from typer.testing import CliRunner
+
+    from treesketch.cli import app
+
+    args = ["dataset", "build", "--trees-per-species", "1", "--species", "palm"]
+    args += ["--views", "front", "--size", "32", "--no-progress"]
+    a = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "a")])
+    b = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "b"), "--executor", "ray"])
+    assert a.exit_code == 0 and b.exit_code == 0, a.output + b.output
+    assert "1 built, 0 failed" in b.output
+    assert _tree_files(tmp_path / "a") == _tree_files(tmp_path / "b")
+    assert ray.is_initialized()  # the CLI left the Ray it did not start alone

@@ -10,7 +10,7 @@ import pytest
 import trimesh
 
 from weberpenn import build_mesh, default_params, grow, species
-from weberpenn.export import colours, export_mesh, glb_bytes, obj_files
+from weberpenn.export import colours, export_mesh, glb_bytes, mesh_files, obj_files
 from weberpenn.orient import face_view_matrix, to_export_frame
 
 
@@ -144,3 +144,13 @@ def test_bad_format_and_empty_leave_nothing(tree, tmp_path):
 def test_colour_table():
     assert colours(None) == colours("no-such-species")
     assert colours("cherry") != colours("pine")
+
+
+def test_mesh_files_for_write_together(tree, tmp_path):
+    glb = mesh_files(tree, tmp_path / "a.gltf", yaw=30.0, max_faces=3000)
+    assert list(glb) == [tmp_path / "a.glb"] and glb[tmp_path / "a.glb"][:4] == b"glTF"
+    obj = mesh_files(tree, tmp_path / "a.obj")
+    assert [p.name for p in obj] == ["a.obj", "a_bark.png", "a_leaf.png", "a.mtl"]
+    with pytest.raises(ValueError, match="format"):
+        mesh_files(tree, tmp_path / "a.ply")
+    assert list(tmp_path.iterdir()) == []  # nothing written

@@ -245,15 +245,37 @@ def test_length_ratio_of_children():
         assert ln == pytest.approx(0.4 * trunk_len, rel=1e-9)
 
 
-def test_exploding_splits_are_capped_with_a_warning():
+def test_exploding_splits_are_refused():
     from weberpenn import ParamError
-    from weberpenn.params import MAX_LEAVES, MAX_STEMS
 
-    try:
-        p = species.sample("bonsai", seed=2).replace(segSplits=(1.0, 1.0, 1.0, 1.0))
-    except ParamError:
-        pytest.skip("the parameter table now rejects this dictionary outright")
-    with pytest.warns(RuntimeWarning, match="limits"):
-        sk = grow(p)
-    assert sk.n_stems <= MAX_STEMS and sk.n_leaves <= MAX_LEAVES
-    _check_structure(sk)
+    p = species.sample("bonsai", seed=2).replace(segSplits=(1.0, 1.0, 1.0, 1.0))
+    with pytest.raises(ParamError, match="stems"):
+        grow(p)
+
+
+def test_random_draws_follow_the_structure():
+    # a small rSplits2 step flips a few split draws; with one random stream per stem the
+    # stems away from the flips keep their draws (with one stream per level, every draw
+    # after the first flip moved: 72 % of this bonsai's stems stayed)
+    p = species.sample("bonsai", 0)
+    a = grow(p)
+    b = grow(p.replace(rSplits2=(p["rSplits2"] + 0.002) % 1.0))
+
+    def stems(sk):
+        return {sk.stem(i)[0].tobytes() for i in range(sk.n_stems)}
+
+    sa, sb = stems(a), stems(b)
+    assert sa != sb
+    assert len(sa & sb) >= 0.95 * len(sa)
+
+
+def test_leaf_azimuth_accumulates_along_each_stem():
+    # a 0.01 degree change of leafRotateV turns a stem's n-th leaf by n * 0.01 degrees;
+    # accumulated over the whole tree (Sapling), the 4000th leaf turned by 40 degrees
+    p = species.sample("maple", 0)
+    a = grow(p)
+    b = grow(p.replace(leafRotateV=p["leafRotateV"] + 0.01))
+    assert np.array_equal(a.leaf_positions, b.leaf_positions)
+    scale = np.linalg.norm(a.leaf_matrices, axis=(1, 2))
+    turn = np.linalg.norm(b.leaf_matrices - a.leaf_matrices, axis=(1, 2)) / scale
+    assert 0 < turn.max() < 0.05

@@ -56,5 +56,5 @@ def test_without_skeleton(maple):
 def test_bad_budgets(maple):
     with pytest.raises(ValueError, match=str(MIN_FACES)):
         lod(maple, 10)
-    with pytest.raises(TypeError):
+    with pytest.raises(ValueError):
         lod(maple, 1000.5)

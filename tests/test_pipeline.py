@@ -93,9 +93,10 @@ def test_no_refine_and_height() -> None:
 @pytest.mark.parametrize("height", [float("inf"), 1e308, float("nan"), 0.0, -1.0])
 def test_bad_height_is_refused_before_any_work(height: float) -> None:
     est = Fixed("palm", 9)
+    img = _gt_sketch()
     t0 = time.perf_counter()
     with pytest.raises(ValueError, match="height"):
-        Pipeline(est, RefineSettings(budget=50)).run(_gt_sketch(), height=height)
+        Pipeline(est, RefineSettings(budget=50)).run(img, height=height)
     assert est.calls == 0 and time.perf_counter() - t0 < 1.0
 
 

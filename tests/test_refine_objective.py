@@ -5,7 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from refine.objective import SearchSpace, SketchObjective, SketchTarget, sketch_distance
+from refine.objective import (
+    SearchSpace,
+    SketchObjective,
+    SketchTarget,
+    framed,
+    make_target,
+    sketch_distance,
+)
 from weberpenn import build_mesh, grow, species
 
 
@@ -93,12 +100,12 @@ def test_objective_deterministic_cached_and_zero_at_truth() -> None:
     gt = species.sample("palm", 2)
     img = SketchRenderer(build_mesh(grow(gt), species="palm")).sketch(90.0, 128)
     sp = SearchSpace.create("palm", gt)
-    obj = SketchObjective(SketchTarget.from_image(img, 128), sp)
+    obj = SketchObjective(make_target(framed(img, 128), 128), sp)
     x = sp.from_params(gt, 90.0)
     assert obj(x) == pytest.approx(0.0, abs=1e-9)
     assert obj.evaluations == 1
     assert obj(x) == obj(x) and obj.evaluations == 1  # cached
     x2 = x.copy()
     x2[sp.labels.index("scaleV")] = 1.0 - x2[sp.labels.index("scaleV")]
-    obj2 = SketchObjective(SketchTarget.from_image(img, 128), sp)
+    obj2 = SketchObjective(make_target(framed(img, 128), 128), sp)
     assert obj2(x2) == obj(x2) > 0.0  # deterministic across objectives

@@ -52,6 +52,20 @@ def predict_command(
     data: Path | None = typer.Option(
         None, "--data", help="Dataset folder (the nns estimator's index)."
     ),
+    max_faces: int | None = typer.Option(
+        None, "--max-faces", help="Keep the exported tree under this many triangles (LOD)."
+    ),
+    face_view: bool = typer.Option(
+        True,
+        "--face-view/--no-face-view",
+        help="Turn the exported tree so its front faces the way it was drawn (the found yaw).",
+    ),
+    textures: bool = typer.Option(
+        True, "--textures/--no-textures", help="Embed bark and leaf textures (else flat colours)."
+    ),
+    summary_path: Path | None = typer.Option(
+        None, "--summary", help="Also write a JSON summary: species, scores, distances, yaw."
+    ),
     algorithm: str = typer.Option("bobyqa", "--algorithm", help="bobyqa, sbplx or cobyla."),
     seed: int = typer.Option(0, "--seed", help="Refinement seed (nlopt)."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
@@ -62,16 +76,23 @@ def predict_command(
     Example: `treesketch predict examples/sketch_maple.png --out tree.glb --compare cmp.png`.
     """
     from .estimators import ESTIMATORS, load_estimator
-    from .outputs import write_outputs
+    from .outputs import ExportOptions, write_outputs
     from .pipeline import Pipeline, RefineSettings, SketchError, check_height, load_sketch
 
     # every option first: nothing is read, estimated or refined before they all pass
-    outputs = {"mesh": out, "json": params_path, "preset": preset_path, "compare": compare_path}
+    outputs = {
+        "mesh": out,
+        "json": params_path,
+        "preset": preset_path,
+        "compare": compare_path,
+        "summary": summary_path,
+    }
     for opt, p, exts in (
         ("--out", out, (".glb", ".obj")),
         ("--params", params_path, (".json",)),
         ("--preset", preset_path, (".py",)),
         ("--compare", compare_path, (".png",)),
+        ("--summary", summary_path, (".json",)),
     ):
         if p is None:
             continue
@@ -91,6 +112,7 @@ def predict_command(
             settings = settings.replace(time_limit=time_limit)
         settings.validate()
         check_height(height)
+        export = ExportOptions(face_view, max_faces, textures).validate()
         image = load_sketch(sketch)
         pipeline = Pipeline(load_estimator(estimator, checkpoint=checkpoint, data=data), settings)
     except (SketchError, ValueError) as exc:
@@ -117,7 +139,7 @@ def predict_command(
     try:
         with bar:
             result = pipeline.run(image, height=height, progress=on_progress)
-        written = write_outputs(result, outputs)
+        written = write_outputs(result, outputs, export)
     except (SketchError, ValueError) as exc:
         fail(str(exc))
     except OSError as exc:
@@ -131,6 +153,12 @@ def predict_command(
     if r is not None:
         line += f" ({r.evaluations} trees, {r.seconds:.1f} s, stopped by {r.stopped_by})"
     typer.echo(line)
+    tried = result.extras.get("tried", {})
+    if len(tried) > 1:
+        typer.echo(
+            "species tried: "
+            + ", ".join(f"{k} {v:.3f}" for k, v in sorted(tried.items(), key=lambda kv: kv[1]))
+        )
     lo, hi = result.tree_mesh.bounds()
     typer.echo(
         f"tree: {hi[2] - lo[2]:.2f} m tall, {len(result.tree_mesh.branches.faces)} branch faces"

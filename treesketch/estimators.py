@@ -11,8 +11,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -58,9 +60,28 @@ class TSNEstimator:
             raise ValueError(str(exc)) from None
 
     def estimate(self, sketch: np.ndarray) -> Estimate:
-        pred = self.model.predict(sketch)
+        with _one_torch_thread():
+            pred = self.model.predict(sketch)
         scores = self.model.species_id.shares(pred.matrix)
         return Estimate(pred.params, pred.species, scores, None, decoded=pred.decoded)
+
+
+@contextlib.contextmanager
+def _one_torch_thread() -> Iterator[None]:
+    """Run the network on one thread: a sum split over threads is added in another order,
+    which moves the last digits of a prediction, and an executor's workers (one CPU each)
+    must give the values this process gives.  One image is no slower on one thread."""
+    import torch
+
+    n = torch.get_num_threads()
+    if n == 1:
+        yield
+        return
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(n)
 
 
 def _scores_from_distances(best: dict[str, float]) -> dict[str, float]:
@@ -85,7 +106,7 @@ class TemplateEstimator:
         return {"seeds": self.seeds, "_templates": None}  # a worker builds its own
 
     def _build(self) -> list[tuple[str, int, float, Any]]:
-        from refine.objective import SketchTarget
+        from refine.objective import framed, make_target
         from render.sketch import SketchRenderer
 
         out = []
@@ -94,18 +115,19 @@ class TemplateEstimator:
                 r = SketchRenderer(build_mesh(grow(species.sample(name, seed)), species=name))
                 for yaw in TEMPLATE_YAWS:
                     img = r.sketch(yaw, TEMPLATE_SIZE)
-                    out.append((name, seed, yaw, SketchTarget.from_image(img, TEMPLATE_SIZE)))
+                    target = make_target(framed(img, TEMPLATE_SIZE), TEMPLATE_SIZE)
+                    out.append((name, seed, yaw, target))
         return out
 
     def estimate(self, sketch: np.ndarray) -> Estimate:
-        from refine.objective import SketchTarget, target_distance
+        from refine.objective import framed, make_target
 
         if self._templates is None:
             self._templates = self._build()
-        target = SketchTarget.from_image(sketch, TEMPLATE_SIZE)
+        target = make_target(framed(sketch, TEMPLATE_SIZE), TEMPLATE_SIZE)
         best: dict[str, tuple[float, int, float]] = {}
         for name, seed, yaw, cand in self._templates:
-            d = target_distance(target, cand)
+            d = target.distance(cand)
             if name not in best or d < best[name][0]:
                 best[name] = (d, seed, yaw)
         top = min(best, key=lambda s: best[s][0])

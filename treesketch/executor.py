@@ -302,9 +302,12 @@ class RayExecutor:
         self._ray = ray
         self._started = False
         if not ray.is_initialized():
+            _check_reachable(address)
             try:
                 ray.init(
-                    address=address,
+                    # "local": always a new Ray of our own, never one a stale
+                    # /tmp/ray/ray_current_cluster points at
+                    address=address or "local",
                     num_cpus=num_cpus,
                     include_dashboard=False,
                     log_to_driver=False,
@@ -375,6 +378,25 @@ class RayExecutor:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _check_reachable(address: str | None, timeout: float = 5.0) -> None:
+    """A HOST:PORT that nobody answers on fails now, plainly (Ray itself would retry
+    for minutes)."""
+    if address is None or address == "auto" or "://" in address:
+        return
+    host, sep, port = address.rpartition(":")
+    if not sep or not host or not port.isdigit():
+        raise ExecutorError(
+            f"--address must be auto, HOST:PORT or ray://HOST:PORT, got {address!r}"
+        )
+    try:
+        socket.create_connection((host, int(port)), timeout=timeout).close()
+    except OSError as exc:
+        raise ExecutorError(
+            f"no Ray cluster answers at {address} ({exc.strerror or exc}); "
+            "start one with `ray start --head` or leave out --address for a local Ray"
+        ) from None
 
 
 def _pythonpath() -> str:

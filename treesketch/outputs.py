@@ -5,8 +5,8 @@
 (``weberpenn.fileio.write_together``).  Kinds:
 
 ========== ==========================================================================
-glb        the tree (branches and leaves), binary glTF
-obj        the tree as Wavefront OBJ (+ its .mtl beside it, written together)
+glb        the tree (branches and leaves), binary glTF, Y-up, textured
+obj        the tree as Wavefront OBJ (+ its .mtl and textures beside it, written together)
 json       the parameter dictionary (Sapling key names)
 preset     a Blender Sapling preset (.py)
 compare    PNG: input sketch | first estimate's sketch | refined sketch | colour render
@@ -20,8 +20,8 @@ from __future__ import annotations
 import io
 import json
 import os
-import tempfile
 from collections.abc import Iterable, Mapping
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +29,14 @@ import numpy as np
 
 from weberpenn.fileio import write_together
 
-__all__ = ["KINDS", "compare_image", "png_bytes", "result_files", "write_outputs"]
+__all__ = [
+    "KINDS",
+    "ExportOptions",
+    "compare_image",
+    "png_bytes",
+    "result_files",
+    "write_outputs",
+]
 
 KINDS = (
     "glb",
@@ -81,19 +88,38 @@ def compare_image(result: Any, size: int = 256) -> np.ndarray:
     return np.asarray(out)
 
 
-def _mesh_bytes(tree_mesh: Any, suffix: str) -> dict[str, bytes]:
-    """The mesh file (and for OBJ its material library) as bytes, keyed by suffix."""
-    from weberpenn.export import export_mesh
+@dataclass(frozen=True)
+class ExportOptions:
+    """How the tree is exported: ``face_view`` turns it so Blender's (and any glTF
+    viewer's) front view shows it as it was drawn (the yaw the refinement found);
+    ``max_faces`` keeps it under that many triangles (``weberpenn.lod``); ``textures``
+    embeds the species' bark and leaf textures (else flat colours)."""
 
-    with tempfile.TemporaryDirectory(prefix="treesketch-") as d:
-        path = export_mesh(tree_mesh, Path(d) / f"tree{suffix}")
-        return {p.suffix: p.read_bytes() for p in Path(d).iterdir() if p.stem == path.stem}
+    face_view: bool = True
+    max_faces: int | None = None
+    textures: bool = True
+
+    def validate(self) -> ExportOptions:
+        if self.max_faces is not None:
+            from weberpenn.lod import check_budget
+
+            check_budget(self.max_faces)
+        return self
+
+    def mesh_kwargs(self, result: Any) -> dict[str, Any]:
+        yaw = float(result.yaw) if self.face_view else 0.0
+        return {"yaw": yaw, "max_faces": self.max_faces, "textures": self.textures}
 
 
-def result_files(result: Any, kinds: Iterable[str]) -> dict[str, bytes]:
-    """The bytes of each artefact kind asked for (see the module text)."""
-    from weberpenn.export import sapling_preset_text
+def result_files(
+    result: Any, kinds: Iterable[str], options: ExportOptions | None = None
+) -> dict[str, bytes]:
+    """The bytes of each artefact kind asked for (see the module text); an OBJ comes with
+    its material library and texture pictures, named ``tree.obj``, ``tree.mtl``, ...."""
+    from weberpenn.export import glb_bytes, obj_files
+    from weberpenn.preset import preset_text
 
+    opts = (options or ExportOptions()).validate()
     wanted = list(dict.fromkeys(kinds))
     unknown = [k for k in wanted if k not in KINDS]
     if unknown:
@@ -101,30 +127,39 @@ def result_files(result: Any, kinds: Iterable[str]) -> dict[str, bytes]:
     out: dict[str, bytes] = {}
     for kind in wanted:
         if kind == "glb":
-            out[kind] = _mesh_bytes(result.tree_mesh, ".glb")[".glb"]
+            out[kind] = glb_bytes(result.tree_mesh, **opts.mesh_kwargs(result))
         elif kind == "obj":
-            files = _mesh_bytes(result.tree_mesh, ".obj")
-            out["obj"] = files[".obj"]
-            if ".mtl" in files:
-                out["mtl"] = files[".mtl"]
+            files = obj_files(result.tree_mesh, Path("tree.obj"), **opts.mesh_kwargs(result))
+            for path, content in files.items():
+                key = "obj" if path.suffix == ".obj" else path.name
+                out[key] = content.encode() if isinstance(content, str) else content
         elif kind == "json":
             out[kind] = (json.dumps(result.params.to_dict(), indent=1) + "\n").encode()
         elif kind == "preset":
-            out[kind] = sapling_preset_text(result.params).encode()
+            yaw = float(result.yaw) if opts.face_view else None
+            out[kind] = preset_text(result.params, yaw=yaw).encode()
         elif kind == "compare":
             out[kind] = png_bytes(compare_image(result))
         elif kind in ("sketch_before", "sketch_after"):
             out[kind] = png_bytes(getattr(result, kind))
         elif kind == "summary":
-            out[kind] = (json.dumps(result.summary(), indent=1, default=float) + "\n").encode()
+            summary = {**result.summary(), "export": asdict(opts)}
+            out[kind] = (json.dumps(summary, indent=1, default=float) + "\n").encode()
     return out
 
 
-def write_outputs(result: Any, outputs: Mapping[str, str | os.PathLike[str] | None]) -> list[Path]:
+def write_outputs(
+    result: Any,
+    outputs: Mapping[str, str | os.PathLike[str] | None],
+    options: ExportOptions | None = None,
+) -> list[Path]:
     """Write the requested outputs ``{kind: path}`` (None entries skipped) all or nothing.
 
-    ``kind`` "mesh" picks GLB or OBJ from the path's suffix; an OBJ's material library is
-    written beside it, in the same all-or-nothing set."""
+    ``kind`` "mesh" picks GLB or OBJ from the path's suffix; an OBJ's material library and
+    texture pictures are written beside it, in the same all-or-nothing set."""
+    from weberpenn.export import mesh_files
+
+    opts = (options or ExportOptions()).validate()
     paths: dict[str, Path] = {}
     for kind, p in outputs.items():
         if p is None:
@@ -138,8 +173,11 @@ def write_outputs(result: Any, outputs: Mapping[str, str | os.PathLike[str] | No
     for kind, path in paths.items():
         if path.is_dir():
             raise ValueError(f"{path} is a folder; give a file name for the {kind} output")
-    data = result_files(result, paths)
-    files: dict[Path, bytes] = {paths[k]: v for k, v in data.items() if k in paths}
-    if "mtl" in data:
-        files[paths["obj"].with_suffix(".mtl")] = data["mtl"]
+    files: dict[Path, Any] = {}
+    for kind in ("glb", "obj"):
+        if kind in paths:
+            files.update(mesh_files(result.tree_mesh, paths[kind], **opts.mesh_kwargs(result)))
+    rest = [k for k in paths if k not in ("glb", "obj")]
+    data = result_files(result, rest, opts)
+    files.update({paths[k]: v for k, v in data.items() if k in paths})
     return write_together(files)

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from refine.objective import sketch_distance
+from refine.objective import metric_distance
 from refine.search import Cancelled, RefineResult, RefineSettings
 from refine.search import refine as refine_search
 from render.reader import SketchError, normalise_drawing, read_sketch
@@ -34,6 +34,7 @@ from .estimate import Estimate, Estimator
 from .estimators import load_estimator
 
 __all__ = [
+    "LOW_CONFIDENCE_INK",
     "LOW_CONFIDENCE_LOSS",
     "MAX_HEIGHT",
     "Cancelled",
@@ -50,7 +51,11 @@ __all__ = [
 ]
 
 SKETCH_SIZE = 256  # the size sketches are prepared at (TSN crops and resizes from it)
-LOW_CONFIDENCE_LOSS = 0.6  # sketch distance above which the result is flagged
+# the result is flagged when the best tree's sketch is this far from the input, by the
+# style-blind shape distance (a circle can pass for a crown) or by the line distance (a
+# drawing of a tree has a trunk and branches somewhere); calibrated in RESULTS.md
+LOW_CONFIDENCE_LOSS = 0.8
+LOW_CONFIDENCE_INK = 0.6
 MAX_HEIGHT = 200.0  # metres: taller than any tree that grows
 
 
@@ -161,13 +166,17 @@ def rescale_height(params: TreeParams, height: float) -> TreeParams:
     return out
 
 
-def _confidence(loss: float) -> tuple[float, str | None]:
-    confidence = float(math.exp(-max(0.0, loss) / LOW_CONFIDENCE_LOSS))
-    if loss <= LOW_CONFIDENCE_LOSS:
+def _confidence(loss: float, ink: float) -> tuple[float, str | None]:
+    """Confidence in 0..1 (1 at a perfect match, exp(-1) at either threshold) and the
+    warning when either distance passes its threshold."""
+    worst = max(max(0.0, loss) / LOW_CONFIDENCE_LOSS, max(0.0, ink) / LOW_CONFIDENCE_INK)
+    confidence = float(math.exp(-worst))
+    if worst <= 1.0:
         return confidence, None
     return confidence, (
-        f"low confidence: the best tree's sketch is far from the input "
-        f"(distance {loss:.3f} > {LOW_CONFIDENCE_LOSS}); is this a sketch of a tree?"
+        f"low confidence: the best tree's sketch is far from the input (shape distance "
+        f"{loss:.3f}, limit {LOW_CONFIDENCE_LOSS}; line distance {ink:.3f}, limit "
+        f"{LOW_CONFIDENCE_INK}); is this a sketch of a tree?"
     )
 
 
@@ -279,7 +288,7 @@ class Pipeline:
         if result_refine is not None:
             loss_before, loss_after = loss0, result_refine.loss_after
         else:
-            loss_before = loss_after = sketch_distance(img, before, cfg.size)
+            loss_before = loss_after = metric_distance(img, before, cfg.size, cfg.metric)
         timings["render"] = time.perf_counter() - t
 
         if height is not None:
@@ -288,7 +297,8 @@ class Pipeline:
             mesh1 = build_mesh(grow(params1), species=name)
             timings["height"] = time.perf_counter() - t
 
-        confidence, warning = _confidence(loss_after)
+        ink_after = metric_distance(img, after, cfg.size, "ink")
+        confidence, warning = _confidence(loss_after, ink_after)
         timings["total"] = sum(timings.values())
         return Result(
             params=params1,
@@ -296,7 +306,11 @@ class Pipeline:
             tree_mesh=mesh1,
             sketch_before=before,
             sketch_after=after,
-            losses={"before": float(loss_before), "after": float(loss_after)},
+            losses={
+                "before": float(loss_before),
+                "after": float(loss_after),
+                "ink_after": float(ink_after),
+            },
             timings=timings,
             yaw=float(yaw1),
             input_sketch=img,

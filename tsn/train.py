@@ -388,9 +388,7 @@ def _write_csv(rows: list[dict[str, Any]], path: Path) -> None:
     w = csv.DictWriter(buf, fieldnames=list(rows[0]))
     w.writeheader()
     w.writerows(rows)
-    from weberpenn.params import atomic_write_text
-
-    atomic_write_text(path, buf.getvalue())
+    atomic_write(path, buf.getvalue())
 
 
 def _load_init(cfg: TrainConfig) -> Any:

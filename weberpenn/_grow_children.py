@@ -9,20 +9,31 @@ import math
 import numpy as np
 
 from ._grow_bezier import evaluate, handles
-from ._grow_math import TAU, apply, declination, euler_compat, mat_x, mat_z, track_frames
+from ._grow_math import (
+    TAU,
+    apply,
+    declination,
+    euler_compat,
+    mat_x,
+    mat_z,
+    run_rank,
+    track_frames,
+)
+from ._grow_random import CHILD, TIP, WHORL, derive, uniform
 from ._grow_shapes import shape_ratio
 from ._grow_stems import Cfg, ChildPoints, Families, Splines
 
 
 # --------------------------------------------------------------------------- child points
-def _trunk_t(cfg: Cfg, children: float, base: float, rng: np.random.Generator) -> np.ndarray:
+def _trunk_t(cfg: Cfg, children: float, base: float, key: np.ndarray) -> np.ndarray:
     """Sapling's list of child positions on the trunk (evenly spaced, whorls, distribution)."""
     c = int(children) if children > 0 else 0
     t = [(a + 1) / c for a in range(c)] if c > 0 else []
     t = t[int(base * (len(t) + 1)) :]
     if cfg.nrings > 0:
         ring = cfg.nrings
-        t = [(math.floor(x * ring) / ring) * float(rng.uniform(0.995, 1.005)) for x in t[:-1]]
+        jitter = 0.995 + 0.01 * uniform(key, WHORL, np.arange(max(len(t) - 1, 0)))
+        t = [(math.floor(x * ring) / ring) * float(j) for x, j in zip(t[:-1], jitter, strict=True)]
         t.append(1.0)
         t = [x for x in t if x > base]
     tv = np.array(t, dtype=np.float64)
@@ -51,7 +62,7 @@ def _pairs(
     ct: np.ndarray,
     children: np.ndarray,
     base: float,
-    rng: np.random.Generator,
+    trunk_key: np.ndarray,
     limit: int,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(spline, t) of every child position inside a spline's share of its family, in
@@ -60,7 +71,7 @@ def _pairs(
     res = cfg.curve_res[min(n, 3)]
     cbo, cto = cb[s_ord], ct[s_ord]
     if n == 0:
-        tv = _trunk_t(cfg, float(children[0]), base, rng)
+        tv = _trunk_t(cfg, float(children[0]), base, trunk_key)
         srt = np.argsort(tv, kind="stable")
         ts = tv[srt]
         lo = np.searchsorted(ts, cbo, side="left")
@@ -101,7 +112,7 @@ def child_points(
     gid: np.ndarray,
     children: np.ndarray,
     base: float,
-    rng: np.random.Generator,
+    fam_key: np.ndarray,
     cap: int,
 ) -> tuple[ChildPoints, bool]:
     """Where the grown level sprouts: Sapling's child points in Sapling's order, at most
@@ -116,7 +127,9 @@ def child_points(
         cb_s = spl.offset_len / mo
         ct_s = cb_s + seg_total / mo
     s_ord = order
-    ps, pt = _pairs(cfg, n, spl, s_ord, cb_s, ct_s, children, base, rng, cap + 5 * len(s_ord) + 1)
+    ps, pt = _pairs(
+        cfg, n, spl, s_ord, cb_s, ct_s, children, base, fam_key[:1], cap + 5 * len(s_ord) + 1
+    )
 
     # Sapling order: each spline's points, then its tip; cut at ``cap``
     rank = np.empty(len(order), dtype=np.int64)
@@ -154,6 +167,8 @@ def child_points(
         co, tan = np.zeros((0, 3)), np.zeros((0, 3))
     radius = (1.0 - tt) * spl.rad[ps, slot] + tt * spl.rad[ps, slot + 1]
 
+    # each child stem's key: its parent's, and its rank among the parent's child points
+    rank = run_rank(ps)
     # tips: one per spline
     ts = s_ord[tip_sel]
     tip_co = spl.pts[ts, res]
@@ -165,7 +180,7 @@ def child_points(
     src[is_pair], src[~is_pair] = ps, ts
 
     def comb(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        out = np.empty((m,) + a.shape[1:])
+        out = np.empty((m,) + a.shape[1:], dtype=a.dtype)
         out[is_pair], out[~is_pair] = a, b
         return out
 
@@ -178,14 +193,16 @@ def child_points(
         stem_offset=comb(ofst, np.ones(len(ts))),
         len_par=res * spl.seg_len[src],
         src=gid[src],
+        key=comb(derive(spl.key[ps], CHILD, rank), derive(spl.key[ts], TIP)),
     )
     return cp, cut
 
 
 # --------------------------------------------------------------------------- fabricate
-def _running_rotate(rot: float, count: int) -> np.ndarray:
-    """Sapling's accumulated azimuth for the i-th child: i*rot, or alternating if rot < 0."""
-    i = np.arange(count, dtype=np.float64)
+def _running_rotate(rot: float, count: int | np.ndarray) -> np.ndarray:
+    """Sapling's accumulated azimuth for the i-th child: (i+1)*rot, or alternating if
+    rot < 0; ``count`` children numbered 0.., or each child's number ``i`` given."""
+    i = np.asarray(np.arange(count) if np.ndim(count) == 0 else count, dtype=np.float64)
     if rot < 0.0:
         return abs(rot) * np.where(i % 2 == 0, -1.0, 1.0)
     return (i + 1.0) * rot
@@ -252,7 +269,12 @@ def fabricate(cfg: Cfg, n: int, cp: ChildPoints, base: float) -> Families:
     else:
         down_v = np.full(c, dav) if dav < 0.0 else -dav * (1.0 - rel) ** 2
     down = np.where(tip, 0.0, cfg.down_angle[m] + down_v)
-    b_rot = rot_a if rotate_mode else _running_rotate(cfg.rotate[m], c) + cfg.rotate_v[m]
+    # the azimuth accumulates along each parent stem (Sapling: along the whole level, so
+    # one extra child anywhere turned every later branch of the level)
+    if not rotate_mode:
+        b_rot = _running_rotate(cfg.rotate[m], run_rank(cp.src)) + cfg.rotate_v[m]
+    else:
+        b_rot = rot_a
     sd = np.sin(down)
     tp = np.stack([sd * np.sin(b_rot), -sd * np.cos(b_rot), np.cos(down)], axis=1)
     if rotate_mode:
@@ -301,10 +323,11 @@ def fabricate(cfg: Cfg, n: int, cp: ChildPoints, base: float) -> Families:
         rad0=start_rad,
         children=children,
         parent=cp.src,
+        key=cp.key,
     )
 
 
-def trunk(cfg: Cfg) -> Families:
+def trunk(cfg: Cfg, key: np.ndarray) -> Families:
     start_rad = cfg.scale_val * cfg.ratio * cfg.scale0 * cfg.scale_v0
     end_rad = max(start_rad * (1.0 - cfg.taper[0]), 0.0) ** cfg.ratio_power
     start_rad = max(start_rad, cfg.min_radius)
@@ -321,4 +344,5 @@ def trunk(cfg: Cfg) -> Families:
         rad0=np.array([start_rad * cfg.root_flare]),
         children=np.array([float(max(children, 0))]),
         parent=np.array([-1], dtype=np.int64),
+        key=np.asarray(key, dtype=np.uint64).reshape(1),
     )

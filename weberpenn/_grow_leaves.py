@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from ._grow_math import mat_x, mat_z
+from ._grow_math import mat_x, mat_z, run_rank
 
 # Per-leaf matrices are built in "structure of arrays" form, (3, 3, L): much faster than
 # numpy's batched matmul on tiny 3x3 matrices.
@@ -92,11 +92,14 @@ def leaf_transforms(p: Mapping[str, Any], cp: Any) -> tuple[np.ndarray, np.ndarr
     if leaves > 0:
         src = np.arange(c)
         step = rotate + rot_v
+        # the azimuth accumulates along each stem (Sapling: along the whole tree, so a
+        # small change of leafRotateV turned the thousandth leaf a thousand times as far)
+        i = run_rank(cp.src)
         if rotate < 0.0:
-            before = _alternate(0.0, step, c + 1)
-            old_before, old_after = before[:-1], before[1:]
+            before = _alternate(0.0, step, int(i.max()) + 2)
+            old_before, old_after = before[i], before[i + 1]
         else:
-            old_before = np.arange(c) * step
+            old_before = i * step
             old_after = old_before + step
         offset = cp.offset
         dv = -down_v * offset if down_v > 0.0 else np.full(c, down_v)

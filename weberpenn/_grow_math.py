@@ -14,6 +14,16 @@ TAU = 2.0 * np.pi
 _FLT_EPS16 = 16.0 * float(np.finfo(np.float32).eps)
 
 
+def run_rank(ids: np.ndarray) -> np.ndarray:
+    """Position of each element within its run of equal consecutive ``ids`` (0, 1, ...)."""
+    ids = np.asarray(ids)
+    if len(ids) == 0:
+        return np.zeros(0, dtype=np.int64)
+    new_run = np.concatenate([[True], ids[1:] != ids[:-1]])
+    starts = np.nonzero(new_run)[0]
+    return np.arange(len(ids)) - starts[np.cumsum(new_run) - 1]
+
+
 def normalize(v: np.ndarray) -> np.ndarray:
     """Unit vectors (zero vectors stay zero)."""
     n = np.sqrt(np.einsum("ij,ij->i", v, v))

@@ -25,7 +25,9 @@ from ._grow_math import (
     track_frames,
     track_x_and_yz,
 )
+from ._grow_random import CLONE, LENGTH, SPLIT, derive, uniform
 from ._grow_shapes import find_taper, shape_ratio
+from .limits import check_grow
 
 
 @dataclass
@@ -41,6 +43,7 @@ class Families:
     rad0: np.ndarray  # (F,) radius of the first point
     children: np.ndarray  # (F,) children (or leaves) per stem; 0 = only the tip sprouts
     parent: np.ndarray  # (F,) global id of the parent stem (-1 for the trunk)
+    key: np.ndarray  # (F,) uint64 random-stream key (see _grow_random)
 
 
 @dataclass
@@ -55,7 +58,7 @@ class Splines:
     rad_s: np.ndarray  # (N,)
     offset_len: np.ndarray  # (N,)
     parent: np.ndarray  # (N,) local index of the spline a clone split from, -1 = root
-    capped: bool = False  # splitting stopped at the stem limit
+    key: np.ndarray  # (N,) uint64 random-stream key
 
 
 @dataclass
@@ -68,6 +71,7 @@ class ChildPoints:
     stem_offset: np.ndarray  # (C,)
     len_par: np.ndarray  # (C,) parent nominal length
     src: np.ndarray  # (C,) global id of the parent spline
+    key: np.ndarray  # (C,) uint64 random-stream key of the stem that starts here
 
 
 class Cfg:
@@ -75,6 +79,7 @@ class Cfg:
 
     def __init__(self, p: Mapping[str, Any]):
         r = math.radians
+        self.params = p  # for errors that name the keys responsible
         self.levels = int(p["levels"])
         self.length = [float(x) for x in p["length"]]
         self.length_v = [float(x) for x in p["lengthV"]]
@@ -142,12 +147,6 @@ class Cfg:
         )
 
 
-def rng_for(seed: int, params_seed: int, level: int, stream: int) -> np.random.Generator:
-    words = [int(seed) & 0xFFFFFFFF, (int(seed) >> 32) & 0xFFFFFFFF]
-    words += [int(params_seed) & 0xFFFFFFFF, (int(params_seed) >> 32) & 0xFFFFFFFF]
-    return np.random.default_rng(np.random.SeedSequence(words + [level, stream]))
-
-
 # --------------------------------------------------------------------------- growth
 def _attract_up(v: np.ndarray, att: float, res: int) -> np.ndarray:
     if att == 0.0 or len(v) == 0:
@@ -166,12 +165,12 @@ def grow_level(
     n: int,
     fam: Families,
     scale: np.ndarray,
-    rng: np.random.Generator,
-    max_splines: int,
+    stems_before: int,
 ) -> Splines:
     """Grow every family of level ``n`` (param index ``m = min(n, 3)``) segment by segment.
 
-    Splits stop once the level holds ``max_splines`` splines (``Splines.capped`` says so).
+    ``stems_before`` stems exist in the tree already; a split that takes the tree past
+    :data:`weberpenn.limits.MAX_STEMS` raises :class:`ParamError` before it is made.
     """
     m = min(n, 3)
     res = cfg.curve_res[m]
@@ -179,7 +178,8 @@ def grow_level(
     f = len(fam.pos)
     stem_seg = fam.seg_len * scale  # Sapling's stemsegL (per family)
     lv = cfg.length_v[m]
-    seg_len = stem_seg * (rng.uniform(1.0 - lv, 1.0 + lv, f) if lv > 0.0 else 1.0)
+    key = fam.key.copy()
+    seg_len = stem_seg * ((1.0 - lv) + 2.0 * lv * uniform(key, LENGTH) if lv > 0.0 else 1.0)
 
     pts = np.zeros((f, res + 1, 3))
     pts[:, 0] = fam.pos
@@ -198,7 +198,7 @@ def grow_level(
     parent = np.full(f, -1, dtype=np.int64)
 
     seg_splits = cfg.seg_splits[m]
-    capped = False
+    check_grow(cfg.params, n, stems_before + f, f * (res + 1))
     cv1, cv2 = cfg.curve_v1[m], cfg.curve_v2[m]
     att_up = cfg.attract_up[m]
     att_out = cfg.attract_out[m]
@@ -217,7 +217,7 @@ def grow_level(
         if trunk:
             sv = max(((2.0 * cfg.split_bias) * (kp - 0.5) + 1.0) * sv, 0.0)
         sval = np.where(split_last, sv * sv, sv * 1.33)
-        u = np.mod(rng.random(nsp) + cfg.r_splits2, 1.0)
+        u = np.mod(uniform(key, SPLIT, k) + cfg.r_splits2, 1.0)
         if k == 0 or trunk and k < (res - 1) * cfg.split_height and k != 1:
             nsplit = np.zeros(nsp, dtype=np.int64)
         elif trunk and k == 1:
@@ -226,9 +226,9 @@ def grow_level(
             nsplit = (sval > 0.0).astype(np.int64)
         else:
             nsplit = (u < sval).astype(np.int64)
-        if nsplit.sum() > max_splines - nsp:
-            nsplit = np.where(np.cumsum(nsplit) <= max(max_splines - nsp, 0), nsplit, 0)
-            capped = True
+        if nsplit.any():
+            grown = nsp + int(nsplit.sum())
+            check_grow(cfg.params, n, stems_before + grown, grown * (res + 1))
         if k == k_back and cfg.curve_back[m] != 0.0:
             curv = curv + 2.0 * cfg.curve_back[m] / res
 
@@ -267,7 +267,8 @@ def grow_level(
             first = np.concatenate([[0], np.cumsum(nsplit[sp])[:-1]])
             idx = np.arange(len(par)) - np.repeat(first, nsplit[sp])
             ncl = len(par)
-            lv_c = rng.uniform(1.0 - lv, 1.0 + lv, ncl) if lv > 0.0 else np.ones(ncl)
+            ckey = derive(key[par], CLONE, k * 1024 + idx)
+            lv_c = (1.0 - lv) + 2.0 * lv * uniform(ckey, LENGTH) if lv > 0.0 else np.ones(ncl)
             bscale = np.minimum(lv_c * tf[par], 1.0)
             a = angle[par] + cang[par]
             v = np.empty((ncl, 3))
@@ -308,6 +309,7 @@ def grow_level(
                 offset_len=offset_len[par] + seg_len[par] * (k - start[par]),
                 parent=par,
                 seg_len=stem_l,
+                key=ckey,
             )
 
         a = np.where(sp, -angle + cang, cang)
@@ -353,8 +355,9 @@ def grow_level(
             offset_len = np.concatenate([offset_len, new["offset_len"]])
             parent = np.concatenate([parent, new["parent"]])
             seg_len = np.concatenate([seg_len, new["seg_len"]])
+            key = np.concatenate([key, new["key"]])
 
-    return Splines(pts, rad, start, famid, seg_len, rad_s, offset_len, parent, capped)
+    return Splines(pts, rad, start, famid, seg_len, rad_s, offset_len, parent, key)
 
 
 # --------------------------------------------------------------------------- ordering
@@ -364,9 +367,7 @@ def spline_order(spl: Splines) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- pruning
-def prune_scales(
-    cfg: Cfg, n: int, fam: Families, seed: int, pseed: int, max_splines: int
-) -> np.ndarray:
+def prune_scales(cfg: Cfg, n: int, fam: Families, stems_before: int) -> np.ndarray:
     """Sapling's pruning: bisect each family's length scale until its spline ends fit
     inside the envelope (regrowing with the same draws), then blend by ``pruneRatio``."""
     f = len(fam.pos)
@@ -381,7 +382,7 @@ def prune_scales(
         near = active & ((cmax - cmin) < 0.01)
         cs = np.where(near, (cs - 1.0) * cfg.prune_ratio + 1.0, cs)
         used = np.where(active, cs, used)
-        spl = grow_level(cfg, n, fam, used, rng_for(seed, pseed, n, 0), max_splines)
+        spl = grow_level(cfg, n, fam, used, stems_before)
         end = spl.pts[:, res]
         ratio = (sv - end[:, 2]) / (sv * max(1.0 - cfg.prune_base, 1e-6))
         env = cfg.prune_width * shape_ratio(

@@ -48,6 +48,7 @@ __all__ = [
     "colours",
     "export_mesh",
     "glb_bytes",
+    "mesh_files",
     "obj_files",
     "preset_text",
     "sapling_preset_text",
@@ -197,6 +198,27 @@ def obj_files(
     return files
 
 
+def mesh_files(
+    tree_mesh: TreeMesh,
+    path: str | os.PathLike[str],
+    *,
+    yaw: float = 0.0,
+    max_faces: int | None = None,
+    textures: bool = True,
+) -> dict[Path, bytes | str]:
+    """``{path: content}`` of a mesh export by the path's suffix (``.glb``: one file;
+    ``.obj``: see :func:`obj_files`), for ``weberpenn.fileio.write_together`` beside other
+    outputs."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix in (".glb", ".gltf"):
+        data = glb_bytes(tree_mesh, yaw=yaw, max_faces=max_faces, textures=textures)
+        return {path.with_suffix(".glb"): data}
+    if suffix == ".obj":
+        return obj_files(tree_mesh, path, yaw=yaw, max_faces=max_faces, textures=textures)
+    raise ValueError(f"{path}: unknown mesh format {suffix!r} (use .glb or .obj)")
+
+
 def export_mesh(
     tree_mesh: TreeMesh,
     path: str | os.PathLike[str],
@@ -207,14 +229,6 @@ def export_mesh(
 ) -> Path:
     """Write the tree as ``.glb`` (``.gltf`` is written as ``.glb``) or ``.obj`` (+ ``.mtl``
     and textures), all files or none; returns the mesh file's path."""
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix in (".glb", ".gltf"):
-        path = path.with_suffix(".glb")
-        data = glb_bytes(tree_mesh, yaw=yaw, max_faces=max_faces, textures=textures)
-        write_together({path: data})
-    elif suffix == ".obj":
-        write_together(obj_files(tree_mesh, path, yaw=yaw, max_faces=max_faces, textures=textures))
-    else:
-        raise ValueError(f"{path}: unknown mesh format {suffix!r} (use .glb or .obj)")
-    return path
+    files = mesh_files(tree_mesh, path, yaw=yaw, max_faces=max_faces, textures=textures)
+    write_together(files)
+    return next(iter(files))

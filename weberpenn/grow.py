@@ -8,21 +8,29 @@ roll, ``scaleV``/``scaleV0``/``leafScaleV`` realised offsets and multipliers, an
 ``rotateV``/``downAngleV``/``leafRotateV``/``leafDownAngleV`` realised offsets.
 
 What stays random in Sapling and has no realised key (whether a segment splits,
-``lengthV`` and the whorl jitter of ``nrings``) comes from a numpy ``Generator`` seeded by
-``seed`` and ``params['seed']``; each split draw is shifted by ``rSplits2`` (modulo 1), so
-it stays uniform (Sapling's statistics) while ``rSplits2`` still changes the tree.  (The
+``lengthV`` and the whorl jitter of ``nrings``) comes from random streams that follow the
+tree's structure (:mod:`weberpenn._grow_random`): the trunk's key comes from ``seed`` and
+``params['seed']``, every other stem's from its parent's and its place on the parent,
+so a small change of one value changes the stems it touches, not every later draw of
+the level (``benchmarks/step_curve.py`` measures it).  Each split draw is shifted by
+``rSplits2`` (modulo 1), so it stays uniform (Sapling's statistics) while ``rSplits2`` still changes the tree.  (The
 third-party Render Tree code compares *every* split draw with ``rSplits2``, so a level
 splits at every segment or never; that loses Sapling's stem counts, which the project
 compares against.)  So ``grow`` is a pure function: the same input gives byte-identical
 arrays.
 
-Deliberate differences from Sapling: a stem's end radius is capped at its start radius
+Deliberate differences from Sapling: the azimuth of successive children
+(``rotate``) and leaves (``leafRotate + leafRotateV``) accumulates along each parent stem,
+not along the whole level or tree (Sapling's running total turned the n-th leaf by n
+times any change of ``leafRotateV``, and one extra child turned every later branch); a
+stem's end radius is capped at its start radius
 (Sapling's ``(startRad * (1 - taper)) ** ratioPower`` exceeds the start radius when the
 start radius is above 1, so radii would grow towards the tip); operator options that the
 TreeSketchNet dictionary does not store take Sapling's defaults (rMode 'rotate',
-autoTaper on, closeTip off, splitByLen off); a tree that would exceed the parameter
-table's stem or leaf limits (``MAX_STEMS``, ``MAX_LEAVES``) stops splitting or sprouting
-there, with a ``RuntimeWarning``.  The trunk-split rule is checked draw for
+autoTaper on, closeTip off, splitByLen off).  A dictionary whose tree would exceed
+:mod:`weberpenn.limits` (stems, control points, leaves, or the vertices and triangles of
+its mesh) is refused with a :class:`~weberpenn.params.ParamError` naming the keys
+responsible, as soon as growing reaches the limit.  The trunk-split rule is checked draw for
 draw against Sapling's own statistics by ``benchmarks/compare_sapling.py``.
 
 The implementation is vectorised: all stems of a level grow together, one Bezier
@@ -32,7 +40,6 @@ segment at a time, with local frames as rotation matrices (Sapling's quaternions
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping
 from typing import Any
 
@@ -40,8 +47,10 @@ import numpy as np
 
 from ._grow_children import child_points, fabricate, trunk
 from ._grow_leaves import leaf_transforms
-from ._grow_stems import Cfg, ChildPoints, grow_level, prune_scales, rng_for, spline_order
-from .params import MAX_LEAVES, MAX_STEMS, TreeParams, validate
+from ._grow_random import root_key
+from ._grow_stems import Cfg, ChildPoints, grow_level, prune_scales, spline_order
+from .limits import MAX_LEAVES, MAX_STEMS, check_grow, check_leaves, check_mesh, mesh_size
+from .params import TreeParams, validate
 from .skeleton import Skeleton
 
 __all__ = ["Skeleton", "grow"]
@@ -49,7 +58,8 @@ __all__ = ["Skeleton", "grow"]
 
 def _no_child_points() -> ChildPoints:
     z = np.zeros(0)
-    return ChildPoints(np.zeros((0, 3)), np.zeros((0, 3, 3)), z, z, z, z, z, z.astype(np.int64))
+    i = z.astype(np.int64)
+    return ChildPoints(np.zeros((0, 3)), np.zeros((0, 3, 3)), z, z, z, z, z, i, z.astype(np.uint64))
 
 
 # --------------------------------------------------------------------------- public API
@@ -69,10 +79,9 @@ def grow(params: TreeParams | Mapping[str, Any], seed: int = 0) -> Skeleton:
     parents_out: list[np.ndarray] = []
     next_gid = 0
     base = cfg.base_size
-    fam = trunk(cfg)
+    fam = trunk(cfg, root_key(seed, pseed))
     cp = _no_child_points()
-    budget = MAX_STEMS  # stems left before the hard limit (only absurd inputs reach it)
-    truncated = False
+    res_u, bevel_res, leaf_shape = int(p["resU"]), int(p["bevelRes"]), str(p["leafShape"])
     for n in range(cfg.levels):
         m = min(n, 3)
         if n > 0:
@@ -83,12 +92,8 @@ def grow(params: TreeParams | Mapping[str, Any], seed: int = 0) -> Skeleton:
             base *= cfg.base_size_s
         if n == cfg.levels - 1:
             base = 0.0
-        if cfg.prune:
-            scale = prune_scales(cfg, n, fam, seed, pseed, budget)
-        else:
-            scale = np.ones(len(fam.pos))
-        spl = grow_level(cfg, n, fam, scale, rng_for(seed, pseed, n, 0), budget)
-        truncated |= spl.capped
+        scale = prune_scales(cfg, n, fam, next_gid) if cfg.prune else np.ones(len(fam.pos))
+        spl = grow_level(cfg, n, fam, scale, next_gid)
         order = spline_order(spl)
         gid = np.empty(len(order), dtype=np.int64)
         gid[order] = next_gid + np.arange(len(order))
@@ -107,25 +112,22 @@ def grow(params: TreeParams | Mapping[str, Any], seed: int = 0) -> Skeleton:
         )
         parents_out.append(par)
         next_gid += len(order)
-        budget -= len(order)
+        # the branch mesh so far, exactly: refuse before growing (or meshing) any more
+        check_mesh(*mesh_size(np.concatenate(counts), res_u, bevel_res, 0, leaf_shape), p)
         last = n == cfg.levels - 1
         if last and cfg.leaves == 0:
             cp = _no_child_points()
             break
-        cap = MAX_LEAVES // max(1, -cfg.leaves) if last else budget
-        cp, cut = child_points(
-            cfg, n, spl, order, gid, fam.children, base, rng_for(seed, pseed, n, 1), cap
-        )
-        truncated |= cut
+        per_point = max(1, -cfg.leaves)
+        cap = MAX_LEAVES // per_point if last else MAX_STEMS - next_gid
+        cp, cut = child_points(cfg, n, spl, order, gid, fam.children, base, fam.key, cap)
+        if cut and last:
+            check_leaves(p, (cap + 1) * per_point)
+        elif cut:
+            check_grow(p, n + 1, next_gid + cap + 1, 0)
 
-    if truncated:
-        warnings.warn(
-            f"the tree was cut at the generator's limits ({MAX_STEMS} stems, {MAX_LEAVES} "
-            "leaves): its parameters make it explode (segSplits, curveRes or branches)",
-            RuntimeWarning,
-            stacklevel=2,
-        )
     leaf_pos, leaf_mat = leaf_transforms(p, cp)
+    check_mesh(*mesh_size(np.concatenate(counts), res_u, bevel_res, len(leaf_pos), leaf_shape), p)
     points = np.concatenate(all_pts).astype(np.float64)
     radii = np.concatenate(all_rad).astype(np.float64)
     cnt = np.concatenate(counts)

@@ -53,9 +53,9 @@ def _leaf_faces(n_leaves: int, shape: str) -> int:
     return n_leaves * (2 if shape == "rect" else 4)
 
 
-def _check_budget(max_faces: int) -> int:
+def check_budget(max_faces: int) -> int:
     if isinstance(max_faces, bool) or not isinstance(max_faces, int | np.integer):
-        raise TypeError(f"max_faces must be an integer, got {max_faces!r}")
+        raise ValueError(f"max_faces must be an integer, got {max_faces!r}")
     if max_faces < MIN_FACES:
         raise ValueError(f"max_faces={max_faces} is too small: at least {MIN_FACES} triangles")
     return int(max_faces)
@@ -130,7 +130,7 @@ def _thin_leaf_mesh(leaves: trimesh.Trimesh, per_leaf: int, keep: int) -> trimes
     c = v.mean(axis=1, keepdims=True)
     v = c + (v - c) * _leaf_growth(n, keep)
     nf = len(leaves.faces) // n
-    f = np.asarray(leaves.faces).reshape(n, nf, 3)[:1] - 0  # same template for every leaf
+    f = np.asarray(leaves.faces).reshape(n, nf, 3)[:1]  # leaf 0's faces: every leaf's template
     faces = (f + (np.arange(keep) * per_leaf)[:, None, None]).reshape(-1, 3)
     out = trimesh.Trimesh(vertices=v.reshape(-1, 3), faces=faces, process=False)
     uv = getattr(leaves.visual, "uv", None)
@@ -170,7 +170,7 @@ def lod(tree_mesh: TreeMesh, max_faces: int) -> TreeMesh:
     ``meta["lod"]`` records what was given up: ``res_u``, ``bevel_res``, ``leaf_shape``,
     ``leaves`` kept, and ``decimated`` (True when step 3 ran).
     """
-    budget = _check_budget(max_faces)
+    budget = check_budget(max_faces)
     if tree_mesh.n_faces <= budget:
         return tree_mesh
     sk = tree_mesh.skeleton

@@ -20,6 +20,7 @@ import numpy as np
 import trimesh
 from trimesh.visual import TextureVisuals
 
+from .limits import check_mesh, mesh_size
 from .skeleton import Skeleton
 from .treemesh import TreeMesh
 
@@ -302,10 +303,14 @@ def build_mesh(skeleton: Skeleton, species: str | None = None) -> TreeMesh:
     """Mesh a grown skeleton: tubes for the stems, leaf quads/hexes, both with UVs.
 
     ``species`` is recorded on the TreeMesh (it picks export/render colours).  An empty
-    skeleton gives two empty meshes.
+    skeleton gives two empty meshes; one whose mesh would exceed :mod:`weberpenn.limits`
+    raises :class:`~weberpenn.params.ParamError` before anything is allocated.
     """
     if not isinstance(skeleton, Skeleton):
         raise TypeError(f"build_mesh expects a weberpenn Skeleton, got {type(skeleton).__name__}")
+    sk = skeleton
+    size = mesh_size(np.diff(sk.offsets), sk.res_u, sk.bevel_res, sk.n_leaves, sk.leaf_shape)
+    check_mesh(*size, {"resU": int(sk.res_u), "bevelRes": int(sk.bevel_res)})
     branches, meta = _branches(skeleton)
     leaves = _leaves(skeleton)
     meta = {**meta, "leaves": skeleton.n_leaves, "leaf_shape": str(skeleton.leaf_shape)}

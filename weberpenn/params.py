@@ -558,11 +558,6 @@ def load_params(path: str | os.PathLike[str]) -> TreeParams:
         raise ParamError(f"{path}: {exc}") from None
 
 
-def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
-    """Write text atomically (``weberpenn.fileio.atomic_write``)."""
-    atomic_write(path, text)
-
-
 def save_params(params: TreeParams | Mapping[str, Any], path: str | os.PathLike[str]) -> Path:
     """Save as JSON (atomically).  Use ``weberpenn.export.save_sapling_preset`` for Sapling."""
     params = validate(params)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import os
 import queue
+import shutil
 import tempfile
 import threading
 from pathlib import Path
@@ -98,16 +99,26 @@ class TREESKETCH_Settings(bpy.types.PropertyGroup):
     running: BoolProperty(default=False)
 
 
+GPENCIL_TYPES = ("GPENCIL", "GREASEPENCIL")  # Blender < 4.3, Blender 4.3+ (GPv3)
+
+
 def _gpencil_strokes(obj) -> list:
     """World-space strokes of a Grease Pencil object seen from the front (x, z)."""
     mw = obj.matrix_world
     out = []
     for layer in obj.data.layers:
-        if layer.hide or layer.active_frame is None:
+        if layer.hide:
             continue
-        for stroke in layer.active_frame.strokes:
-            pts = [mw @ p.co for p in stroke.points]
-            out.append([(p.x, p.z) for p in pts])
+        if obj.type == "GPENCIL":  # legacy Grease Pencil: frames hold strokes of points
+            frame = layer.active_frame
+            strokes = [[p.co for p in s.points] for s in frame.strokes] if frame else []
+        else:  # Grease Pencil v3: frames hold a drawing of strokes of positions
+            frame = layer.current_frame()
+            drawing = frame.drawing if frame else None
+            strokes = [[p.position for p in s.points] for s in drawing.strokes] if drawing else []
+        for pts in strokes:
+            world = [mw @ co for co in pts]
+            out.append([(p.x, p.z) for p in world])
     return out
 
 
@@ -120,7 +131,7 @@ def drawing_file(context, folder: Path) -> Path:
             raise backend.PredictError(f"no image file at {path}")
         return path
     obj = context.active_object
-    if obj is None or obj.type != "GPENCIL":
+    if obj is None or obj.type not in GPENCIL_TYPES:
         raise backend.PredictError("make a Grease Pencil drawing the active object first")
     path = folder / "drawing.png"
     path.write_bytes(backend.strokes_png(_gpencil_strokes(obj)))
@@ -154,9 +165,7 @@ def add_result(context, out: backend.Outputs, yaw: float | None = None) -> list:
     before = set(bpy.data.objects)
     use_sapling = settings.result == "SAPLING" and out.preset.is_file()
     if use_sapling:
-        import addon_utils
-
-        addon_utils.enable(SAPLING, default_set=True)
+        _enable_sapling()
         kwargs, preset_yaw = backend.read_preset(out.preset)
         # as keyword arguments limitImport would be applied last and switch the build off
         kwargs.pop("limitImport", None)
@@ -166,13 +175,38 @@ def add_result(context, out: backend.Outputs, yaw: float | None = None) -> list:
         if _prefs(context).copy_presets:
             _copy_to_sapling_menu(out.preset)
     else:
+        images = set(bpy.data.images)
         bpy.ops.import_scene.gltf(filepath=str(out.glb))
+        for img in set(bpy.data.images) - images:
+            if img.source == "FILE" and not img.packed_file:
+                img.pack()  # the prediction's folder is removed afterwards
         turn = 0.0  # the GLB already faces the drawn view
     new = [o for o in bpy.data.objects if o not in before]
     for o in new:
         if o.parent is None and turn:
             o.rotation_euler.z -= math.radians(turn)
     return new
+
+
+def _enable_sapling() -> None:
+    """Turn Sapling Tree Gen on (bundled up to Blender 4.1; an extension from 4.2)."""
+    import addon_utils
+
+    addons = bpy.context.preferences.addons
+    names = [SAPLING] + [
+        m.__name__
+        for m in addon_utils.modules()
+        if m.__name__.endswith((".sapling_tree_gen", "." + SAPLING))
+    ]
+    for name in names:
+        if name not in addons:
+            addon_utils.enable(name, default_set=True)
+        if name in addons:
+            return
+    raise backend.PredictError(
+        "Sapling Tree Gen is not installed in this Blender (from 4.2 it is an extension: "
+        "Edit > Preferences > Get Extensions); or add the tree as Mesh (GLB)"
+    )
 
 
 def _copy_to_sapling_menu(preset: Path) -> None:
@@ -203,22 +237,24 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
         settings = context.scene.treesketch
         folder = Path(tempfile.mkdtemp(prefix="treesketch-"))
         try:
+            if settings.result == "SAPLING" and _prefs(context).backend == "CLI":
+                _enable_sapling()  # before the prediction, not after a minute of it
             image = drawing_file(context, folder)
         except backend.PredictError as exc:
+            shutil.rmtree(folder, ignore_errors=True)
+            settings.status = str(exc)
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
+        self._folder = folder
         self._out = backend.Outputs.in_folder(folder)
         if self.wait or bpy.app.background:
             try:
                 job = prediction_job(context, image, self._out)
                 job(on_line=lambda s: print("treesketch:", s))
-                new = add_result(context, self._out)
             except (backend.PredictError, RuntimeError) as exc:
-                settings.status = str(exc).splitlines()[0]
-                self.report({"ERROR"}, str(exc))
-                return {"CANCELLED"}
-            settings.status = f"added {len(new)} object(s)"
-            return {"FINISHED"}
+                shutil.rmtree(folder, ignore_errors=True)
+                return self._failed(settings, exc)
+            return self._finish(context)
         self._lines = queue.Queue()
         self._error = None
         job = prediction_job(context, image, self._out)
@@ -256,10 +292,25 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
         context.window_manager.event_timer_remove(self._timer)
         settings.running = False
         if self._error is not None:
-            settings.status = str(self._error).splitlines()[0]
-            self.report({"ERROR"}, str(self._error))
-            return {"CANCELLED"}
-        new = add_result(context, self._out)
+            shutil.rmtree(self._folder, ignore_errors=True)
+            return self._failed(settings, self._error)
+        return self._finish(context)
+
+    def _failed(self, settings, exc: BaseException) -> set:
+        settings.status = str(exc).splitlines()[0]
+        self.report({"ERROR"}, str(exc))
+        return {"CANCELLED"}
+
+    def _finish(self, context) -> set:
+        """Add the tree, then drop the prediction's files (the GLB's images are packed
+        into the .blend by the importer; the preset was copied to Sapling's menu)."""
+        settings = context.scene.treesketch
+        try:
+            new = add_result(context, self._out)
+        except (backend.PredictError, RuntimeError, OSError) as exc:
+            return self._failed(settings, exc)
+        finally:
+            shutil.rmtree(self._folder, ignore_errors=True)
         settings.progress, settings.status = 1.0, f"added {len(new)} object(s)"
         return {"FINISHED"}
 
@@ -279,7 +330,7 @@ class TREESKETCH_PT_panel(bpy.types.Panel):
             layout.prop(settings, "image_path")
         else:
             obj = context.active_object
-            ok = obj is not None and obj.type == "GPENCIL"
+            ok = obj is not None and obj.type in GPENCIL_TYPES
             layout.label(
                 text=obj.name if ok else "select a Grease Pencil drawing", icon="GREASEPENCIL"
             )

@@ -43,6 +43,7 @@ __all__ = [
     "strokes_png",
 ]
 
+_ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
 _YAW = re.compile(r"^# view yaw: (-?[0-9.]+) degrees")
 
 
@@ -99,7 +100,16 @@ def run_cli(
             f"TreeSketch CLI not found at {exe}: set it in the add-on preferences "
             "(the 'treesketch' program inside the project's .venv/bin)"
         )
-    env = {**os.environ, "PYTHONUNBUFFERED": "1", "COLUMNS": "100"}
+    # a live progress bar although the output is a pipe (rich redraws it with \r and
+    # cursor codes; the codes are stripped below, \r ends a line in text mode)
+    env = {
+        **os.environ,
+        "PYTHONUNBUFFERED": "1",
+        "COLUMNS": "100",
+        "TTY_INTERACTIVE": "1",
+        "TTY_COMPATIBLE": "1",
+        "NO_COLOR": "1",
+    }
     proc = subprocess.Popen(
         list(cmd),
         stdout=subprocess.PIPE,
@@ -112,11 +122,12 @@ def run_cli(
     assert proc.stdout is not None
     start = time.monotonic()
     for raw in proc.stdout:
-        for line in raw.replace("\r", "\n").splitlines():
-            if line.strip():
-                tail = (tail + [line.strip()])[-8:]
+        for part in raw.replace("\r", "\n").splitlines():
+            line = " ".join(_ANSI.sub("", part).split())
+            if line:
+                tail = (tail + [line])[-8:]
                 if on_line is not None:
-                    on_line(line.strip())
+                    on_line(line)
         if (cancel is not None and cancel()) or time.monotonic() - start > timeout:
             proc.kill()
             proc.wait()

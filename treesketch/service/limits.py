@@ -206,7 +206,7 @@ def parse_options(
     default_time_limit: float = 50.0,
 ) -> JobOptions:
     """Validated job options from form fields; LimitError(422) naming the first bad one."""
-    known = {"refine", "budget", "time_limit", "height", "estimator"}
+    known = {"refine", "budget", "time_limit", "height", "estimator", "max_faces"}
     unknown = sorted(set(fields) - known)
     if unknown:
         raise LimitError(
@@ -230,15 +230,18 @@ def parse_options(
         raise LimitError(
             422, f"estimator must be one of {', '.join(sorted(estimators))}, got {estimator!r}"
         )
+    max_faces = _number(fields, "max_faces", int)
     options = JobOptions(
         refine=_flag(fields, "refine", True),
         budget=budget,
         time_limit=seconds,
         height=None if height is None else float(height),
         estimator=estimator,
+        max_faces=None if max_faces is None else int(max_faces),
     )
     try:
         options.settings()  # the pipeline's own check, before the job is queued
+        options.export().validate()
     except ValueError as exc:
         raise LimitError(422, str(exc)) from exc
     return options

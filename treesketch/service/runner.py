@@ -43,13 +43,14 @@ class JobOptions:
     time_limit: float | None = 50.0
     height: float | None = None
     estimator: str = "tsn"  # a spec the server allows
+    max_faces: int | None = None  # the exported tree's triangle budget (weberpenn.lod)
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> JobOptions:
-        return cls(**d)
+        return cls(**{k: v for k, v in d.items() if k in cls.__dataclass_fields__})
 
     def settings(self) -> Any:
         """The pipeline's ``RefineSettings`` for these options (validated)."""
@@ -58,6 +59,12 @@ class JobOptions:
         return RefineSettings().replace(
             refine=self.refine, budget=self.budget, time_limit=self.time_limit
         )
+
+    def export(self) -> Any:
+        """How the artefacts are exported (``treesketch.outputs.ExportOptions``)."""
+        from treesketch.outputs import ExportOptions
+
+        return ExportOptions(max_faces=self.max_faces)
 
 
 def load_estimator_spec(spec: str) -> Any:
@@ -105,5 +112,5 @@ class Runner:
         pipeline = Pipeline(self.estimator(options.estimator), options.settings())
         result = pipeline.run(sketch, height=options.height, progress=progress, cancel=cancel)
         kinds = {kind: name for name, (kind, _) in ARTEFACT_KINDS.items()}
-        files = result_files(result, kinds)
+        files = result_files(result, kinds, options.export())
         return {kinds[k]: data for k, data in files.items() if k in kinds}, result.summary()

@@ -132,6 +132,7 @@ async function submit(ev) {
   form.append("budget", $("budget").value || "20");
   form.append("refine", $("refine").checked ? "true" : "false");
   if ($("height").value) form.append("height", $("height").value);
+  if ($("max_faces").value) form.append("max_faces", $("max_faces").value);
   jobId = null;
   setState("sending");
   say("Sending...");
