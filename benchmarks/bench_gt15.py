@@ -143,7 +143,7 @@ def markdown(recs: list[dict]) -> str:
         )
     out += [
         "",
-        "| species | n | TSN max | refined max | refined better | s/tree |",
+        "| species | n | TSN max | refined max | refined better / same / worse | s/tree |",
         "|---|---|---|---|---|---|",
     ]
     groups = [(s, [r for r in recs if r["species"] == s]) for s in species.SPECIES]
@@ -151,9 +151,11 @@ def markdown(recs: list[dict]) -> str:
         if not rows:
             continue
         better = sum(r["refined"]["max"] < r["tsn"]["max"] for r in rows)
+        same = sum(r["refined"]["max"] == r["tsn"]["max"] for r in rows)
         out.append(
             f"| {name} | {len(rows)} | {_mean([r['tsn']['max'] for r in rows]):.4f} "
-            f"| {_mean([r['refined']['max'] for r in rows]):.4f} | {better}/{len(rows)} "
+            f"| {_mean([r['refined']['max'] for r in rows]):.4f} "
+            f"| {better} / {same} / {len(rows) - better - same} "
             f"| {_mean([r['seconds'] for r in rows]):.0f} |"
         )
     mean_after = _mean([r["refined"]["max"] for r in recs])
