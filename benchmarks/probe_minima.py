@@ -24,6 +24,7 @@ import argparse
 import json
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -52,7 +53,11 @@ def local_minima(values: np.ndarray) -> list[int]:
     return [int(starts[i]) for i in inner[low]]
 
 
-def probe_species(name: str, seed: int, span: float, steps: int, size: int) -> list[dict]:
+def probe_species(
+    name: str, seed: int, span: float, steps: int, size: int, done: Callable[[dict], None]
+) -> list[dict]:
+    """Profiles of every live value of one species' sampled tree; ``done(record)`` after
+    each value (so a cut run keeps what it measured)."""
     gt = species.sample(name, seed)
     space = SearchSpace.create(name, gt, search_yaw=False).live()
     x0 = space.from_params(space.base)
@@ -92,6 +97,7 @@ def probe_species(name: str, seed: int, span: float, steps: int, size: int) -> l
             rec[f"{m}_minima"] = len(mins)
             rec[f"{m}_spurious"] = sum(j != centre for j in mins)
         out.append(rec)
+        done(rec)
         print(
             f"{name:>7} {u.label:<18} ink {rec['ink_minima']} shape {rec['shape_minima']} "
             f"({len(used)} points, {rec['seconds']:.1f}s)",
@@ -150,10 +156,14 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(str(e))
     size = RefineSettings().size
     recs: list[dict] = []
-    for name in names:
-        recs += probe_species(name, args.seed, args.span, args.steps, size)
+
+    def done(rec: dict) -> None:
+        recs.append(rec)
         if args.json is not None:
             atomic_write(args.json, json.dumps(recs, indent=1))
+
+    for name in names:
+        probe_species(name, args.seed, args.span, args.steps, size, done)
     print(markdown(recs))
     return 0
 
