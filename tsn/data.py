@@ -46,8 +46,14 @@ def preprocess(image: Any, size: int = DEFAULT_SIZE) -> np.ndarray:
 
     grey = read_sketch(image)
     sq = crop_square(grey)
-    im = Image.fromarray(sq, mode="L").resize((size, size), Image.Resampling.BOX)
-    return np.asarray(im, dtype=np.float32) / 255.0
+
+    def box(a: np.ndarray) -> np.ndarray:
+        im = Image.fromarray(np.ascontiguousarray(a), mode="L")
+        return np.asarray(im.resize((size, size), Image.Resampling.BOX), dtype=np.float32)
+
+    # Pillow's box filter is not mirror-symmetric at non-integer ratios; the mean of the
+    # image's and its mirror's (mirrored back) is, so a mirrored drawing gives the mirror
+    return (box(sq) + box(sq[:, ::-1])[:, ::-1]) / (2.0 * 255.0)
 
 
 def augment(img: np.ndarray, rng: np.random.Generator) -> np.ndarray:
