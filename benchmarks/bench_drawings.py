@@ -262,13 +262,17 @@ def flagged(rec: dict, limit: float, ink_limit: float) -> bool:
     return rec["loss_after"] > limit or rec["ink_after"] > ink_limit
 
 
+def _get(rec: dict, key: str) -> float:
+    return math.inf if "refused" in rec else rec[key]
+
+
 def _loss(rec: dict) -> float:
-    return math.inf if "refused" in rec else rec["loss_after"]
+    return _get(rec, "loss_after")
 
 
 def calibrate(records: list[dict]) -> dict:
-    """Flag rates at the current limits, and the shape limits (the line limit kept) that
-    flag <= 10 % of trees and >= 95 % of non-trees."""
+    """Flag rates at the current limits; the shape limits (the line limit kept) that flag
+    <= 10 % of trees and >= 95 % of non-trees; the same for each distance alone."""
     ink_limit = ts_pipeline.LOW_CONFIDENCE_INK
     trees = [r for r in records if r["kind"] == "tree"]
     other = [r for r in records if r["kind"] == "non-tree"]
@@ -284,12 +288,18 @@ def calibrate(records: list[dict]) -> dict:
     mids = [(a + b) / 2 for a, b in zip(cands, cands[1:], strict=False)] + [cands[-1] + 0.1]
     ok = [m for m in mids if (lambda t, o: t <= 0.10 and o >= 0.95)(*rates(m))]
     ft, fo = rates(current)
-    shape_only = [
-        m
-        for m in mids
-        if np.mean([_loss(r) > m for r in trees]) <= 0.10
-        and np.mean([_loss(r) > m for r in other]) >= 0.95
-    ]
+
+    def alone(key: str) -> list[float] | None:
+        """The limits on ``key`` alone that separate as asked (refused pictures flagged)."""
+        vals = sorted({r[key] for r in records if "refused" not in r})
+        ok1 = [
+            m
+            for m in [(a + b) / 2 for a, b in zip(vals, vals[1:], strict=False)]
+            if np.mean([_get(r, key) > m for r in trees]) <= 0.10
+            and np.mean([_get(r, key) > m for r in other]) >= 0.95
+        ]
+        return [min(ok1), max(ok1)] if ok1 else None
+
     return {
         "limit_now": current,
         "ink_limit": ink_limit,
@@ -297,7 +307,9 @@ def calibrate(records: list[dict]) -> dict:
         "non_trees_flagged_now": fo,
         "feasible_min": min(ok) if ok else None,
         "feasible_max": max(ok) if ok else None,
-        "shape_only_feasible": [min(shape_only), max(shape_only)] if shape_only else None,
+        "shape_alone_feasible": alone("loss_after"),
+        "line_alone_feasible": alone("ink_after"),
+        "line_limit_fixed_shape_off_flags": list(rates(math.inf)),
         "tree_loss_max": max(_loss(r) for r in trees),
         "tree_loss_p90": float(np.percentile([_loss(r) for r in trees], 90)),
         "non_tree_loss_p05": float(np.percentile([_loss(r) for r in other], 5)),
@@ -448,7 +460,8 @@ def markdown(doc: dict) -> str:
             "|---|---|---|---|---|---|---:|",
             *map(refine_line, recs),
         ]
-    lines += ["", "```", json.dumps(doc["summary"], indent=1), "```"]
+    summary = calibrate(recs) if part == "warning" else doc["summary"]
+    lines += ["", "```", json.dumps(summary, indent=1), "```"]
     return "\n".join(lines)
 
 
