@@ -355,8 +355,14 @@ def part_refine(args: argparse.Namespace) -> dict:
     from eval.hausdorff import aligned_tree_hausdorff, bbox_diagonal, hausdorff, rotate_about_trunk
 
     pipe = Pipeline("tsn", RefineSettings(budget=args.budget))
-    records = []
-    for d in tree_drawings(950, args.per_species):
+    records: list[dict] = []
+    # one of each species at a time, and each case saved as it ends: a run stopped early
+    # still has a balanced, readable record
+    drawings = sorted(
+        tree_drawings(950, args.per_species),
+        key=lambda d: (d["seed"], species.SPECIES.index(d["species"])),
+    )
+    for d in drawings:
         t = time.perf_counter()
         res = pipe.run(d["image"])
         secs = time.perf_counter() - t
@@ -391,6 +397,13 @@ def part_refine(args: argparse.Namespace) -> dict:
         }
         records.append(rec)
         print(refine_line(rec), flush=True)
+        if args.json is not None:
+            partial = {"part": "refine", "records": records, "summary": refine_summary(records)}
+            atomic_write(args.json, json.dumps(partial | {"machine": machine()}, indent=1))
+    return {"records": records, "summary": refine_summary(records)}
+
+
+def refine_summary(records: list[dict]) -> dict:
     n = len(records)
 
     def frac(f: Callable[[dict], bool]) -> float:
@@ -410,7 +423,7 @@ def part_refine(args: argparse.Namespace) -> dict:
             + ("aligned_before", "aligned_after", "seconds")
         },
     }
-    return {"records": records, "summary": summary}
+    return summary
 
 
 def refine_line(r: dict) -> str:
