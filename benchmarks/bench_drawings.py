@@ -24,8 +24,9 @@ the combined branch+leaf Hausdorff max distance normalised by the ground truth's
 which has no view, as a front view), as ``benchmarks/bench_refine.py`` does, and the
 "aligned" distance (each tree turned about its trunk to its best fit).
 
-``estimate``: milliseconds per ``Pipeline.estimate`` (normaliser + TSN) on the drawings,
-median and max after one warm-up.
+``estimate``: milliseconds per ``Pipeline.estimate`` (normaliser + TSN) on 10 drawings and
+the hand drawings of examples/hand, and per stage, wall clock and CPU time, [median, max]
+after one warm-up.
 """
 
 from __future__ import annotations
@@ -436,19 +437,34 @@ def refine_line(r: dict) -> str:
 
 
 def part_estimate(args: argparse.Namespace) -> dict:
+    """Wall and CPU milliseconds of ``Pipeline.estimate`` and of its two stages (reading +
+    normalising, the estimator), per sketch; CPU time is what the shared machine's load
+    does not inflate (much)."""
+    from treesketch.pipeline import load_sketch, prepare_input
+
     pipe = Pipeline("tsn")
     imgs = [d["image"] for d in tree_drawings(900, 2)]
     pngs = sorted((ROOT / "examples" / "hand").glob("*.png"))
     sources = [*imgs, *pngs]
-    pipe.estimate(sources[0])  # warm-up: first call pays for lazy set-up
-    ms = []
+    pipe.estimate(sources[0])  # warm-up: the first call pays for lazy set-up
+    clocks = {"wall": time.perf_counter, "cpu": time.process_time}
+    per: dict[str, list[float]] = {}
     for src in sources:
-        t = time.perf_counter()
-        pipe.estimate(src)
-        ms.append((time.perf_counter() - t) * 1000)
-    out = {"n": len(ms), "median_ms": statistics.median(ms), "max_ms": max(ms)}
+        for clock, now in clocks.items():
+            t = now()
+            pipe.estimate(src)
+            per.setdefault(f"estimate_{clock}", []).append((now() - t) * 1000)
+            t = now()
+            img = prepare_input(load_sketch(src))
+            per.setdefault(f"prepare_{clock}", []).append((now() - t) * 1000)
+            t = now()
+            pipe.estimator.estimate(img)
+            per.setdefault(f"tsn_{clock}", []).append((now() - t) * 1000)
+    out = {"n": len(sources)} | {
+        f"{k}_ms": [round(statistics.median(v), 1), round(max(v), 1)] for k, v in per.items()
+    }
     print(json.dumps(out))
-    return {"records": ms, "summary": out}
+    return {"records": per, "summary": out}
 
 
 def markdown(doc: dict) -> str:
