@@ -471,17 +471,24 @@ def markdown(doc: dict) -> str:
     part, recs = doc["part"], doc["records"]
     lines = [f"machine: {doc['machine']}", ""]
     if part == "warning":
-        lines += ["| kind | drawing | species | shape distance | line distance | warned |"]
-        lines += ["|---|---|---|---:|---:|---|"]
-        for r in sorted(recs, key=lambda r: (r["kind"], _loss(r))):
-            if "refused" in r:
-                lines.append(f"| {r['kind']} | {r['name']} | refused: {r['refused']} | | | yes |")
-                continue
+        lines += ["| tree drawing | style | species found | shape distance | line distance |"]
+        lines += ["|---|---|---|---:|---:|"]
+        for r in sorted((r for r in recs if r["kind"] == "tree"), key=_loss):
             lines.append(
-                f"| {r['kind']} | {r['name']}{'' if r['style'] is None else ' ' + r['style']} "
-                f"| {r['species']} | {r['loss_after']:.3f} | {r['ink_after']:.3f} "
-                f"| {'yes' if r['warned'] else 'no'} |"
+                f"| {r['name']} | {r['style']} | {r['species']} | {r['loss_after']:.3f} "
+                f"| {r['ink_after']:.3f} |"
             )
+        groups: dict[str, list[dict]] = {}
+        for r in recs:
+            if r["kind"] == "non-tree":
+                groups.setdefault(r["name"].rstrip("0123456789.").rstrip("e"), []).append(r)
+        lines += ["", "| non-trees | n | refused | shape distance min | line distance min |"]
+        lines += ["|---|---:|---:|---:|---:|"]
+        for g, rs in groups.items():
+            kept = [r for r in rs if "refused" not in r]
+            lo = min((r["loss_after"] for r in kept), default=math.nan)
+            li = min((r["ink_after"] for r in kept), default=math.nan)
+            lines.append(f"| {g} | {len(rs)} | {len(rs) - len(kept)} | {lo:.3f} | {li:.3f} |")
     elif part == "refine":
         lines += [
             "| drawing | style | species TSN -> final | sketch distance | Hausdorff max "
