@@ -481,7 +481,7 @@ def markdown(doc: dict) -> str:
         groups: dict[str, list[dict]] = {}
         for r in recs:
             if r["kind"] == "non-tree":
-                groups.setdefault(r["name"].rstrip("0123456789.").rstrip("e"), []).append(r)
+                groups.setdefault(r["name"].rstrip("0123456789."), []).append(r)
         lines += ["", "| non-trees | n | refused | shape distance min | line distance min |"]
         lines += ["|---|---:|---:|---:|---:|"]
         for g, rs in groups.items():
