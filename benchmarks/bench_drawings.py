@@ -267,6 +267,12 @@ def _get(rec: dict, key: str) -> float:
     return math.inf if "refused" in rec else rec[key]
 
 
+def _mids(values: list[float]) -> list[float]:
+    """One limit per distinct outcome: midway between sorted values, and above the top."""
+    v = sorted(set(values))
+    return [(a + b) / 2 for a, b in zip(v, v[1:], strict=False)] + [v[-1] + 0.1]
+
+
 def _loss(rec: dict) -> float:
     return _get(rec, "loss_after")
 
@@ -301,6 +307,23 @@ def calibrate(records: list[dict]) -> dict:
         ]
         return [min(ok1), max(ok1)] if ok1 else None
 
+    def both() -> dict:
+        """The (shape, line) limit pair that flags the most non-trees while flagging
+        <= 10 % of trees (ties: the largest limits, the least eager to flag)."""
+        kept = [r for r in records if "refused" not in r]
+        best: tuple = ()
+        for key_s in _mids([r["loss_after"] for r in kept]):
+            for key_i in _mids([r["ink_after"] for r in kept]):
+                ft = np.mean([flagged(r, key_s, key_i) for r in trees])
+                if ft > 0.10:
+                    continue
+                fo = float(np.mean([flagged(r, key_s, key_i) for r in other]))
+                cand = (fo, key_s + key_i, key_s, key_i, float(ft))
+                best = max(best, cand) if best else cand
+        if not best:
+            return {}
+        return {"shape": best[2], "line": best[3], "trees_flagged": best[4], "non_trees": best[0]}
+
     return {
         "limit_now": current,
         "ink_limit": ink_limit,
@@ -311,6 +334,7 @@ def calibrate(records: list[dict]) -> dict:
         "shape_alone_feasible": alone("loss_after"),
         "line_alone_feasible": alone("ink_after"),
         "line_limit_fixed_shape_off_flags": list(rates(math.inf)),
+        "best_pair": both(),
         "tree_loss_max": max(_loss(r) for r in trees),
         "tree_loss_p90": float(np.percentile([_loss(r) for r in trees], 90)),
         "non_tree_loss_p05": float(np.percentile([_loss(r) for r in other], 5)),
@@ -322,8 +346,13 @@ def part_warning(args: argparse.Namespace) -> dict:
     pipe = Pipeline("tsn", RefineSettings(budget=args.budget, species_tries=1))
     cases = [("non-tree", n, img, None) for n, img in non_trees(0)]
     cases += [("tree", d["name"], d["image"], d) for d in tree_drawings(900, 5)]
-    records = []
+    records: list[dict] = []
+    if args.resume is not None:  # a stopped run's records are kept, their cases not rerun
+        records = json.loads(args.resume.read_text())["records"]
+    done = {r["name"] for r in records}
     for kind, name, img, d in cases:
+        if name in done:
+            continue
         t = time.perf_counter()
         try:
             res = pipe.run(img)
@@ -344,6 +373,8 @@ def part_warning(args: argparse.Namespace) -> dict:
             "seconds": time.perf_counter() - t,
         }
         records.append(rec)
+        if args.json is not None:
+            atomic_write(args.json, json.dumps({"part": "warning", "records": records}, indent=1))
         print(
             f"{kind:>8} {name:>12} {rec['species']:>7} shape {rec['loss_after']:.3f} "
             f"ink {rec['ink_after']:.3f} warned {rec['warned']} {rec['seconds']:.1f}s",
@@ -509,6 +540,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--samples", type=int, default=10_000, help="Hausdorff samples per side")
     ap.add_argument("--align-step", type=float, default=15.0)
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--resume", type=Path, default=None, help="warning: keep this JSON's records")
     ap.add_argument("--markdown", type=Path, default=None, help="print the tables of a --json")
     args = ap.parse_args(argv)
     if args.markdown is not None:
