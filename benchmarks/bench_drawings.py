@@ -1,0 +1,568 @@
+"""Benchmark: the pipeline on drawings it was not trained on (issue 12).
+
+    nice -n 10 .venv/bin/python benchmarks/bench_drawings.py --part warning \\
+        --json /work/data/bench_drawings_warning.json
+    nice -n 10 .venv/bin/python benchmarks/bench_drawings.py --part refine \\
+        --json /work/data/bench_drawings_refine.json
+    .venv/bin/python benchmarks/bench_drawings.py --part estimate
+    .venv/bin/python benchmarks/bench_drawings.py --markdown FILE.json
+
+``warning``: 50 pictures that are not trees, made by code (noise of several densities,
+circles, ellipses, squares, a house, a face, text in PIL's default font, random strokes, a
+spiral, a grid, a star, a car-like outline, a zigzag, rings; seeded) and 25 tree drawings
+(5 per species, seeds 900+, a style other than "sg", a random yaw) through
+``Pipeline("tsn", RefineSettings(budget=20, species_tries=1))``.  Records the final shape
+and line distances and reports which are flagged at the current
+``treesketch.pipeline.LOW_CONFIDENCE_LOSS`` (and ``LOW_CONFIDENCE_INK``), and the range of
+shape thresholds that flags <= 10 % of trees and >= 95 % of non-trees, if there is one.
+
+``refine``: 25 held-out-style drawings (5 per species, seeds 950+) through the pipeline at
+its default settings but ``--budget`` (40): the sketch distance before/after, the species
+after synthesis against the truth, and the mesh error before (TSN) and after (refined):
+the combined branch+leaf Hausdorff max distance normalised by the ground truth's diagonal
+(``eval.hausdorff``), each tree turned into the ground truth's frame by its own view (TSN,
+which has no view, as a front view), as ``benchmarks/bench_refine.py`` does, and the
+"aligned" distance (each tree turned about its trunk to its best fit).
+
+``estimate``: milliseconds per ``Pipeline.estimate`` (normaliser + TSN) on 10 drawings and
+the hand drawings of examples/hand, and per stage, wall clock and CPU time, [median, max]
+after one warm-up.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import statistics
+import sys
+import time
+from collections.abc import Callable
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
+from PIL import Image, ImageDraw, ImageFont
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from render.sketch import SketchRenderer  # noqa: E402
+from render.styles import Silhouettes, draw  # noqa: E402
+from treesketch import Pipeline, RefineSettings, SketchError  # noqa: E402
+from treesketch import pipeline as ts_pipeline  # noqa: E402
+from weberpenn import build_mesh, grow, species  # noqa: E402
+from weberpenn.fileio import atomic_write  # noqa: E402
+
+SIZE = 256
+HELD_OUT_STYLES = ("pen", "cloud", "scribble", "pencil", "felt")
+
+
+def machine() -> str:
+    load = os.getloadavg()[0]
+    return (
+        f"{platform.machine()}, {os.cpu_count()} shared CPUs, no GPU, load average {load:.1f}; "
+        f"{datetime.now(UTC):%Y-%m-%d %H:%M} UTC"
+    )
+
+
+# ---------------------------------------------------------------- non-tree pictures
+
+
+def _canvas() -> tuple[Image.Image, ImageDraw.ImageDraw]:
+    im = Image.new("L", (SIZE, SIZE), 255)
+    return im, ImageDraw.Draw(im)
+
+
+def _box(rng: np.random.Generator, lo: float = 0.3, hi: float = 0.8) -> tuple[float, ...]:
+    w, h = rng.uniform(lo, hi, 2) * SIZE
+    x0, y0 = rng.uniform(0, SIZE - w), rng.uniform(0, SIZE - h)
+    return (x0, y0, x0 + w, y0 + h)
+
+
+def noise(rng: np.random.Generator, density: float) -> np.ndarray:
+    return np.where(rng.random((SIZE, SIZE)) < density, 0, 255).astype(np.uint8)
+
+
+def circle(rng: np.random.Generator, filled: bool) -> np.ndarray:
+    im, d = _canvas()
+    r = rng.uniform(0.2, 0.45) * SIZE
+    cx, cy = rng.uniform(r, SIZE - r, 2)
+    d.ellipse((cx - r, cy - r, cx + r, cy + r), fill=0 if filled else None, outline=0, width=3)
+    return np.asarray(im)
+
+
+def ellipse(rng: np.random.Generator) -> np.ndarray:
+    im, d = _canvas()
+    d.ellipse(_box(rng, 0.2, 0.9), outline=0, width=int(rng.integers(2, 6)))
+    return np.asarray(im)
+
+
+def square(rng: np.random.Generator, filled: bool) -> np.ndarray:
+    im, d = _canvas()
+    s = rng.uniform(0.3, 0.7) * SIZE
+    x, y = rng.uniform(0, SIZE - s, 2)
+    d.rectangle((x, y, x + s, y + s), fill=0 if filled else None, outline=0, width=3)
+    return np.asarray(im)
+
+
+def house(rng: np.random.Generator) -> np.ndarray:
+    im, d = _canvas()
+    x0, x1 = rng.uniform(30, 70), rng.uniform(180, 226)
+    y0, y1 = rng.uniform(100, 130), rng.uniform(210, 240)
+    d.rectangle((x0, y0, x1, y1), outline=0, width=3)
+    d.line([(x0 - 10, y0), ((x0 + x1) / 2, rng.uniform(20, 60)), (x1 + 10, y0)], fill=0, width=3)
+    dx = (x1 - x0) / 5
+    d.rectangle((x0 + 2 * dx, y1 - 60, x0 + 3 * dx, y1), outline=0, width=3)
+    d.rectangle((x0 + 0.5 * dx, y0 + 15, x0 + 1.5 * dx, y0 + 45), outline=0, width=2)
+    return np.asarray(im)
+
+
+def face(rng: np.random.Generator) -> np.ndarray:
+    im, d = _canvas()
+    c, r = SIZE / 2 + rng.uniform(-20, 20), rng.uniform(80, 115)
+    d.ellipse((c - r, c - r, c + r, c + r), outline=0, width=3)
+    for sx in (-1, 1):
+        ex = c + sx * r * 0.4
+        d.ellipse((ex - 10, c - r * 0.35 - 10, ex + 10, c - r * 0.35 + 10), fill=0)
+    d.arc((c - r * 0.5, c - r * 0.2, c + r * 0.5, c + r * 0.6), 20, 160, fill=0, width=3)
+    d.line([(c, c - 0.1 * r), (c - 8, c + 0.2 * r), (c, c + 0.2 * r)], fill=0, width=2)
+    return np.asarray(im)
+
+
+def text(rng: np.random.Generator) -> np.ndarray:
+    small = Image.new("L", (128, 128), 255)
+    d = ImageDraw.Draw(small)
+    words = ["tree", "hello world", "TreeSketch", "lorem ipsum", "sketch me", "12345"]
+    font = ImageFont.load_default()
+    for k in range(int(rng.integers(2, 6))):
+        d.text((rng.uniform(2, 40), 8 + 22 * k), str(rng.choice(words)), fill=0, font=font)
+    return np.asarray(small.resize((SIZE, SIZE), Image.NEAREST))
+
+
+def strokes(rng: np.random.Generator) -> np.ndarray:
+    im, d = _canvas()
+    for _ in range(int(rng.integers(5, 25))):
+        pts = np.cumsum(rng.normal(0, 20, (int(rng.integers(2, 8)), 2)), axis=0)
+        pts += rng.uniform(40, SIZE - 40, 2)
+        d.line([tuple(p) for p in pts], fill=0, width=int(rng.integers(1, 5)))
+    return np.asarray(im)
+
+
+def spiral(rng: np.random.Generator) -> np.ndarray:
+    im, d = _canvas()
+    t = np.linspace(0, rng.uniform(4, 8) * math.pi, 400)
+    r = t / t[-1] * rng.uniform(80, 120)
+    c = SIZE / 2 + rng.uniform(-10, 10, 2)
+    d.line(list(zip(c[0] + r * np.cos(t), c[1] + r * np.sin(t), strict=True)), fill=0, width=3)
+    return np.asarray(im)
+
+
+def grid(rng: np.random.Generator) -> np.ndarray:
+    im, d = _canvas()
+    step = int(rng.integers(16, 48))
+    for v in range(step // 2, SIZE, step):
+        d.line([(v, 0), (v, SIZE)], fill=0, width=2)
+        d.line([(0, v), (SIZE, v)], fill=0, width=2)
+    return np.asarray(im)
+
+
+def star(rng: np.random.Generator) -> np.ndarray:
+    im, d = _canvas()
+    n, r0 = int(rng.integers(5, 9)), rng.uniform(80, 120)
+    a = np.arange(2 * n) * math.pi / n + rng.uniform(0, math.pi)
+    r = np.where(np.arange(2 * n) % 2 == 0, r0, r0 * 0.4)
+    pts = list(zip(128 + r * np.cos(a), 128 + r * np.sin(a), strict=True))
+    d.polygon(pts, outline=0, width=3)
+    return np.asarray(im)
+
+
+def car(rng: np.random.Generator) -> np.ndarray:
+    im, d = _canvas()
+    y = rng.uniform(140, 180)
+    body = [(20, y), (20, y - 40), (70, y - 45), (100, y - 85), (170, y - 85), (200, y - 45)]
+    body += [(236, y - 35), (236, y), (20, y)]
+    d.line(body, fill=0, width=3)
+    for wx in (65, 190):
+        d.ellipse((wx - 22, y - 22, wx + 22, y + 22), outline=0, width=4)
+    return np.asarray(im)
+
+
+def zigzag(rng: np.random.Generator) -> np.ndarray:
+    im, d = _canvas()
+    n = int(rng.integers(4, 12))
+    xs = np.linspace(20, SIZE - 20, n)
+    ys = np.where(np.arange(n) % 2 == 0, 60.0, 200.0) + rng.normal(0, 10, n)
+    d.line(list(zip(xs, ys, strict=True)), fill=0, width=3)
+    return np.asarray(im)
+
+
+def rings(rng: np.random.Generator) -> np.ndarray:
+    im, d = _canvas()
+    for r in range(20, int(rng.uniform(90, 125)), int(rng.integers(10, 25))):
+        d.ellipse((128 - r, 128 - r, 128 + r, 128 + r), outline=0, width=2)
+    return np.asarray(im)
+
+
+def non_trees(seed: int = 0) -> list[tuple[str, np.ndarray]]:
+    """The 50 non-tree pictures (name, (SIZE, SIZE) uint8), the same for the same seed."""
+    rng = np.random.default_rng(seed)
+    makers: list[tuple[str, Callable[[np.random.Generator], np.ndarray]]] = [
+        *[(f"noise{d:g}", lambda g, d=d: noise(g, d)) for d in (0.01, 0.03, 0.1, 0.3, 0.5)],
+        *[(f"circle{k}", lambda g, k=k: circle(g, k % 2 == 1)) for k in range(5)],
+        *[(f"ellipse{k}", ellipse) for k in range(4)],
+        *[(f"square{k}", lambda g, k=k: square(g, k % 2 == 1)) for k in range(4)],
+        *[(f"house{k}", house) for k in range(3)],
+        *[(f"face{k}", face) for k in range(3)],
+        *[(f"text{k}", text) for k in range(4)],
+        *[(f"strokes{k}", strokes) for k in range(5)],
+        *[(f"spiral{k}", spiral) for k in range(3)],
+        *[(f"grid{k}", grid) for k in range(3)],
+        *[(f"star{k}", star) for k in range(3)],
+        *[(f"car{k}", car) for k in range(3)],
+        *[(f"zigzag{k}", zigzag) for k in range(3)],
+        *[(f"rings{k}", rings) for k in range(2)],
+    ]
+    assert len(makers) == 50
+    return [(name, make(rng)) for name, make in makers]
+
+
+# ---------------------------------------------------------------- tree drawings
+
+
+def tree_drawings(first_seed: int, per_species: int) -> list[dict]:
+    """Held-out-style drawings: per species ``per_species`` trees (seeds ``first_seed``+),
+    each drawn in a style other than "sg" at a random yaw.  Dicts with the drawing, the
+    ground-truth params, species, style and view yaw."""
+    out = []
+    for si, name in enumerate(species.SPECIES):
+        for k in range(per_species):
+            seed = first_seed + k
+            rng = np.random.default_rng([seed, si])
+            style = HELD_OUT_STYLES[(k + si) % len(HELD_OUT_STYLES)]
+            yaw = float(rng.uniform(0.0, 360.0))
+            gt = species.sample(name, seed=seed)
+            renderer = SketchRenderer(build_mesh(grow(gt)), species=name)
+            img = draw(style, Silhouettes.from_parts(renderer.parts(yaw, SIZE)), rng, SIZE)
+            out.append(
+                {"name": f"{name}{seed}", "species": name, "seed": seed, "style": style,
+                 "yaw": yaw, "params": gt, "image": img}
+            )  # fmt: skip
+    return out
+
+
+# ---------------------------------------------------------------- parts
+
+
+def flagged(rec: dict, limit: float, ink_limit: float) -> bool:
+    """Warned at these limits (a refused picture counts as flagged)."""
+    if "refused" in rec:
+        return True
+    return rec["loss_after"] > limit or rec["ink_after"] > ink_limit
+
+
+def _get(rec: dict, key: str) -> float:
+    return math.inf if "refused" in rec else rec[key]
+
+
+def _mids(values: list[float]) -> list[float]:
+    """One limit per distinct outcome: midway between sorted values, and above the top."""
+    v = sorted(set(values))
+    return [(a + b) / 2 for a, b in zip(v, v[1:], strict=False)] + [v[-1] + 0.1]
+
+
+def _loss(rec: dict) -> float:
+    return _get(rec, "loss_after")
+
+
+def calibrate(records: list[dict]) -> dict:
+    """Flag rates at the current limits; the shape limits (the line limit kept) that flag
+    <= 10 % of trees and >= 95 % of non-trees; the same for each distance alone."""
+    ink_limit = ts_pipeline.LOW_CONFIDENCE_INK
+    trees = [r for r in records if r["kind"] == "tree"]
+    other = [r for r in records if r["kind"] == "non-tree"]
+
+    def rates(limit: float) -> tuple[float, float]:
+        ft = np.mean([flagged(r, limit, ink_limit) for r in trees])
+        fo = np.mean([flagged(r, limit, ink_limit) for r in other])
+        return float(ft), float(fo)
+
+    current = ts_pipeline.LOW_CONFIDENCE_LOSS
+    cands = sorted({0.0, *(r["loss_after"] for r in records if "refused" not in r)})
+    # between consecutive observed distances every limit gives the same flags
+    mids = [(a + b) / 2 for a, b in zip(cands, cands[1:], strict=False)] + [cands[-1] + 0.1]
+    ok = [m for m in mids if (lambda t, o: t <= 0.10 and o >= 0.95)(*rates(m))]
+    ft, fo = rates(current)
+
+    def alone(key: str) -> list[float] | None:
+        """The limits on ``key`` alone that separate as asked (refused pictures flagged)."""
+        vals = sorted({r[key] for r in records if "refused" not in r})
+        ok1 = [
+            m
+            for m in [(a + b) / 2 for a, b in zip(vals, vals[1:], strict=False)]
+            if np.mean([_get(r, key) > m for r in trees]) <= 0.10
+            and np.mean([_get(r, key) > m for r in other]) >= 0.95
+        ]
+        return [min(ok1), max(ok1)] if ok1 else None
+
+    def both() -> dict:
+        """The (shape, line) limit pair that flags the most non-trees while flagging
+        <= 10 % of trees (ties: the largest limits, the least eager to flag)."""
+        kept = [r for r in records if "refused" not in r]
+        best: tuple = ()
+        for key_s in _mids([r["loss_after"] for r in kept]):
+            for key_i in _mids([r["ink_after"] for r in kept]):
+                ft = np.mean([flagged(r, key_s, key_i) for r in trees])
+                if ft > 0.10:
+                    continue
+                fo = float(np.mean([flagged(r, key_s, key_i) for r in other]))
+                cand = (fo, key_s + key_i, key_s, key_i, float(ft))
+                best = max(best, cand) if best else cand
+        if not best:
+            return {}
+        return {"shape": best[2], "line": best[3], "trees_flagged": best[4], "non_trees": best[0]}
+
+    return {
+        "limit_now": current,
+        "ink_limit": ink_limit,
+        "trees_flagged_now": ft,
+        "non_trees_flagged_now": fo,
+        "feasible_min": min(ok) if ok else None,
+        "feasible_max": max(ok) if ok else None,
+        "shape_alone_feasible": alone("loss_after"),
+        "line_alone_feasible": alone("ink_after"),
+        "line_limit_fixed_shape_off_flags": list(rates(math.inf)),
+        "best_pair": both(),
+        "tree_loss_max": max(_loss(r) for r in trees),
+        "tree_loss_p90": float(np.percentile([_loss(r) for r in trees], 90)),
+        "non_tree_loss_p05": float(np.percentile([_loss(r) for r in other], 5)),
+        "non_tree_loss_min": min(_loss(r) for r in other),
+    }
+
+
+def part_warning(args: argparse.Namespace) -> dict:
+    pipe = Pipeline("tsn", RefineSettings(budget=args.budget, species_tries=1))
+    cases = [("non-tree", n, img, None) for n, img in non_trees(0)]
+    cases += [("tree", d["name"], d["image"], d) for d in tree_drawings(900, 5)]
+    records: list[dict] = []
+    if args.resume is not None:  # a stopped run's records are kept, their cases not rerun
+        records = json.loads(args.resume.read_text())["records"]
+    done = {r["name"] for r in records}
+    for kind, name, img, d in cases:
+        if name in done:
+            continue
+        t = time.perf_counter()
+        try:
+            res = pipe.run(img)
+        except SketchError as exc:  # refused before any work: as good as a warning
+            records.append({"kind": kind, "name": name, "refused": str(exc)})
+            print(f"{kind:>8} {name:>12} refused: {exc}", flush=True)
+            continue
+        rec = {
+            "kind": kind,
+            "name": name,
+            "style": None if d is None else d["style"],
+            "species_true": None if d is None else d["species"],
+            "species": res.species,
+            "loss_before": res.losses["before"],
+            "loss_after": res.losses["after"],
+            "ink_after": res.losses["ink_after"],
+            "warned": res.warning is not None,
+            "seconds": time.perf_counter() - t,
+        }
+        records.append(rec)
+        if args.json is not None:
+            atomic_write(args.json, json.dumps({"part": "warning", "records": records}, indent=1))
+        print(
+            f"{kind:>8} {name:>12} {rec['species']:>7} shape {rec['loss_after']:.3f} "
+            f"ink {rec['ink_after']:.3f} warned {rec['warned']} {rec['seconds']:.1f}s",
+            flush=True,
+        )
+    return {"records": records, "summary": calibrate(records)}
+
+
+def part_refine(args: argparse.Namespace) -> dict:
+    from eval.hausdorff import aligned_tree_hausdorff, bbox_diagonal, hausdorff, rotate_about_trunk
+
+    pipe = Pipeline("tsn", RefineSettings(budget=args.budget))
+    records: list[dict] = []
+    # one of each species at a time, and each case saved as it ends: a run stopped early
+    # still has a balanced, readable record
+    drawings = sorted(
+        tree_drawings(950, args.per_species),
+        key=lambda d: (d["seed"], species.SPECIES.index(d["species"])),
+    )
+    for d in drawings:
+        t = time.perf_counter()
+        res = pipe.run(d["image"])
+        secs = time.perf_counter() - t
+        gt_mesh = build_mesh(grow(d["params"]), species=d["species"])
+        gt_c, diag = gt_mesh.combined(), bbox_diagonal(gt_mesh.bounds())
+        est = res.estimate
+        m0 = build_mesh(grow(est.params), species=est.species)
+        m1 = res.tree_mesh
+        yaw0 = 0.0 if est.yaw is None else float(est.yaw)
+        h0 = hausdorff(rotate_about_trunk(m0, d["yaw"] - yaw0).combined(), gt_c, args.samples, diag)
+        h1 = hausdorff(
+            rotate_about_trunk(m1, d["yaw"] - res.yaw).combined(), gt_c, args.samples, diag
+        )
+        _, a0 = aligned_tree_hausdorff(m0, gt_mesh, args.samples, args.align_step)
+        _, a1 = aligned_tree_hausdorff(m1, gt_mesh, args.samples, args.align_step)
+        rec = {
+            "name": d["name"],
+            "style": d["style"],
+            "species_true": d["species"],
+            "species_tsn": est.species,
+            "species": res.species,
+            "loss_before": res.losses["before"],
+            "loss_after": res.losses["after"],
+            "haus_before": h0.max_norm,
+            "haus_after": h1.max_norm,
+            "aligned_before": a0.max_norm,
+            "aligned_after": a1.max_norm,
+            "yaw_view": d["yaw"],
+            "yaw_found": res.yaw,
+            "warned": res.warning is not None,
+            "seconds": secs,
+        }
+        records.append(rec)
+        print(refine_line(rec), flush=True)
+        if args.json is not None:
+            partial = {"part": "refine", "records": records, "summary": refine_summary(records)}
+            atomic_write(args.json, json.dumps(partial | {"machine": machine()}, indent=1))
+    return {"records": records, "summary": refine_summary(records)}
+
+
+def refine_summary(records: list[dict]) -> dict:
+    n = len(records)
+
+    def frac(f: Callable[[dict], bool]) -> float:
+        return sum(map(f, records)) / n
+
+    summary = {
+        "n": n,
+        "loss_fell": frac(lambda r: r["loss_after"] < r["loss_before"]),
+        "haus_improved": frac(lambda r: r["haus_after"] < r["haus_before"]),
+        "aligned_improved": frac(lambda r: r["aligned_after"] < r["aligned_before"]),
+        "species_tsn_right": frac(lambda r: r["species_tsn"] == r["species_true"]),
+        "species_right": frac(lambda r: r["species"] == r["species_true"]),
+        "warned": frac(lambda r: r["warned"]),
+        **{
+            f"{k}_mean": float(np.mean([r[k] for r in records]))
+            for k in ("loss_before", "loss_after", "haus_before", "haus_after")
+            + ("aligned_before", "aligned_after", "seconds")
+        },
+    }
+    return summary
+
+
+def refine_line(r: dict) -> str:
+    return (
+        f"| {r['name']} | {r['style']} | {r['species_tsn']} -> {r['species']} | "
+        f"{r['loss_before']:.3f} -> {r['loss_after']:.3f} | "
+        f"{r['haus_before']:.3f} -> {r['haus_after']:.3f} | "
+        f"{r['aligned_before']:.3f} -> {r['aligned_after']:.3f} | {r['seconds']:.0f} |"
+    )
+
+
+def part_estimate(args: argparse.Namespace) -> dict:
+    """Wall and CPU milliseconds of ``Pipeline.estimate`` and of its two stages (reading +
+    normalising, the estimator), per sketch; CPU time is what the shared machine's load
+    does not inflate (much)."""
+    from treesketch.pipeline import load_sketch, prepare_input
+
+    pipe = Pipeline("tsn")
+    imgs = [d["image"] for d in tree_drawings(900, 2)]
+    pngs = sorted((ROOT / "examples" / "hand").glob("*.png"))
+    sources = [*imgs, *pngs]
+    pipe.estimate(sources[0])  # warm-up: the first call pays for lazy set-up
+    clocks = {"wall": time.perf_counter, "cpu": time.process_time}
+    per: dict[str, list[float]] = {}
+    for src in sources:
+        for clock, now in clocks.items():
+            t = now()
+            pipe.estimate(src)
+            per.setdefault(f"estimate_{clock}", []).append((now() - t) * 1000)
+            t = now()
+            img = prepare_input(load_sketch(src))
+            per.setdefault(f"prepare_{clock}", []).append((now() - t) * 1000)
+            t = now()
+            pipe.estimator.estimate(img)
+            per.setdefault(f"tsn_{clock}", []).append((now() - t) * 1000)
+    out = {"n": len(sources)} | {
+        f"{k}_ms": [round(statistics.median(v), 1), round(max(v), 1)] for k, v in per.items()
+    }
+    print(json.dumps(out))
+    return {"records": per, "summary": out}
+
+
+def markdown(doc: dict) -> str:
+    part, recs = doc["part"], doc["records"]
+    lines = [f"machine: {doc['machine']}", ""]
+    if part == "warning":
+        lines += ["| tree drawing | style | species found | shape distance | line distance |"]
+        lines += ["|---|---|---|---:|---:|"]
+        for r in sorted((r for r in recs if r["kind"] == "tree"), key=_loss):
+            lines.append(
+                f"| {r['name']} | {r['style']} | {r['species']} | {r['loss_after']:.3f} "
+                f"| {r['ink_after']:.3f} |"
+            )
+        groups: dict[str, list[dict]] = {}
+        for r in recs:
+            if r["kind"] == "non-tree":
+                groups.setdefault(r["name"].rstrip("0123456789."), []).append(r)
+        lines += ["", "| non-trees | n | refused | shape distance min | line distance min |"]
+        lines += ["|---|---:|---:|---:|---:|"]
+        for g, rs in groups.items():
+            kept = [r for r in rs if "refused" not in r]
+            lo = min((r["loss_after"] for r in kept), default=math.nan)
+            li = min((r["ink_after"] for r in kept), default=math.nan)
+            lines.append(f"| {g} | {len(rs)} | {len(rs) - len(kept)} | {lo:.3f} | {li:.3f} |")
+    elif part == "refine":
+        lines += [
+            "| drawing | style | species TSN -> final | sketch distance | Hausdorff max "
+            "(gt frame) | aligned max | s |",
+            "|---|---|---|---|---|---|---:|",
+            *map(refine_line, recs),
+        ]
+    summary = calibrate(recs) if part == "warning" else doc["summary"]
+    lines += ["", "```", json.dumps(summary, indent=1), "```"]
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--part", choices=("warning", "refine", "estimate"), default="warning")
+    ap.add_argument("--budget", type=int, default=None, help="20 for warning, 40 for refine")
+    ap.add_argument("--per-species", type=int, default=5)
+    ap.add_argument("--samples", type=int, default=10_000, help="Hausdorff samples per side")
+    ap.add_argument("--align-step", type=float, default=15.0)
+    ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--resume", type=Path, default=None, help="warning: keep this JSON's records")
+    ap.add_argument("--markdown", type=Path, default=None, help="print the tables of a --json")
+    args = ap.parse_args(argv)
+    if args.markdown is not None:
+        print(markdown(json.loads(args.markdown.read_text())))
+        return 0
+    if args.budget is None:
+        args.budget = 20 if args.part == "warning" else 40
+    try:
+        RefineSettings(budget=args.budget).validate()
+    except ValueError as exc:
+        ap.error(str(exc))
+    run = {"warning": part_warning, "refine": part_refine, "estimate": part_estimate}[args.part]
+    t = time.perf_counter()
+    doc = {"part": args.part, "args": {k: str(v) for k, v in vars(args).items()}}
+    doc |= run(args)
+    doc["machine"] = machine()
+    doc["seconds"] = time.perf_counter() - t
+    print(json.dumps(doc["summary"], indent=1))
+    if args.json is not None:
+        atomic_write(args.json, json.dumps(doc, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
