@@ -54,8 +54,8 @@ SKETCH_SIZE = 256  # the size sketches are prepared at (TSN crops and resizes fr
 # the result is flagged when the best tree's sketch is this far from the input, by the
 # style-blind shape distance (a circle can pass for a crown) or by the line distance (a
 # drawing of a tree has a trunk and branches somewhere); calibrated in RESULTS.md
-LOW_CONFIDENCE_LOSS = 0.8
-LOW_CONFIDENCE_INK = 0.6
+LOW_CONFIDENCE_LOSS = 0.6
+LOW_CONFIDENCE_INK = 0.84
 MAX_HEIGHT = 200.0  # metres: taller than any tree that grows
 
 
