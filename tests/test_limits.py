@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
+from paths import GT_PARAM_DIR as PARAM_DIR
 
 from weberpenn import ParamError, build_mesh, default_params, grow, load_params, species
 from weberpenn.limits import (
@@ -17,10 +17,6 @@ from weberpenn.limits import (
 )
 from weberpenn.mesh import tube_counts
 from weberpenn.skeleton import Skeleton
-
-REF_DIR = Path(__file__).resolve().parents[1].parent / "shared" / "reference"
-LOCAL = Path(__file__).resolve().parent / "data" / "treesketchnet_test_params"
-PARAM_DIR = LOCAL if LOCAL.is_dir() else REF_DIR / "treesketchnet_test_params"
 
 
 def _size(sk: Skeleton) -> tuple[int, int]:
@@ -92,7 +88,6 @@ def test_mesh_size_is_exact():
     assert faces == len(mesh.branches.faces) + len(mesh.leaves.faces)
 
 
-@pytest.mark.skipif(not PARAM_DIR.is_dir(), reason="reference parameters not present")
 def test_reference_trees_stay_well_under_the_limits():
     files = sorted(PARAM_DIR.glob("*.json"))
     assert len(files) == 15

@@ -7,17 +7,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tsn_helpers import REFERENCE, sampled_matrices
+from paths import GT_PARAM_FILES as REF_FILES
+from tsn_helpers import sampled_matrices
 
 from tsn import encoding
 from weberpenn import ParamError, TreeParams, load_params, species
 from weberpenn.params import HEAD_KEYS, HEADS, PREDICTED_KEYS, SPECS
 
-PARAM_DIR = REFERENCE / "treesketchnet_test_params"
-REF_FILES = sorted(PARAM_DIR.glob("*.json")) if PARAM_DIR.is_dir() else []
 
-
-@pytest.mark.skipif(len(REF_FILES) != 15, reason="reference files not available")
 @pytest.mark.parametrize("path", REF_FILES, ids=lambda p: p.stem)
 def test_round_trip_reference(path: Path) -> None:
     p = load_params(path)

@@ -6,14 +6,12 @@ import json
 
 import numpy as np
 import pytest
-from tsn_helpers import REFERENCE, sampled_matrices
+from paths import GT_PARAM_FILES as REF_FILES
+from tsn_helpers import sampled_matrices
 
 from tsn import encoding
 from tsn.species_id import SpeciesIdentifier, SpeciesIdError
 from weberpenn import load_params, species
-
-PARAM_DIR = REFERENCE / "treesketchnet_test_params"
-REF_FILES = sorted(PARAM_DIR.glob("*.json")) if PARAM_DIR.is_dir() else []
 
 
 @pytest.fixture(scope="module")
@@ -23,7 +21,6 @@ def identifier() -> SpeciesIdentifier:
     return SpeciesIdentifier.fit(mats, norm.scale)
 
 
-@pytest.mark.skipif(len(REF_FILES) != 15, reason="reference files not available")
 def test_reference_files_15_of_15(identifier: SpeciesIdentifier) -> None:
     right = 0
     for path in REF_FILES:

@@ -8,8 +8,6 @@ import numpy as np
 
 from weberpenn import species
 
-REFERENCE = Path(__file__).resolve().parents[1].parent / "shared" / "reference"
-
 
 def sampled_matrices(per_species: int = 12, seed0: int = 0) -> dict[str, np.ndarray]:
     """Encoded dictionaries drawn with ``weberpenn.species.sample`` (no dataset needed)."""
