@@ -85,7 +85,13 @@ def loso(args: argparse.Namespace) -> dict:
     held = check_styles([s.strip() for s in args.hold_out.split(",") if s.strip()])
     present = sorted({str(r.get("style", "sg")) for r in _rows(data)})
     work = Path(args.work)
-    results: dict = {"machine": _machine(), "data": str(data), "init": args.init, "runs": {}}
+    results: dict = {
+        "machine": _machine(),
+        "data": str(data),
+        "init": args.init,
+        "input": "normalised drawing" if args.normalise else "dataset sketch",
+        "runs": {},
+    }
     for x in held:
         if x not in present:
             raise SystemExit(f"{data} has no sketches in style {x!r} (it has {present})")
@@ -107,6 +113,7 @@ def loso(args: argparse.Namespace) -> dict:
                 loss="rmse",
                 threads=args.threads,
                 seed=0,
+                normalise=args.normalise,
                 resume=(work / f"loso_{x}.work" / "state.pt").is_file(),
             ),
             log=lambda s: print(s, flush=True),
@@ -114,7 +121,8 @@ def loso(args: argparse.Namespace) -> dict:
         t_train = time.perf_counter() - t0
         row = {"trained_on": list(keep), "epochs": res["epochs"], "train_seconds": t_train}
         for name, ck in (("held_out", res["out"]), ("reference_init", args.init)):
-            ev = evaluate(data, Path(ck), "test", bar=False, styles=(x,))
+            # the held-out sketches reach the network as predict feeds it
+            ev = evaluate(data, Path(ck), "test", bar=False, styles=(x,), normalise=args.normalise)
             row[name] = {
                 "n": ev["n"],
                 "species_acc": ev["species_acc"],
@@ -138,7 +146,8 @@ def _rows(data: Path) -> list[dict]:
 
 def _markdown(res: dict) -> str:
     lines = [
-        f"machine: {res['machine']}; data {res['data']}; init {res['init']}",
+        f"machine: {res['machine']}; data {res['data']}; init {res['init']}; "
+        f"input {res.get('input', 'dataset sketch')}",
         "",
         "| held-out style | trained on | epochs | test sketches | species (held-out style) "
         "| 1-RMSE (held-out style) | reference: init on the same sketches |",
@@ -172,6 +181,12 @@ def main() -> None:
     lo.add_argument("--size", type=int, default=192)
     lo.add_argument("--threads", type=int, default=2)
     lo.add_argument("--json", default=None)
+    lo.add_argument(
+        "--raw",
+        dest="normalise",
+        action="store_false",
+        help="train and test on the dataset's pixels (default: through the drawing normaliser)",
+    )
     args = ap.parse_args()
     if args.cmd == "timing":
         timing(args.trees, args.repeats)

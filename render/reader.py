@@ -195,6 +195,7 @@ def check_ink(img: np.ndarray) -> float:
 FRAME_BOTTOM = 0.969
 FRAME_EDGE = 0.043
 WORK_SIDE = 512  # drawings are normalised at most this large (bounded time and memory)
+DRAWING_SIDE = 256  # the side of a normalised drawing (the dataset's sketch size)
 MIN_PAPER = 0.25  # paper darker than this (fraction of white) is refused as a dark page
 INK_CONTRAST = 0.85  # ink is at most this bright relative to the paper around it
 
@@ -207,19 +208,33 @@ def flatten_paper(img: np.ndarray) -> np.ndarray:
     off-white paper and the vignetting of phone photos.  A page whose paper is darker than
     :data:`MIN_PAPER` is refused.
     """
+    from PIL import Image
     from scipy import ndimage
 
-    f = np.asarray(img, dtype=np.float32) / 255.0
-    side = max(f.shape)
-    k = max(5, int(round(side / 24)) | 1)
-    paper = ndimage.maximum_filter(f, size=k, mode="nearest")
-    paper = ndimage.uniform_filter(paper, size=k, mode="nearest")
-    level = float(np.median(paper))
+    g = np.asarray(img, dtype=np.uint8)
+    h, w = g.shape
+    k = max(5, int(round(max(h, w) / 24)) | 1)
+    # the paper is smooth on the scale of k: estimate it on blocks' maxima (a block is at
+    # most k/4 wide, so a stroke still vanishes) and resize back, ~b^2 times less work
+    b = max(1, k // 4)
+    hb, wb = -(-h // b), -(-w // b)
+    padded = np.pad(g, ((0, hb * b - h), (0, wb * b - w)), mode="edge")
+    blocks = padded.reshape(hb, b, wb, b).max(axis=3).max(axis=1).astype(np.float32) / 255.0
+    kb = max(3, int(round(k / b)) | 1)
+    small = ndimage.maximum_filter(blocks, size=kb, mode="nearest")
+    small = ndimage.uniform_filter(small, size=kb, mode="nearest")
+    level = float(np.median(small))
     if level < MIN_PAPER:
         raise SketchError(
             f"the page is too dark (paper at {level:.0%} of white): draw or photograph dark "
             "lines on light paper, in good light"
         )
+    if b > 1:
+        up = Image.fromarray(small, mode="F").resize((wb * b, hb * b), Image.Resampling.BILINEAR)
+        paper = np.asarray(up, dtype=np.float32)[:h, :w]
+    else:
+        paper = small
+    f = g.astype(np.float32) / 255.0
     return np.clip(f / np.maximum(paper, MIN_PAPER / 2), 0.0, 1.0)
 
 
@@ -232,10 +247,52 @@ def _ink_of(flat: np.ndarray) -> np.ndarray:
     dark = flat < INK_CONTRAST
     if not dark.any():
         return dark
-    t = min(INK_CONTRAST, float(threshold_otsu(flat)) if np.ptp(flat) > 0 else INK_CONTRAST)
+    # Otsu on a 256-bin histogram counted with bincount (np.histogram on floats is slow)
+    levels = np.round(flat * 255.0).astype(np.uint8)
+    counts = np.bincount(levels.ravel(), minlength=256)
+    if np.count_nonzero(counts) > 1:
+        t = min(INK_CONTRAST, float(threshold_otsu(hist=(counts, np.arange(256) / 255.0))))
+    else:
+        t = INK_CONTRAST
     ink = flat < max(t, 0.5)
     min_px = max(2, int(round(ink.size * 2e-5)))
     return remove_small_objects(ink, max_size=min_px - 1)
+
+
+RULED_ROW = 0.6  # a thin horizontal line over this much of the page width is ruling
+RULED_COLUMN = 0.8  # a thin vertical line over this much of the page height (a margin)
+RULED_THICK = 5  # rows (columns) a ruled line, tilt included, may cover at most
+
+
+def _drop_ruled_lines(ink: np.ndarray) -> np.ndarray:
+    """Ink without the ruled lines and margin of lined paper (long, thin, straight lines
+    across the page), keeping the drawing's strokes where they cross them."""
+    from scipy import ndimage
+
+    out = ink.copy()
+    for axis, frac in ((0, RULED_ROW), (1, RULED_COLUMN)):
+        a = out if axis == 0 else out.T  # a view: rows of ``a`` are the lines looked for
+        # a line tilted by a pixel or two over the page still covers the row it is on
+        near = a.copy()
+        near[1:] |= a[:-1]
+        near[:-1] |= a[1:]
+        flagged = near.mean(axis=1) > frac
+        if not flagged.any():
+            continue
+        runs, n = ndimage.label(flagged)
+        for i, sl in enumerate(ndimage.find_objects(runs), start=1):
+            lo, hi = sl[0].start, sl[0].stop
+            if hi - lo > RULED_THICK or i > n:  # a dense scribble, not a ruled line
+                continue
+            lo, hi = max(lo - 1, 0), min(hi + 1, a.shape[0])
+            above = a[lo - 1] if lo > 0 else np.zeros(a.shape[1], bool)
+            below = a[hi] if hi < a.shape[0] else np.zeros(a.shape[1], bool)
+            # a stroke that crosses the line goes on through it, also at a slant: ink
+            # within a few pixels on both sides of the band
+            reach = np.ones(2 * (hi - lo) + 1, bool)
+            across = ndimage.binary_dilation(above, reach) & ndimage.binary_dilation(below, reach)
+            a[lo:hi] = (across & (above | below))[None, :]
+    return out
 
 
 def _axis_and_box(ink: np.ndarray) -> tuple[int, int, int, int, float]:
@@ -248,7 +305,7 @@ def _axis_and_box(ink: np.ndarray) -> tuple[int, int, int, int, float]:
     return top, bottom, left, right, float(axis)
 
 
-def normalise_drawing(img: np.ndarray, size: int = 256) -> np.ndarray:
+def normalise_drawing(img: np.ndarray, size: int = DRAWING_SIDE) -> np.ndarray:
     """A drawing (grey ``uint8``, any size) -> ``(size, size)`` uint8 as the renderer
     frames a tree: paper white, strokes dark, trunk base on the bottom margin, trunk axis
     on the centre line, the drawing as large as the frame allows.
@@ -268,7 +325,7 @@ def normalise_drawing(img: np.ndarray, size: int = 256) -> np.ndarray:
         shape = (max(MIN_SIDE, round(a.shape[1] * s)), max(MIN_SIDE, round(a.shape[0] * s)))
         a = np.asarray(Image.fromarray(a).resize(shape, Image.Resampling.BOX))
     flat = flatten_paper(a)
-    ink = _ink_of(flat)
+    ink = _drop_ruled_lines(_ink_of(flat))
     frac = float(ink.mean())
     if frac < MIN_INK:
         raise SketchError("the sketch is blank: draw a tree (dark lines on a light page)")
@@ -293,8 +350,11 @@ def normalise_drawing(img: np.ndarray, size: int = 256) -> np.ndarray:
         pic = pic.resize((out_w, out_h), resample)
     canvas = Image.new("L", (size, size), 255)
     canvas.paste(pic, (x0, y0))
-    # binary, like the renderer's sketches (and so normalising twice changes nothing)
-    out = np.where(np.asarray(canvas) < 128, 0, 255).astype(np.uint8)
+    # binary, like the renderer's sketches (and so normalising twice changes nothing); a
+    # shrunk drawing keeps a pixel a quarter covered by ink, so a thin pen line stays
+    # one unbroken line instead of falling apart into dashes
+    level = 128 if scale >= 1.0 else 192
+    out = np.where(np.asarray(canvas) < level, 0, 255).astype(np.uint8)
     if float(ink_mask(out).mean()) < MIN_INK:
         raise SketchError("the sketch is blank: draw a tree (dark lines on a light page)")
     return out

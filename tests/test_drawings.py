@@ -100,3 +100,41 @@ def test_noise_gets_the_warning() -> None:
     noise = ((np.random.default_rng(0).random((256, 256)) > 0.6) * 255).astype(np.uint8)
     r = Pipeline("tsn", RefineSettings(budget=6)).run(noise)
     assert r.warning is not None and "low confidence" in r.warning
+
+
+def on_lined_paper(img: np.ndarray, page: int = 512) -> np.ndarray:
+    """The drawing on a page of lined paper: dark ruled lines every 24 px, one of them
+    tilted by a pixel over the page, and a margin line down the left."""
+    out = np.full((page, page), 250, np.uint8)
+    h, w = img.shape
+    y0, x0 = (page - h) // 2, (page - w) // 2
+    for y in range(20, page, 24):
+        out[y, :] = 110
+    out[44, page // 2 :] = 250  # the tilted one: its right half one row down
+    out[45, page // 2 :] = 110
+    out[:, 40] = 120
+    region = out[y0 : y0 + h, x0 : x0 + w]
+    out[y0 : y0 + h, x0 : x0 + w] = np.minimum(region, img)
+    return out
+
+
+def test_ruled_lines_and_margin_of_lined_paper_are_not_ink(sketches) -> None:
+    img = sketches["maple"]
+    plain = normalise_drawing(img, 256)
+    lined = normalise_drawing(on_lined_paper(img), 256)
+    ink_plain, ink_lined = plain < 128, lined < 128
+    from scipy import ndimage
+
+    # the same drawing, framed the same: nothing of the ruling is left, no stroke is cut
+    # where it crosses a line (ink of either within 2 px of the other's)
+    def off(a: np.ndarray, b: np.ndarray) -> float:
+        return float((a & ~ndimage.binary_dilation(b, iterations=2)).sum() / a.sum())
+
+    assert off(ink_lined, ink_plain) < 0.03 and off(ink_plain, ink_lined) < 0.03
+    rows = ink_lined.mean(axis=1)
+    assert rows.max() < 0.5  # no line across the page
+    # a dense drawing that fills the page is not taken for ruling
+    rng = np.random.default_rng(3)
+    scribble = np.where(rng.random((256, 256)) < 0.35, 0, 255).astype(np.uint8)
+    scribble[:, :] = np.where(np.arange(256)[None, :] % 3 == 0, 0, scribble)
+    assert normalise_drawing(scribble, 256).mean() < 200

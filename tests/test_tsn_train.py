@@ -242,3 +242,38 @@ def test_styles_filter_and_fine_tune_from_a_checkpoint(tmp_path: Path) -> None:
     )
     assert r.exit_code == 0, r.output
     assert "2 sketches of 2 held-out trees" in r.output
+
+
+def test_training_sketches_are_normalised_like_predicts_input(tiny: Path, tmp_path: Path) -> None:
+    from render.reader import normalise_drawing
+    from tsn.train import cache_key, normalised
+
+    split = load_split(tiny, "train")
+    img = split.images[0]
+    # the same sketch as light pencil on grey paper: the normaliser gives the clean sketch
+    pencil = (96 + (img.astype(np.float32) * 0.55)).astype(np.uint8)
+    assert np.array_equal(normalised(pencil), normalise_drawing(img))
+    assert set(np.unique(normalised(img))) <= {0, 255}
+    blank = np.full_like(img, 255)
+    assert normalised(blank) is blank  # refused by the normaliser: kept as it is
+    # normalised and raw features never share a cache file
+    on = TrainConfig(str(tiny), str(tmp_path / "a.pt"))
+    off = TrainConfig(str(tiny), str(tmp_path / "a.pt"), normalise=False)
+    assert on.normalise and cache_key(on, 3, split, "train", None) != cache_key(
+        off, 3, split, "train", None
+    )
+    ck = tmp_path / "n.pt"
+    r = CliRunner().invoke(
+        app,
+        ["train", "--data", str(tiny), "--out", str(ck), "--size", "64", "--batch", "8"]
+        + ["--copies", "0", "--epochs", "1", "--threads", "2"],
+    )
+    assert r.exit_code == 0, r.output
+    from tsn.predict import load_model
+
+    assert load_model(ck).info["config"]["normalise"] is True
+    r = CliRunner().invoke(
+        app, ["eval", "tsn", "--data", str(tiny), "--checkpoint", str(ck), "--normalise"]
+    )
+    assert r.exit_code == 0, r.output
+    assert "input: normalised drawing" in r.output

@@ -30,9 +30,11 @@ def evaluate(
     max_sketches: int | None = None,
     bar: bool = True,
     styles: tuple[str, ...] | None = None,
+    normalise: bool = False,
 ) -> dict[str, Any]:
     """Scores of a checkpoint on ``split`` of the dataset at ``data`` (only its sketches
-    drawn in ``styles`` when given)."""
+    drawn in ``styles`` when given); with ``normalise``, each sketch first goes through the
+    drawing normaliser, as ``predict`` and the service feed the network."""
     from eval.metrics import one_minus_rmse
     from eval.scoring import dataset_sketch, progress_bar, tsn_scorer
     from render.dataset import read_manifest
@@ -46,6 +48,7 @@ def evaluate(
         what = f" in the styles {', '.join(styles)}" if styles else ""
         raise ValueError(f"{data}: the {split!r} split is empty{what}")
     from .estimators import TSNEstimator
+    from .pipeline import prepare_input
 
     model = TSNEstimator.load(checkpoint).model
     b = tsn_scorer(model)
@@ -56,6 +59,8 @@ def evaluate(
     for s in progress_bar(starts, "eval tsn", len(starts), bar):
         chunk = rows[s : s + batch]
         imgs = [dataset_sketch(data / r["sketch"]) for r in chunk]
+        if normalise:
+            imgs = [prepare_input(i) for i in imgs]
         alone, mirror = model.raw_views(imgs)
         out = 0.5 * (alone + mirror)  # what predict uses (flip=True)
         for r, a, o in zip(chunk, alone, out, strict=True):
@@ -86,6 +91,7 @@ def evaluate(
         "seconds": seconds,
         "checkpoint": b.info["checkpoint"],
         "name": b.name,
+        "input": "normalised drawing" if normalise else "dataset sketch",
     }
 
 
@@ -103,7 +109,8 @@ def format_result(res: dict[str, Any], split: str) -> str:
     sp = ", ".join(f"{k} {v:.1%}" for k, v in res["species_acc_per_species"].items())
     return (
         f"1-RMSE on the {split!r} split: {res['n']} sketches of {res['n_trees']} held-out trees "
-        f"(checkpoint {res['checkpoint']}, {res['seconds']:.0f} s)\n\n{table}\n\n"
+        f"(checkpoint {res['checkpoint']}, input: {res['input']}, {res['seconds']:.0f} s)"
+        f"\n\n{table}\n\n"
         f"species identification (Algorithm 1): {res['species_acc']:.2%} ({sp}); paper target 98%"
         f"\n\nhardest keys (predict's output):\n\n{format_hardest(res['flip'], 8)}"
     )
@@ -125,6 +132,12 @@ def eval_tsn(
         help="Score only sketches drawn in these comma-separated styles (e.g. sg); "
         "default: every sketch of the split.",
     ),
+    normalise: bool = typer.Option(
+        False,
+        "--normalise",
+        help="Feed each sketch through the drawing normaliser first, as predict and the "
+        "service do (paper flattened, ink thresholded, re-framed).",
+    ),
 ) -> None:
     """Paper-style table: 1-RMSE per head and overall, species-identification accuracy."""
     from weberpenn.fileio import atomic_write
@@ -133,7 +146,9 @@ def eval_tsn(
 
     try:
         keep = None if styles is None else tuple(s.strip() for s in styles.split(",") if s.strip())
-        res = evaluate(data, checkpoint, split, max_sketches=max_sketches, styles=keep)
+        res = evaluate(
+            data, checkpoint, split, max_sketches=max_sketches, styles=keep, normalise=normalise
+        )
     except (RuntimeError, ValueError, OSError) as e:  # DatasetError/CheckpointError too
         fail(str(e))
     typer.echo(format_result(res, split))

@@ -58,6 +58,12 @@ def train_cmd(
         "--init",
         help="Checkpoint to fine-tune from (same --backbone and --size); keeps its normaliser.",
     ),
+    normalise: bool = typer.Option(
+        True,
+        "--normalise/--raw",
+        help="Feed every sketch through the drawing normaliser first, as predict does "
+        "(--raw: the dataset's pixels as they are).",
+    ),
 ) -> None:
     """Train TSN: cached frozen early layers, fine-tuned last layers and six heads."""
     from tsn.train import TrainConfig, TrainError, train
@@ -84,6 +90,7 @@ def train_cmd(
         else tuple(s.strip().lower() for s in styles.split(",") if s.strip()),
         init=str(init) if init else None,
         cache=str(cache) if cache else None,
+        normalise=normalise,
     )
     try:
         cfg.check()

@@ -27,7 +27,7 @@ import numpy as np
 from refine.objective import metric_distance
 from refine.search import Cancelled, RefineResult, RefineSettings
 from refine.search import refine as refine_search
-from render.reader import SketchError, normalise_drawing, read_sketch
+from render.reader import DRAWING_SIDE, SketchError, normalise_drawing, read_sketch
 from weberpenn import TreeParams, build_mesh, grow
 
 from .estimate import Estimate, Estimator
@@ -50,7 +50,7 @@ __all__ = [
     "rescale_height",
 ]
 
-SKETCH_SIZE = 256  # the size sketches are prepared at (TSN crops and resizes from it)
+SKETCH_SIZE = DRAWING_SIDE  # the size sketches are prepared at (TSN crops and resizes from it)
 # the result is flagged when the best tree's sketch is this far from the input, by the
 # style-blind shape distance (a circle can pass for a crown) or by the line distance (a
 # drawing of a tree has a trunk and branches somewhere); calibrated in RESULTS.md

@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from render.reader import read_sketch
+from render.reader import SketchError, normalise_drawing, read_sketch
 from weberpenn.fileio import atomic_write
 from weberpenn.params import HEADS, TreeParams
 
@@ -73,6 +73,9 @@ class TrainConfig:
     styles: tuple[str, ...] | None = None  # drawing styles kept (train and val); None = all
     init: str | None = None  # checkpoint to fine-tune from (its weights and normaliser)
     cache: str | None = None  # folder of the feature caches; default: the work folder
+    # every sketch (and augmented copy) goes through the drawing normaliser first, as
+    # predict and the service feed the network: training sees what inference sees
+    normalise: bool = True
     extra: dict[str, Any] = field(default_factory=dict)
 
     def check(self) -> None:
@@ -223,11 +226,12 @@ def fit_species_id(split: Split, normaliser: encoding.Normaliser) -> SpeciesIden
 
 
 # ----------------------------------------------------------------------------- cache
-def _cache_key(cfg: TrainConfig, cut: int, split: Split, tag: str, data: str | None) -> str:
+def cache_key(cfg: TrainConfig, cut: int, split: Split, tag: str, data: str | None) -> str:
     h = hashlib.sha1()
     h.update(
         json.dumps(
-            [tag, cfg.backbone, cfg.size, cut, cfg.copies, cfg.seed, cfg.pretrained],
+            [tag, cfg.backbone, cfg.size, cut, cfg.copies, cfg.seed, cfg.pretrained]
+            + (["normalised"] if cfg.normalise else []),
             sort_keys=True,
         ).encode()
     )
@@ -236,6 +240,15 @@ def _cache_key(cfg: TrainConfig, cut: int, split: Split, tag: str, data: str | N
         h.update(("init:" + str(Path(cfg.init).resolve())).encode())
     h.update("|".join(split.tree_ids).encode())
     return h.hexdigest()[:16]
+
+
+def normalised(img: np.ndarray) -> np.ndarray:
+    """``render.reader.normalise_drawing`` of a training sketch; one the normaliser refuses
+    (an augmented copy left nearly blank) is kept as it is."""
+    try:
+        return normalise_drawing(img)
+    except SketchError:
+        return img
 
 
 @torch.no_grad()
@@ -268,7 +281,7 @@ def build_cache(
     """``(copies + 1, N, ...)`` fp16: version 0 clean, 1.. augmented (seeded per image;
     ``part`` > 0 for the ``more_data`` datasets, so their augmentations differ)."""
     cfg.cache_dir.mkdir(parents=True, exist_ok=True)
-    path = cfg.cache_dir / f"cache_{tag}_{_cache_key(cfg, cut, split, tag, data)}.pt"
+    path = cfg.cache_dir / f"cache_{tag}_{cache_key(cfg, cut, split, tag, data)}.pt"
     if path.is_file():
         try:
             t = torch.load(path, map_location="cpu", weights_only=True)
@@ -289,6 +302,8 @@ def build_cache(
                 )
                 for i, im in enumerate(split.images)
             ]
+        if cfg.normalise:
+            imgs = [normalised(im) for im in imgs]
         versions.append(compute_features(model, imgs, cut, cfg.size, device))
         log(
             f"[train] {tag} version {v + 1}/{copies + 1} cached "
