@@ -224,6 +224,12 @@ def flatten_paper(img: np.ndarray) -> np.ndarray:
     small = ndimage.maximum_filter(blocks, size=kb, mode="nearest")
     small = ndimage.uniform_filter(small, size=kb, mode="nearest")
     level = float(np.median(small))
+    if level < MIN_PAPER and float(np.percentile(blocks, 95)) > 2 * MIN_PAPER:
+        # light paper shows at the edges, but most of the page is one dark area
+        raise SketchError(
+            "the drawing is a dark filled area over most of the page: draw the tree with "
+            "lines (its crown's outline, trunk and branches), not a fill"
+        )
     if level < MIN_PAPER:
         raise SketchError(
             f"the page is too dark (paper at {level:.0%} of white): draw or photograph dark "

@@ -93,6 +93,11 @@ def test_dark_page_is_a_clear_error() -> None:
         prepare_input(dark)
     with pytest.raises(SketchError, match="blank"):
         prepare_input(np.clip(rng.normal(200, 3, (300, 300)), 0, 255).astype(np.uint8))
+    # a black disc over most of a white page is a fill, not a dark page
+    yy, xx = np.mgrid[:300, :300]
+    disc = np.where((yy - 150) ** 2 + (xx - 150) ** 2 < 140**2, 0, 255).astype(np.uint8)
+    with pytest.raises(SketchError, match="filled area"):
+        prepare_input(disc)
 
 
 @pytest.mark.slow
