@@ -272,8 +272,10 @@ def test_training_sketches_are_normalised_like_predicts_input(tiny: Path, tmp_pa
     from tsn.predict import load_model
 
     assert load_model(ck).info["config"]["normalise"] is True
-    r = CliRunner().invoke(
-        app, ["eval", "tsn", "--data", str(tiny), "--checkpoint", str(ck), "--normalise"]
-    )
+    base = ["eval", "tsn", "--data", str(tiny), "--checkpoint", str(ck)]
+    r = CliRunner().invoke(app, base)  # as the checkpoint was trained
     assert r.exit_code == 0, r.output
     assert "input: normalised drawing" in r.output
+    r = CliRunner().invoke(app, [*base, "--raw"])
+    assert r.exit_code == 0, r.output
+    assert "input: dataset sketch" in r.output

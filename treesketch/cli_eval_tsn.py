@@ -30,11 +30,12 @@ def evaluate(
     max_sketches: int | None = None,
     bar: bool = True,
     styles: tuple[str, ...] | None = None,
-    normalise: bool = False,
+    normalise: bool | None = None,
 ) -> dict[str, Any]:
     """Scores of a checkpoint on ``split`` of the dataset at ``data`` (only its sketches
     drawn in ``styles`` when given); with ``normalise``, each sketch first goes through the
-    drawing normaliser, as ``predict`` and the service feed the network."""
+    drawing normaliser, as ``predict`` and the service feed the network (``None``: as the
+    checkpoint was trained)."""
     from eval.metrics import one_minus_rmse
     from eval.scoring import dataset_sketch, progress_bar, tsn_scorer
     from render.dataset import read_manifest
@@ -51,6 +52,8 @@ def evaluate(
     from .pipeline import prepare_input
 
     model = TSNEstimator.load(checkpoint).model
+    if normalise is None:
+        normalise = bool(model.info.get("config", {}).get("normalise", False))
     b = tsn_scorer(model)
     raw, flip, proj, tgt, sp_pred, sp_true = [], [], [], [], [], []
     params: dict[str, TreeParams] = {}
@@ -132,11 +135,13 @@ def eval_tsn(
         help="Score only sketches drawn in these comma-separated styles (e.g. sg); "
         "default: every sketch of the split.",
     ),
-    normalise: bool = typer.Option(
-        False,
-        "--normalise",
+    normalise: bool | None = typer.Option(
+        None,
+        "--normalise/--raw",
         help="Feed each sketch through the drawing normaliser first, as predict and the "
-        "service do (paper flattened, ink thresholded, re-framed).",
+        "service do (paper flattened, ink thresholded, re-framed), or the dataset's pixels "
+        "as they are; default: as the checkpoint was trained.",
+        show_default=False,
     ),
 ) -> None:
     """Paper-style table: 1-RMSE per head and overall, species-identification accuracy."""
