@@ -199,6 +199,17 @@ class JobStore:
             )
             return cur.rowcount > 0
 
+    def requeue(self, job_id: str) -> bool:
+        """Put a running job back at the head of the queue (its worker was lost); False if
+        it is not running.  It keeps its place: no job queued after it runs first."""
+        with self._db() as db:
+            cur = db.execute(
+                "UPDATE jobs SET state='queued', started=NULL, progress=NULL "
+                "WHERE id=? AND state='running'",
+                (job_id,),
+            )
+            return cur.rowcount > 0
+
     def cancel_queued(self, job_id: str) -> bool:
         """Cancel a job that has not started; False if it is not waiting."""
         with self._db() as db:
