@@ -155,6 +155,12 @@ class RayWorkerPool:
                     return True
         return False
 
+    def actor_of(self, job_id: str) -> Any | None:
+        """The Ray actor handle running ``job_id`` (None if none runs it): for operators'
+        tools and fault tests, e.g. ``ray.kill(pool.actor_of(job_id))``."""
+        with self._lock:
+            return next((a.handle for a in self._actors if a.job == job_id), None)
+
     def live(self, job_id: str) -> dict[str, Any] | None:
         with self._lock:
             p = self._live.get(job_id)
