@@ -88,6 +88,32 @@ def comparable(summary: dict) -> dict:
     return {k: v for k, v in summary.items() if k not in ("timings", "worker")}
 
 
+def test_serve_command_options(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    """Checked before serving, without starting Ray (this runs before the module's Ray)."""
+    import uvicorn
+    from typer.testing import CliRunner
+
+    import treesketch.executor
+    from treesketch.cli import app
+    from treesketch.service.ray_pool import RayWorkerPool
+
+    base = ["serve", "--data", str(tmp_path)]
+    r = CliRunner().invoke(app, [*base, "--address", "127.0.0.1:1"])
+    assert r.exit_code == 2 and "--executor ray" in r.output
+    r = CliRunner().invoke(app, [*base, "--executor", "ray", "--address", "127.0.0.1:1"])
+    assert r.exit_code == 2 and "no Ray cluster answers at 127.0.0.1:1" in r.output
+    assert not ray.is_initialized()
+    seen: dict = {}
+    monkeypatch.setattr(uvicorn, "run", lambda a, **kw: seen.update(kw, app=a))
+    monkeypatch.setattr(treesketch.executor, "start_ray", lambda *a: seen.update(ray=a) or False)
+    r = CliRunner().invoke(app, [*base, "--executor", "ray", "--estimator", "template"])
+    assert r.exit_code == 0, r.output
+    assert "Ray actors on a local Ray" in r.output and seen["ray"] == (None, None)
+    config = seen["app"].state.config
+    assert config.executor == "ray" and config.workers is None and config.address is None
+    assert isinstance(seen["app"].state.pool, RayWorkerPool)
+
+
 def test_same_result_as_the_local_pool_with_progress_events(
     client: TestClient, sketch: bytes, tmp_path: Path
 ) -> None:
