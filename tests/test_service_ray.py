@@ -199,3 +199,26 @@ def test_killed_actors(client: TestClient, sketch: bytes) -> None:
     assert pool.replaced == replaced + 3
     after = submit(client, sketch, budget="2")  # the replacements work
     assert wait_for(client, after, finished)["state"] == "done"
+
+
+def test_estimator_that_cannot_load_is_reported(
+    ray_session: None, tmp_path: Path, sketch: bytes
+) -> None:
+    from treesketch.service.pool import LOAD_ATTEMPTS
+
+    config = ServiceConfig(
+        data=tmp_path, workers=1, estimator="service_helpers:missing", executor="ray"
+    )
+    app = create_app(config)
+    app.state.pool.respawn_backoff = 0.1
+    app.state.pool.cpus_per_worker = 0  # beside the module's pool, which holds both CPUs
+    with TestClient(app) as c:
+        deadline = time.monotonic() + 120
+        while c.get("/health").json()["status"] == "ok":
+            assert time.monotonic() < deadline, app.state.pool.status()
+            time.sleep(0.2)
+        h = c.get("/health").json()
+        assert h["status"] == "error" and "service_helpers:missing" in h["error"]
+        assert app.state.pool.replaced == LOAD_ATTEMPTS - 1
+        r = c.post("/jobs", files={"sketch": ("s.png", sketch, "image/png")})
+        assert r.status_code == 503 and "no worker can start" in r.json()["detail"]

@@ -61,7 +61,8 @@ class _Actor:
 
 
 class RayWorkerPool:
-    """``workers`` actors (None: one per CPU of the cluster).  ``address``: an existing
+    """``workers`` actors of ``cpus_per_worker`` CPUs (a job runs on one thread; 0: Ray
+    reserves none; None workers: one per CPU of the cluster).  ``address``: an existing
     cluster; None uses the Ray this process already runs, or starts a local one with
     ``workers`` CPUs and stops it at :meth:`stop`."""
 
@@ -75,9 +76,13 @@ class RayWorkerPool:
         retention: tuple[float | None, int | None] = (None, None),
         sweep_every: float = 60.0,
         respawn_backoff: float = RESPAWN_BACKOFF,
+        cpus_per_worker: float = 1.0,
     ) -> None:
         if workers is not None and workers < 1:
             raise ValueError(f"workers must be at least 1, got {workers}")
+        if not 0 <= cpus_per_worker <= 1024:
+            raise ValueError(f"cpus_per_worker must be in [0, 1024], got {cpus_per_worker}")
+        self.cpus_per_worker = cpus_per_worker
         self.store = store
         self.n = workers or 0
         self.estimator = estimator
@@ -113,10 +118,14 @@ class RayWorkerPool:
         self._owns_ray = start_ray(self.address, local_cpus)
         self._ray = ray
         if not self.n:
-            self.n = max(1, int(ray.cluster_resources().get("CPU", 1)))
+            cpus = ray.cluster_resources().get("CPU", 1)
+            self.n = max(1, int(cpus / (self.cpus_per_worker or 1.0)))
         # SPREAD: a cluster's actors land on as many nodes as there are
         self._cls = ray.remote(JobActor).options(
-            num_cpus=1, max_restarts=0, max_concurrency=4, scheduling_strategy="SPREAD"
+            num_cpus=self.cpus_per_worker,
+            max_restarts=0,
+            max_concurrency=4,
+            scheduling_strategy="SPREAD",
         )
         self.store.recover()
         self._actors = [self._spawn() for _ in range(self.n)]

@@ -2,12 +2,13 @@
 
 A job is one row: its options, its state, its latest progress and, when done, its
 summary (species, scores, parameters, distances, ...).  The artefacts (GLB, JSON,
-preset, PNGs) lie in ``results/<id>/``, written atomically by the worker that made them;
-the uploaded sketch lies in ``uploads/<id>.img``.
+preset, PNGs) lie in ``results/<id>/``, written atomically by the worker that made them
+(by the front for a Ray actor's job); the uploaded sketch lies in ``uploads/<id>.img``.
 
 States: ``queued`` -> ``running`` -> ``done`` | ``failed`` | ``cancelled``; a finished
 job whose artefacts were removed by the retention limits becomes ``expired`` (the API
-answers 410 for its artefacts).
+answers 410 for its artefacts).  A running job whose Ray actor was lost goes back to
+``queued`` once (``requeue``).
 
 Each thread keeps its own connection, so the store may be used from any thread and from
 several processes; WAL lets readers (status pages) go on while a writer commits.
