@@ -185,6 +185,7 @@ class RayWorkerPool:
                     "alive": not a.killed,
                     "ready": a.ready,
                     "job": a.job,
+                    "attempt": a.attempt if a.job else None,  # 2: a lost actor's job again
                 }
                 for a in self._actors
             ]
