@@ -109,7 +109,9 @@ def serve_command(
     try:
         owns = start_ray(address, workers if address is None else None)
     except ExecutorError as exc:
-        raise typer.BadParameter(str(exc), param_hint="--address") from None
+        raise typer.BadParameter(
+            str(exc), param_hint="--address" if address else "--executor"
+        ) from None
     import ray
 
     where = address or "a local Ray"

@@ -1,7 +1,7 @@
 """The HTTP front: FastAPI routes over the job store and the worker pool.
 
 Every route is ``async`` and does no pipeline work: database reads and writes are short
-and run in the thread pool, refinements run in the worker processes.  So ``/health`` and
+and run in the thread pool, refinements run in the worker processes (or Ray actors).  So ``/health`` and
 ``/jobs/{id}`` answer at once however busy the workers are.
 """
 

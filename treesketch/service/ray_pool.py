@@ -107,15 +107,15 @@ class RayWorkerPool:
 
     # -- life --------------------------------------------------------------------------
     def start(self) -> None:
-        import ray
-
         from treesketch.executor import start_ray
 
         from .actor import JobActor
 
         # a local Ray of our own gets as many CPUs as there are workers
         local_cpus = (self.n or None) if self.address is None else None
-        self._owns_ray = start_ray(self.address, local_cpus)
+        self._owns_ray = start_ray(self.address, local_cpus)  # says so when Ray is missing
+        import ray
+
         self._ray = ray
         if not self.n:
             cpus = ray.cluster_resources().get("CPU", 1)
