@@ -26,6 +26,7 @@ from __future__ import annotations
 import contextlib
 import threading
 import time
+import traceback
 from dataclasses import dataclass
 from typing import Any
 
@@ -201,28 +202,33 @@ class RayWorkerPool:
 
     # -- the dispatcher thread ---------------------------------------------------------
     def _loop(self) -> None:
-        ray = self._ray
         last_sweep = 0.0
         while not self._stopping.is_set():
-            self._assign()
-            refs = [
-                r
-                for a in self._actors
-                for r in (a.ready_ref, a.run_ref, a.poll_ref)
-                if r is not None
-            ]
-            if refs:
-                ray.wait(refs, num_returns=1, timeout=TICK)
-            else:
-                self._wake.wait(TICK)
-            self._wake.clear()
-            for i in range(len(self._actors)):
-                self._check(i)
-            self._probe_and_poll()
-            self._enforce_cancels()
-            if time.monotonic() - last_sweep > self.sweep_every:
-                last_sweep = time.monotonic()
-                self.store.expire(*self.retention)
+            try:
+                self._step()
+                if time.monotonic() - last_sweep > self.sweep_every:
+                    last_sweep = time.monotonic()
+                    self.store.expire(*self.retention)
+            except Exception as exc:  # noqa: BLE001 - e.g. the cluster unreachable for a while
+                # the dispatcher must outlive it, or every running job would hang
+                traceback.print_exc()
+                self.error = f"the dispatcher hit {type(exc).__name__}: {exc}"
+                self._stopping.wait(1.0)
+
+    def _step(self) -> None:
+        self._assign()
+        refs = [
+            r for a in self._actors for r in (a.ready_ref, a.run_ref, a.poll_ref) if r is not None
+        ]
+        if refs:
+            self._ray.wait(refs, num_returns=1, timeout=TICK)
+        else:
+            self._wake.wait(TICK)
+        self._wake.clear()
+        for i in range(len(self._actors)):
+            self._check(i)
+        self._probe_and_poll()
+        self._enforce_cancels()
 
     def _done(self, ref: Any) -> bool:
         return ref is not None and bool(self._ray.wait([ref], timeout=0)[0])
@@ -318,8 +324,12 @@ class RayWorkerPool:
                 summary = out["summary"]
                 summary["worker"] = {"node": a.node, "pid": a.pid, "attempt": a.attempt}
                 folder = self.store.result_dir(job_id)
-                write_together({folder / name: data for name, data in out["files"].items()})
-                self.store.finish(job_id, summary)
+                try:
+                    write_together({folder / name: data for name, data in out["files"].items()})
+                except OSError as exc:  # a full disk: the job fails, the pool goes on
+                    self.store.fail(job_id, f"the results could not be saved: {exc}")
+                else:
+                    self.store.finish(job_id, summary)
             elif out["state"] == "cancelled":
                 self.store.fail(job_id, "cancelled", state="cancelled")
             else:
