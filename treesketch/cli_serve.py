@@ -23,7 +23,10 @@ def serve_command(
         None, "--data", help="Folder for the job database and results (default: user data)."
     ),
     workers: int = typer.Option(
-        None, "--workers", min=1, help="Worker processes (default: one per core)."
+        None,
+        "--workers",
+        min=1,
+        help="Worker processes, or Ray actors (default: one per core, or per cluster CPU).",
     ),
     estimator: str = typer.Option(
         "tsn", "--estimator", help="tsn, template, or a TSN checkpoint path."
@@ -47,16 +50,33 @@ def serve_command(
     cors: list[str] = typer.Option(
         None, "--cors", help="Allow browser calls from this origin (repeatable); off by default."
     ),
+    executor: str = typer.Option(
+        "local", "--executor", help="local (worker processes) or ray (Ray actors)."
+    ),
+    address: str = typer.Option(
+        None,
+        "--address",
+        help="With --executor ray: the cluster (auto, HOST:PORT); default a local Ray.",
+    ),
 ) -> None:
     """Serve the job API and the drawing page at http://HOST:PORT/.
 
     Example: `treesketch serve --port 8000`, then open http://127.0.0.1:8000/ or
     `curl -F sketch=@examples/sketch_maple.png -F budget=20 localhost:8000/jobs`.
+    On a Ray cluster: `treesketch serve --executor ray --address HEAD_IP:6379`.
     """
     import uvicorn
 
     from .service import ServiceConfig, create_app
     from .service.pool import default_workers
+
+    executor = executor.strip().lower()
+    if executor not in ("local", "ray"):
+        raise typer.BadParameter(f"choose local or ray, got {executor!r}", param_hint="--executor")
+    if address is not None and executor != "ray":
+        raise typer.BadParameter(
+            "is for the ray executor (add --executor ray)", param_hint="--address"
+        )
 
     if host not in LOCAL_HOSTS:
         typer.echo(
@@ -66,7 +86,8 @@ def serve_command(
         )
     config = ServiceConfig(
         data=data or default_data_dir(),
-        workers=workers or default_workers(),
+        # on Ray, default to every CPU of the cluster (the pool counts them)
+        workers=workers or (None if executor == "ray" else default_workers()),
         estimator=estimator,
         default_budget=budget,
         max_queue=max_queue,
@@ -74,9 +95,35 @@ def serve_command(
         retention_bytes=int(retention_gb * 1024**3),
         token=token or None,
         cors=tuple(cors or ()),
+        executor=executor,
+        address=address,
     )
-    typer.echo(f"data: {config.data}; workers: {config.workers}; estimator: {estimator}")
-    uvicorn.run(create_app(config), host=host, port=port, log_level="info")
+    if executor == "local":
+        typer.echo(f"data: {config.data}; workers: {config.workers}; estimator: {estimator}")
+        uvicorn.run(create_app(config), host=host, port=port, log_level="info")
+        return
+    from .executor import ExecutorError, start_ray
+
+    # connect before serving, so a cluster nobody answers at is a plain error, not a
+    # failed start-up; the pool then uses this Ray and we end it
+    try:
+        owns = start_ray(address, workers if address is None else None)
+    except ExecutorError as exc:
+        raise typer.BadParameter(
+            str(exc), param_hint="--address" if address else "--executor"
+        ) from None
+    import ray
+
+    where = address or "a local Ray"
+    count = workers or "one per CPU of the cluster"
+    typer.echo(
+        f"data: {config.data}; workers: {count} Ray actors on {where}; estimator: {estimator}"
+    )
+    try:
+        uvicorn.run(create_app(config), host=host, port=port, log_level="info")
+    finally:
+        if owns:
+            ray.shutdown()
 
 
 def register(app: typer.Typer) -> None:

@@ -46,6 +46,7 @@ __all__ = [
     "from_options",
     "make_executor",
     "run_ordered",
+    "start_ray",
 ]
 
 EXECUTORS = ("local", "ray")
@@ -289,37 +290,14 @@ class RayExecutor:
             raise ExecutorError(f"max_retries must be in 0..100, got {max_retries!r}")
         if in_flight is not None and not 1 <= int(in_flight) <= 1_000_000:
             raise ExecutorError(f"in_flight must be >= 1, got {in_flight!r}")
-        try:
-            import ray
-        except ImportError:
-            raise ExecutorError(
-                "the ray executor needs Ray: pip install 'treesketch[cluster]' (or pip install ray)"
-            ) from None
+        self._started = start_ray(address, num_cpus)
+        import ray
+
         self.address = address
         self.cpus_per_piece = float(cpus_per_piece)
         self.max_retries = int(max_retries)
         self.in_flight = in_flight
         self._ray = ray
-        self._started = False
-        if not ray.is_initialized():
-            _check_reachable(address)
-            try:
-                ray.init(
-                    # "local": always a new Ray of our own, never one a stale
-                    # /tmp/ray/ray_current_cluster points at
-                    address=address or "local",
-                    num_cpus=num_cpus,
-                    include_dashboard=False,
-                    log_to_driver=False,
-                    configure_logging=False,
-                    # a local Ray's workers import the code this driver imports; a
-                    # cluster's nodes bring their own install
-                    runtime_env=None if address else {"env_vars": {"PYTHONPATH": _pythonpath()}},
-                )
-            except (ConnectionError, ValueError, RuntimeError) as exc:
-                where = address or "a local Ray"
-                raise ExecutorError(f"cannot start or reach {where}: {exc}") from None
-            self._started = True
         self._task = ray.remote(_ray_piece)
 
     @property
@@ -378,6 +356,40 @@ class RayExecutor:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def start_ray(address: str | None = None, num_cpus: int | None = None) -> bool:
+    """Connect this process to Ray: ``address`` (``"auto"``, ``"HOST:PORT"``,
+    ``"ray://HOST:PORT"``) or, without one, a new local Ray with ``num_cpus`` CPUs (default:
+    all).  True when this call started or joined Ray (the caller then ends it with
+    ``ray.shutdown()``); False when Ray was already up in this process (someone else owns
+    it).  ExecutorError when Ray is missing or the cluster cannot be reached."""
+    try:
+        import ray
+    except ImportError:
+        raise ExecutorError(
+            "the ray executor needs Ray: pip install 'treesketch[cluster]' (or pip install ray)"
+        ) from None
+    if ray.is_initialized():
+        return False
+    _check_reachable(address)
+    try:
+        ray.init(
+            # "local": always a new Ray of our own, never one a stale
+            # /tmp/ray/ray_current_cluster points at
+            address=address or "local",
+            num_cpus=num_cpus,
+            include_dashboard=False,
+            log_to_driver=False,
+            configure_logging=False,
+            # a local Ray's workers import the code this driver imports; a cluster's
+            # nodes bring their own install
+            runtime_env=None if address else {"env_vars": {"PYTHONPATH": _pythonpath()}},
+        )
+    except (ConnectionError, ValueError, RuntimeError) as exc:
+        where = address or "a local Ray"
+        raise ExecutorError(f"cannot start or reach {where}: {exc}") from None
+    return True
 
 
 def _check_reachable(address: str | None, timeout: float = 5.0) -> None:

@@ -1,7 +1,7 @@
 """The HTTP front: FastAPI routes over the job store and the worker pool.
 
 Every route is ``async`` and does no pipeline work: database reads and writes are short
-and run in the thread pool, refinements run in the worker processes.  So ``/health`` and
+and run in the thread pool, refinements run in the worker processes (or Ray actors).  So ``/health`` and
 ``/jobs/{id}`` answer at once however busy the workers are.
 """
 
@@ -24,6 +24,7 @@ from starlette.types import ASGIApp, Receive, Scope, Send
 
 from .limits import LimitError, Limits, check_image, parse_options, read_form
 from .pool import WorkerPool, default_workers
+from .ray_pool import RayWorkerPool
 from .runner import ARTEFACTS
 from .store import Job, JobStore
 
@@ -38,7 +39,7 @@ class ServiceConfig:
     """Everything the service is started with (the CLI's options)."""
 
     data: Path
-    workers: int = field(default_factory=default_workers)
+    workers: int | None = field(default_factory=default_workers)  # None: all the cluster's CPUs
     estimator: str = "tsn"
     estimators: tuple[str, ...] = ("template",)  # what a job may ask for besides the default
     max_queue: int = 64
@@ -52,6 +53,8 @@ class ServiceConfig:
     cancel_grace: float = 3.0
     retry_after: int = 10
     vendor: Path | None = None  # node_modules holding three (default: beside the page)
+    executor: str = "local"  # local: worker processes here; ray: Ray actors
+    address: str | None = None  # ray: an existing cluster; None: a local Ray for the service
 
     @property
     def allowed_estimators(self) -> tuple[str, ...]:
@@ -126,19 +129,38 @@ def _view(job: Job, position: int | None, live: dict[str, Any] | None) -> dict[s
     return out
 
 
+def make_pool(config: ServiceConfig, store: JobStore) -> WorkerPool | RayWorkerPool:
+    """The worker pool the config asks for (not started)."""
+    retention = (
+        None if config.retention_days is None else config.retention_days * 86400.0,
+        config.retention_bytes,
+    )
+    if config.executor == "ray":
+        return RayWorkerPool(
+            store,
+            config.workers,
+            config.estimator,
+            address=config.address,
+            cancel_grace=config.cancel_grace,
+            retention=retention,
+        )
+    if config.executor != "local":
+        raise ValueError(f"unknown executor {config.executor!r}: choose local or ray")
+    if config.address is not None:
+        raise ValueError("an address is for the ray executor (executor='ray')")
+    return WorkerPool(
+        store,
+        config.workers or default_workers(),
+        config.estimator,
+        cancel_grace=config.cancel_grace,
+        retention=retention,
+    )
+
+
 def create_app(config: ServiceConfig) -> FastAPI:
     """The app; its worker pool starts and stops with the app's lifespan."""
     store = JobStore(config.data)
-    pool = WorkerPool(
-        store,
-        config.workers,
-        config.estimator,
-        cancel_grace=config.cancel_grace,
-        retention=(
-            None if config.retention_days is None else config.retention_days * 86400.0,
-            config.retention_bytes,
-        ),
-    )
+    pool = make_pool(config, store)
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:

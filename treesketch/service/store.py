@@ -2,12 +2,13 @@
 
 A job is one row: its options, its state, its latest progress and, when done, its
 summary (species, scores, parameters, distances, ...).  The artefacts (GLB, JSON,
-preset, PNGs) lie in ``results/<id>/``, written atomically by the worker that made them;
-the uploaded sketch lies in ``uploads/<id>.img``.
+preset, PNGs) lie in ``results/<id>/``, written atomically by the worker that made them
+(by the front for a Ray actor's job); the uploaded sketch lies in ``uploads/<id>.img``.
 
 States: ``queued`` -> ``running`` -> ``done`` | ``failed`` | ``cancelled``; a finished
 job whose artefacts were removed by the retention limits becomes ``expired`` (the API
-answers 410 for its artefacts).
+answers 410 for its artefacts).  A running job whose Ray actor was lost goes back to
+``queued`` once (``requeue``).
 
 Each thread keeps its own connection, so the store may be used from any thread and from
 several processes; WAL lets readers (status pages) go on while a writer commits.
@@ -196,6 +197,17 @@ class JobStore:
                 "UPDATE jobs SET state=?, finished=?, error=?, summary=? "
                 "WHERE id=? AND state IN ('queued', 'running')",
                 (state, time.time(), message, json.dumps({"input_error": input_error}), job_id),
+            )
+            return cur.rowcount > 0
+
+    def requeue(self, job_id: str) -> bool:
+        """Put a running job back at the head of the queue (its worker was lost); False if
+        it is not running.  It keeps its place: no job queued after it runs first."""
+        with self._db() as db:
+            cur = db.execute(
+                "UPDATE jobs SET state='queued', started=NULL, progress=NULL "
+                "WHERE id=? AND state='running'",
+                (job_id,),
             )
             return cur.rowcount > 0
 

@@ -22,7 +22,7 @@ from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import Any
 
-__all__ = ["worker_main"]
+__all__ = ["progress_info", "worker_main"]
 
 WORKER_NICE = 5
 PROGRESS_EVERY = 0.1  # seconds between progress messages (the pipe is cheap, the DB is not)
@@ -40,14 +40,13 @@ class _Reporter:
         now = time.perf_counter()
         if p.stage != self.stage or now - self.last >= PROGRESS_EVERY:
             self.last, self.stage = now, p.stage
-            best = p.best_loss if math.isfinite(p.best_loss) else None
-            info = {
-                "stage": p.stage,
-                "evaluations": p.evaluations,
-                "best_loss": best,
-                "elapsed": now - self.t0,
-            }
-            self.conn.send(("progress", self.job_id, info))
+            self.conn.send(("progress", self.job_id, progress_info(p, now - self.t0)))
+
+
+def progress_info(p: Any, elapsed: float) -> dict[str, Any]:
+    """A ``treesketch.Progress`` as the plain dict the pool keeps and the API shows."""
+    best = p.best_loss if math.isfinite(p.best_loss) else None
+    return {"stage": p.stage, "evaluations": p.evaluations, "best_loss": best, "elapsed": elapsed}
 
 
 def worker_main(spec: str, conn: Connection, cancel: Any, root: str) -> None:
