@@ -28,7 +28,7 @@ if str(ROOT) not in sys.path:
 
 from refine.objective import METRICS, framed, make_target  # noqa: E402
 from refine.search import RefineSettings  # noqa: E402
-from render.sketch import SketchRenderer  # noqa: E402
+from render.sketch import SketchRenderer, sketch_mesh  # noqa: E402
 from weberpenn import build_mesh, grow, species  # noqa: E402
 
 STAGES = ("grow", "mesh", "scene", "sketch", "frame", "loss", "view only")
@@ -44,26 +44,37 @@ def _best(fn, repeats: int) -> tuple[float, object]:
     return best, out
 
 
+def _stages(p, name: str, size: int, repeats: int, metric: str, target, fast: bool) -> dict:
+    t = {}
+    t["grow"], sk = _best(lambda: grow(p), repeats)
+    if fast:
+        t["mesh"], mesh = _best(lambda: sketch_mesh(sk, size, name), repeats)
+        t["scene"], rend = _best(lambda: SketchRenderer(mesh, engine="raster"), repeats)
+    else:
+        t["mesh"], mesh = _best(lambda: build_mesh(sk, species=name), repeats)
+        t["scene"], rend = _best(lambda: SketchRenderer(mesh), repeats)
+    t["sketch"], img = _best(lambda: rend.sketch(0.0, size), repeats)
+    t["frame"], fr = _best(lambda: framed(img, size), repeats)
+    t["loss"], _ = _best(lambda: target.distance(make_target(fr, size, metric)), repeats)
+    t["view only"], _ = _best(lambda: rend.sketch(37.0, size), repeats)
+    t["tris"] = mesh.n_faces
+    return t
+
+
 def measure(name: str, trees: int, size: int, repeats: int, metric: str) -> dict:
-    rows = []
+    """Median over trees of each stage, for the full path and the fast path."""
+    rows: dict[bool, list[dict]] = {False: [], True: []}
     for i in range(trees):
         p = species.sample(name, i)
         other = SketchRenderer(build_mesh(grow(species.sample(name, i + 100)))).sketch(0.0, size)
         target = make_target(framed(other, size), size, metric)
-        t = {}
-        t["grow"], sk = _best(lambda p=p: grow(p), repeats)
-        t["mesh"], mesh = _best(lambda sk=sk: build_mesh(sk, species=name), repeats)
-        t["scene"], rend = _best(lambda mesh=mesh: SketchRenderer(mesh), repeats)
-        t["sketch"], img = _best(lambda rend=rend: rend.sketch(0.0, size), repeats)
-        t["frame"], fr = _best(lambda img=img: framed(img, size), repeats)
-        t["loss"], _ = _best(
-            lambda fr=fr, tg=target: tg.distance(make_target(fr, size, metric)), repeats
-        )
-        t["view only"], _ = _best(lambda rend=rend: rend.sketch(37.0, size), repeats)
-        t["tris"] = len(mesh.branches.faces) + len(mesh.leaves.faces)
-        rows.append(t)
-    out = {k: statistics.median(r[k] for r in rows) for k in (*STAGES, "tris")}
-    out["total"] = sum(out[k] for k in COUNTED)
+        for fast in (False, True):
+            rows[fast].append(_stages(p, name, size, repeats, metric, target, fast))
+    out = {}
+    for fast, rs in rows.items():
+        r = {k: statistics.median(x[k] for x in rs) for k in (*STAGES, "tris")}
+        r["total"] = sum(r[k] for k in COUNTED)
+        out[fast] = r
     return out
 
 
@@ -76,21 +87,42 @@ def main() -> None:
     ap.add_argument("--metric", choices=METRICS, default=RefineSettings().metric)
     args = ap.parse_args()
     SketchRenderer(build_mesh(grow(species.sample("palm", 0)))).sketch(0.0, args.size)  # warm-up
+    full_rows, fast_rows = [], []
+    for name in args.species:
+        r = measure(name, args.trees, args.size, args.repeats, args.metric)
+        full, fast = r[False], r[True]
+        top = max(COUNTED, key=lambda s: full[s])
+        cells = " | ".join(f"{1000 * full[s]:.0f}" for s in STAGES)
+        full_rows.append(
+            f"| {name} | {int(full['tris'])} | {cells} | {1000 * full['total']:.0f} | "
+            f"{top} ({full[top] / full['total']:.0%}) |"
+        )
+        cells = " | ".join(f"{1000 * fast[s]:.0f}" for s in STAGES)
+        fast_rows.append(
+            f"| {name} | {int(fast['tris'])} | {cells} | {1000 * fast['total']:.0f} | "
+            f"{1000 * full['total']:.0f} | {full['total'] / fast['total']:.1f}x |"
+        )
+        print(
+            f"{name}: full {1000 * full['total']:.0f} ms, fast {1000 * fast['total']:.0f} ms",
+            file=sys.stderr,
+            flush=True,
+        )
+    print("Full path (before: build_mesh + mitsuba scene)\n")
     print(
         "| species | triangles | "
         + " | ".join(f"{s} ms" for s in STAGES)
         + " | evaluation ms | largest stage |"
     )
     print("|---|---:|" + "---:|" * len(STAGES) + "---:|---|")
-    for name in args.species:
-        r = measure(name, args.trees, args.size, args.repeats, args.metric)
-        top = max(COUNTED, key=lambda s: r[s])
-        cells = " | ".join(f"{1000 * r[s]:.0f}" for s in STAGES)
-        print(
-            f"| {name} | {int(r['tris'])} | {cells} | {1000 * r['total']:.0f} | "
-            f"{top} ({r[top] / r['total']:.0%}) |",
-            flush=True,
-        )
+    print("\n".join(full_rows))
+    print("\nFast path (after: sketch_mesh + raster), same trees, same run\n")
+    print(
+        "| species | triangles | "
+        + " | ".join(f"{s} ms" for s in STAGES)
+        + " | evaluation ms | before ms | speed-up |"
+    )
+    print("|---|---:|" + "---:|" * len(STAGES) + "---:|---:|---:|")
+    print("\n".join(fast_rows))
 
 
 if __name__ == "__main__":

@@ -40,8 +40,9 @@ def hit_mask(vertices: np.ndarray, faces: np.ndarray, camera: Camera, n: int) ->
     s = camera.framing.span
     d = np.asarray(vertices, dtype=np.float64).reshape(-1, 3) - camera.framing.centre
     # sample k sits at ((k + 0.5) / n - 0.5) * s: column k <-> x, row k <-> -y
-    px = (d @ right) * (n / s) + (0.5 * n - 0.5)
-    py = (0.5 * n - 0.5) - (d @ up) * (n / s)
+    # (not ``d @ right``: a BLAS call per 3-vector is slower than three products)
+    px = (d[:, 0] * right[0] + d[:, 1] * right[1] + d[:, 2] * right[2]) * (n / s) + (0.5 * n - 0.5)
+    py = (0.5 * n - 0.5) - (d[:, 0] * up[0] + d[:, 1] * up[1] + d[:, 2] * up[2]) * (n / s)
     xs = [px[f[:, i]] for i in range(3)]
     ys = [py[f[:, i]] for i in range(3)]
     # only triangles whose box holds a sample centre can cover one
@@ -73,15 +74,25 @@ def hit_mask(vertices: np.ndarray, faces: np.ndarray, camera: Camera, n: int) ->
         return xs[i] - ys[i] * k, k
 
     (c_ac, k_ac), (c_ab, k_ab), (c_bc, k_bc) = line(0, 2), line(0, 1), line(1, 2)
-    total = int(h.sum())
-    tri = np.repeat(np.arange(len(h)), h)
-    row = np.repeat(y0 - (np.cumsum(h) - h), h) + np.arange(total)
-    ry = row.astype(np.float64)
-    x_long = c_ac[tri] + ry * k_ac[tri]  # edge a-c spans every row of the triangle
-    upper = ry < ys[1][tri]  # rows above b meet edge a-b, the others edge b-c
-    x_short = np.where(upper, c_ab[tri], c_bc[tri]) + ry * np.where(upper, k_ab[tri], k_bc[tri])
-    c0 = np.maximum(np.ceil(np.minimum(x_long, x_short)), 0)
-    c1 = np.minimum(np.floor(np.maximum(x_long, x_short)), n - 1)
+    # row j of every triangle spanning more than j rows at once: with the triangles in
+    # order of falling row count those are a prefix, so each pass works on slices
+    order = np.argsort((n - h).astype(np.uint16), kind="stable")  # a radix sort
+    h, y0, yb = h[order], y0[order], ys[1][order]
+    c_ac, k_ac, c_ab, k_ab, c_bc, k_bc = (a[order] for a in (c_ac, k_ac, c_ab, k_ab, c_bc, k_bc))
+    counts = np.searchsorted(-h, -np.arange(1, int(h[0]) + 1), side="right")
+    rows, lo, hi = [], [], []
+    for j, c in enumerate(counts):
+        r = y0[:c] + j
+        ry = r.astype(np.float64)
+        x_long = c_ac[:c] + ry * k_ac[:c]  # edge a-c spans every row of the triangle
+        upper = ry < yb[:c]  # rows above b meet edge a-b, the others edge b-c
+        x_short = np.where(upper, c_ab[:c] + ry * k_ab[:c], c_bc[:c] + ry * k_bc[:c])
+        rows.append(r)
+        lo.append(np.minimum(x_long, x_short))
+        hi.append(np.maximum(x_long, x_short))
+    row = np.concatenate(rows)
+    c0 = np.maximum(np.ceil(np.concatenate(lo)), 0)
+    c1 = np.minimum(np.floor(np.concatenate(hi)), n - 1)
     keep = c1 >= c0
     row, c0i, c1i = row[keep], c0[keep].astype(np.int64), c1[keep].astype(np.int64)
     m = n + 1  # one spare column for the run ends
