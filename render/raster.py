@@ -27,10 +27,20 @@ from .silhouette import Coverage, downsample, mesh_arrays
 __all__ = ["RasterScene", "hit_mask"]
 
 
-def hit_mask(vertices: np.ndarray, faces: np.ndarray, camera: Camera, n: int) -> np.ndarray:
+def hit_mask(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    camera: Camera,
+    n: int,
+    front_only: bool = False,
+) -> np.ndarray:
     """(n, n) bool: which samples of the ``n`` x ``n`` grid of ``camera`` a triangle covers.
 
-    The grid is :meth:`Camera.rays` with ``size * supersample == n``.
+    The grid is :meth:`Camera.rays` with ``size * supersample == n``.  ``front_only``
+    draws only the triangles that face the camera (counter-clockwise seen from it, i.e.
+    an outward normal towards it): the front half of a closed surface covers all of its
+    silhouette, so a tube mesh costs half; where a surface is open (a tube's ends) a
+    few samples are lost.
     """
     out = np.zeros((n, n), dtype=bool)
     f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
@@ -53,6 +63,9 @@ def hit_mask(vertices: np.ndarray, faces: np.ndarray, camera: Camera, n: int) ->
     first_row = np.maximum(np.ceil(y_min), 0)
     rows = np.minimum(np.floor(y_max), n - 1) - first_row + 1
     live = (rows > 0) & (np.maximum(np.ceil(x_min), 0) <= np.minimum(np.floor(x_max), n - 1))
+    if front_only:  # rows grow downwards: facing the camera = negative signed area
+        area = (xs[1] - xs[0]) * (ys[2] - ys[0]) - (ys[1] - ys[0]) * (xs[2] - xs[0])
+        live &= area < 0
     if not live.any():
         return out
     h = rows[live].astype(np.int64)
@@ -102,7 +115,8 @@ def hit_mask(vertices: np.ndarray, faces: np.ndarray, camera: Camera, n: int) ->
 
 
 class RasterScene:
-    """A tree's branch and leaf triangles, drawn by :func:`hit_mask` (no mitsuba).
+    """A tree's branch and leaf triangles, drawn by :func:`hit_mask` (no mitsuba); the
+    branch tubes by their triangles facing the camera.
 
     Offers the silhouette part of :class:`render.silhouette.TreeScene`'s interface
     (``framing``, ``is_empty``, :meth:`coverage`); colour pictures need mitsuba.
@@ -141,7 +155,10 @@ class RasterScene:
         hits = []
         for part, k in zip(self._parts, (ss, ss_leaf), strict=True):
             n = size * k
-            hits.append(np.zeros((n, n), bool) if part is None else hit_mask(*part, cam, n))
+            if part is None:
+                hits.append(np.zeros((n, n), bool))
+            else:  # tubes: their front half covers them; leaves are seen from both sides
+                hits.append(hit_mask(*part, cam, n, front_only=len(hits) == 0))
         cov_b = downsample(hits[0].astype(np.float32), ss)
         cov_l = downsample(hits[1].astype(np.float32), ss_leaf)
         return Coverage(cov_b, cov_l, hits[0] if keep_hr else None)
