@@ -66,7 +66,8 @@ class Framing:
     def from_vertices(cls, vertices: np.ndarray, **margins: float) -> Framing:
         """Frame a point set (e.g. all vertices of a tree); empty -> a unit box."""
         v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
-        v = v[np.isfinite(v).all(axis=1)]
+        if not np.isfinite(v).all():  # (the row-wise filter is slow: only when needed)
+            v = v[np.isfinite(v).all(axis=1)]
         if len(v) == 0:
             return cls(0.0, 1.0, 0.5, **margins)
         z_bottom = float(min(v[:, 2].min(), 0.0))
