@@ -55,7 +55,9 @@ def _stages(p, name: str, size: int, repeats: int, metric: str, target, fast: bo
         t["scene"], rend = _best(lambda: SketchRenderer(mesh), repeats)
     t["sketch"], img = _best(lambda: rend.sketch(0.0, size), repeats)
     t["frame"], fr = _best(lambda: framed(img, size), repeats)
-    t["loss"], _ = _best(lambda: target.distance(make_target(fr, size, metric)), repeats)
+    t["loss"], t["distance"] = _best(
+        lambda: target.distance(make_target(fr, size, metric)), repeats
+    )
     t["view only"], _ = _best(lambda: rend.sketch(37.0, size), repeats)
     t["tris"] = mesh.n_faces
     return t
@@ -70,7 +72,9 @@ def measure(name: str, trees: int, size: int, repeats: int, metric: str) -> dict
         target = make_target(framed(other, size), size, metric)
         for fast in (False, True):
             rows[fast].append(_stages(p, name, size, repeats, metric, target, fast))
-    out = {}
+    # what the search sees: the candidate's distance to the target, fast vs full path
+    pairs = zip(rows[False], rows[True], strict=True)
+    out: dict = {"delta": max(abs(a["distance"] - b["distance"]) for a, b in pairs)}
     for fast, rs in rows.items():
         r = {k: statistics.median(x[k] for x in rs) for k in (*STAGES, "tris")}
         r["total"] = sum(r[k] for k in COUNTED)
@@ -100,7 +104,8 @@ def main() -> None:
         cells = " | ".join(f"{1000 * fast[s]:.0f}" for s in STAGES)
         fast_rows.append(
             f"| {name} | {int(fast['tris'])} | {cells} | {1000 * fast['total']:.0f} | "
-            f"{1000 * full['total']:.0f} | {full['total'] / fast['total']:.1f}x |"
+            f"{1000 * full['total']:.0f} | {full['total'] / fast['total']:.1f}x | "
+            f"{r['delta']:.4f} |"
         )
         print(
             f"{name}: full {1000 * full['total']:.0f} ms, fast {1000 * fast['total']:.0f} ms",
@@ -119,9 +124,9 @@ def main() -> None:
     print(
         "| species | triangles | "
         + " | ".join(f"{s} ms" for s in STAGES)
-        + " | evaluation ms | before ms | speed-up |"
+        + " | evaluation ms | before ms | speed-up | distance change |"
     )
-    print("|---|---:|" + "---:|" * len(STAGES) + "---:|---:|---:|")
+    print("|---|---:|" + "---:|" * len(STAGES) + "---:|---:|---:|---:|")
     print("\n".join(fast_rows))
 
 

@@ -16,8 +16,8 @@ from weberpenn.lod import drop_thin_stems
 from weberpenn.treemesh import TreeMesh
 
 # fast path vs the full one, on a 128 px sketch (measured worst over the five species,
-# seeds 0-2, two yaws: 0.52 % of pixels, distance 0.0005; benchmarks/RESULTS.md)
-MAX_PIXELS_CHANGED = 0.01
+# seeds 0-2, two yaws: 0.73 % of pixels, distance 0.0005; benchmarks/RESULTS.md)
+MAX_PIXELS_CHANGED = 0.015
 MAX_DISTANCE = 0.005
 
 
