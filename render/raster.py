@@ -40,7 +40,9 @@ def hit_mask(
     draws only the triangles that face the camera (counter-clockwise seen from it, i.e.
     an outward normal towards it): the front half of a closed surface covers all of its
     silhouette, so a tube mesh costs half; where a surface is open (a tube's ends) a
-    few samples are lost.
+    few samples are lost.  Two consecutive triangles (a, b, c), (a, c, d) whose union is
+    a convex quad seen from the camera (a leaf, a tube's side) are drawn as that quad,
+    which spans the rows once instead of twice.
     """
     out = np.zeros((n, n), dtype=bool)
     f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
@@ -53,65 +55,124 @@ def hit_mask(
     # (not ``d @ right``: a BLAS call per 3-vector is slower than three products)
     px = (d[:, 0] * right[0] + d[:, 1] * right[1] + d[:, 2] * right[2]) * (n / s) + (0.5 * n - 0.5)
     py = (0.5 * n - 0.5) - (d[:, 0] * up[0] + d[:, 1] * up[1] + d[:, 2] * up[2]) * (n / s)
-    xs = [px[f[:, i]] for i in range(3)]
-    ys = [py[f[:, i]] for i in range(3)]
-    # only triangles whose box holds a sample centre can cover one
-    x_min = np.minimum(np.minimum(xs[0], xs[1]), xs[2])
-    x_max = np.maximum(np.maximum(xs[0], xs[1]), xs[2])
-    y_min = np.minimum(np.minimum(ys[0], ys[1]), ys[2])
-    y_max = np.maximum(np.maximum(ys[0], ys[1]), ys[2])
+    quads, tris = _pair_quads(f, px, py, front_only)
+    runs = [_convex_runs([px[q] for q in quads.T], [py[q] for q in quads.T], n)]
+    if len(tris):
+        xs, ys = [px[t] for t in tris.T], [py[t] for t in tris.T]
+        if front_only:  # rows grow downwards: facing the camera = negative signed area
+            facing = _cross(xs, ys, 0) < 0
+            xs, ys = [x[facing] for x in xs], [y[facing] for y in ys]
+        runs.append(_convex_runs(xs, ys, n))
+    row = np.concatenate([r[0] for r in runs])
+    c0 = np.concatenate([r[1] for r in runs])
+    c1 = np.concatenate([r[2] for r in runs])
+    m = n + 1  # one spare column for the run ends
+    cover = np.bincount(row * m + c0, minlength=n * m)
+    cover -= np.bincount(row * m + c1 + 1, minlength=n * m)
+    return np.cumsum(cover.reshape(n, m), axis=1)[:, :n] > 0
+
+
+def _cross(xs: list[np.ndarray], ys: list[np.ndarray], i: int) -> np.ndarray:
+    """Signed turn at corner ``i + 1`` of polygons given corner by corner."""
+    k = len(xs)
+    a, b, c = i % k, (i + 1) % k, (i + 2) % k
+    return (xs[b] - xs[a]) * (ys[c] - ys[b]) - (ys[b] - ys[a]) * (xs[c] - xs[b])
+
+
+def _pair_quads(
+    f: np.ndarray, px: np.ndarray, py: np.ndarray, front_only: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """(Q, 4) quads made of consecutive triangle pairs (a, b, c), (a, c, d) that are
+    strictly convex on screen (and facing the camera when ``front_only``), and the
+    (T, 3) triangles left over."""
+    even = len(f) - len(f) % 2
+    t0, t1 = f[0:even:2], f[1:even:2]
+    pair = (t0[:, 0] == t1[:, 0]) & (t0[:, 2] == t1[:, 1])
+    quad = np.column_stack([t0[:, 0], t0[:, 1], t0[:, 2], t1[:, 2]])
+    xs, ys = [px[q] for q in quad.T], [py[q] for q in quad.T]
+    turns = [_cross(xs, ys, i) for i in range(4)]
+    neg = (turns[0] < 0) & (turns[1] < 0) & (turns[2] < 0) & (turns[3] < 0)
+    convex = (
+        neg
+        if front_only
+        else neg | ((turns[0] > 0) & (turns[1] > 0) & (turns[2] > 0) & (turns[3] > 0))
+    )
+    # a pair facing away (front_only) is dropped whole, like its two triangles would be
+    away = front_only & pair & (turns[0] > 0) & (turns[1] > 0) & (turns[2] > 0) & (turns[3] > 0)
+    take = pair & convex
+    rest = ~(take | away)
+    tris = np.concatenate([t0[rest], t1[rest], f[even:]])
+    return quad[take], tris
+
+
+def _convex_runs(
+    xs: list[np.ndarray], ys: list[np.ndarray], n: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(row, first column, last column) of the samples inside each convex polygon
+    (corners ``xs[i], ys[i]`` in order, either winding; triangles included).
+
+    A convex polygon is where every edge's inner half-plane meets: on a row, the
+    run starts at the rightmost left-hand edge and ends at the leftmost right-hand one.
+    """
+    empty = np.zeros(0, dtype=np.int64)
+    if len(xs[0]) == 0:
+        return empty, empty, empty
+    k = len(xs)
+    x_min, x_max, y_min, y_max = xs[0], xs[0], ys[0], ys[0]
+    for x, y in zip(xs[1:], ys[1:], strict=True):
+        x_min, x_max = np.minimum(x_min, x), np.maximum(x_max, x)
+        y_min, y_max = np.minimum(y_min, y), np.maximum(y_max, y)
     first_row = np.maximum(np.ceil(y_min), 0)
     rows = np.minimum(np.floor(y_max), n - 1) - first_row + 1
+    # only polygons whose box holds a sample centre can cover one; one seen edge-on
+    # (no area) covers none, as no ray along its plane hits it
+    turn = _cross(xs, ys, 0)  # the winding: > 0 when the corners go clockwise on screen
     live = (rows > 0) & (np.maximum(np.ceil(x_min), 0) <= np.minimum(np.floor(x_max), n - 1))
-    if front_only:  # rows grow downwards: facing the camera = negative signed area
-        area = (xs[1] - xs[0]) * (ys[2] - ys[0]) - (ys[1] - ys[0]) * (xs[2] - xs[0])
-        live &= area < 0
+    live &= turn != 0
     if not live.any():
-        return out
+        return empty, empty, empty
     h = rows[live].astype(np.int64)
     y0 = first_row[live].astype(np.int64)
-    xs = [x[live] for x in xs]
-    ys = [y[live] for y in ys]
-    # corners from top to bottom (a: the smallest row value, then b, c): three swaps
-    for p, q in ((0, 1), (1, 2), (0, 1)):
-        swap = ys[q] < ys[p]
-        xs[p], xs[q] = np.where(swap, xs[q], xs[p]), np.where(swap, xs[p], xs[q])
-        ys[p], ys[q] = np.where(swap, ys[q], ys[p]), np.where(swap, ys[p], ys[q])
-
-    def line(i: int, j: int) -> tuple[np.ndarray, np.ndarray]:
-        """Edge i-j as x = c + k * row; a flat edge (k = 0) is met only at its ends,
-        which the other two edges share."""
+    xs, ys, turn = [x[live] for x in xs], [y[live] for y in ys], turn[live]
+    # each edge as x = c + slope * row, bounding the run from the left (x >= line) or
+    # the right, by its direction and the winding (a sliver whose winding rounding got
+    # wrong gets its bounds swapped: an empty run); a flat edge bounds only the rows,
+    # which first_row..y_max already do
+    left, right = [], []
+    for i in range(k):
+        j = (i + 1) % k
         dy = ys[j] - ys[i]
         flat = dy == 0
-        k = np.where(flat, 0.0, (xs[j] - xs[i]) / np.where(flat, 1.0, dy))
-        return xs[i] - ys[i] * k, k
-
-    (c_ac, k_ac), (c_ab, k_ab), (c_bc, k_bc) = line(0, 2), line(0, 1), line(1, 2)
-    # row j of every triangle spanning more than j rows at once: with the triangles in
+        slope = np.where(flat, 0.0, (xs[j] - xs[i]) / np.where(flat, 1.0, dy))
+        c = xs[i] - ys[i] * slope
+        is_left = dy * turn < 0
+        left.append((np.where(flat | ~is_left, -np.inf, c), np.where(is_left, slope, 0.0)))
+        right.append((np.where(flat | is_left, np.inf, c), np.where(is_left, 0.0, slope)))
+    # row j of every polygon spanning more than j rows at once: with the polygons in
     # order of falling row count those are a prefix, so each pass works on slices
     order = np.argsort((n - h).astype(np.uint16), kind="stable")  # a radix sort
-    h, y0, yb = h[order], y0[order], ys[1][order]
-    c_ac, k_ac, c_ab, k_ab, c_bc, k_bc = (a[order] for a in (c_ac, k_ac, c_ab, k_ab, c_bc, k_bc))
+    h, y0 = h[order], y0[order]
+    left = [(c[order], sl[order]) for c, sl in left]
+    right = [(c[order], sl[order]) for c, sl in right]
     counts = np.searchsorted(-h, -np.arange(1, int(h[0]) + 1), side="right")
-    rows, lo, hi = [], [], []
-    for j, c in enumerate(counts):
-        r = y0[:c] + j
+    out_rows, out_lo, out_hi = [], [], []
+    for j, m in enumerate(counts):
+        r = y0[:m] + j
         ry = r.astype(np.float64)
-        x_long = c_ac[:c] + ry * k_ac[:c]  # edge a-c spans every row of the triangle
-        upper = ry < yb[:c]  # rows above b meet edge a-b, the others edge b-c
-        x_short = np.where(upper, c_ab[:c] + ry * k_ab[:c], c_bc[:c] + ry * k_bc[:c])
-        rows.append(r)
-        lo.append(np.minimum(x_long, x_short))
-        hi.append(np.maximum(x_long, x_short))
-    row = np.concatenate(rows)
-    c0 = np.maximum(np.ceil(np.concatenate(lo)), 0)
-    c1 = np.minimum(np.floor(np.concatenate(hi)), n - 1)
+        lo = left[0][0][:m] + ry * left[0][1][:m]
+        hi = right[0][0][:m] + ry * right[0][1][:m]
+        for c, sl in left[1:]:
+            lo = np.maximum(lo, c[:m] + ry * sl[:m])
+        for c, sl in right[1:]:
+            hi = np.minimum(hi, c[:m] + ry * sl[:m])
+        out_rows.append(r)
+        out_lo.append(lo)
+        out_hi.append(hi)
+    row = np.concatenate(out_rows)
+    c0 = np.maximum(np.ceil(np.concatenate(out_lo)), 0)
+    c1 = np.minimum(np.floor(np.concatenate(out_hi)), n - 1)
     keep = c1 >= c0
-    row, c0i, c1i = row[keep], c0[keep].astype(np.int64), c1[keep].astype(np.int64)
-    m = n + 1  # one spare column for the run ends
-    runs = np.bincount(row * m + c0i, minlength=n * m)
-    runs -= np.bincount(row * m + c1i + 1, minlength=n * m)
-    return np.cumsum(runs.reshape(n, m), axis=1)[:, :n] > 0
+    return row[keep], c0[keep].astype(np.int64), c1[keep].astype(np.int64)
 
 
 class RasterScene:

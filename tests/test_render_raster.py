@@ -38,6 +38,22 @@ def test_hit_mask_covers_exactly_the_sample_centres_inside() -> None:
     assert not hit_mask(flat, np.array([[0, 1, 2]]), cam, n).any()
 
 
+def test_triangle_pairs_drawn_as_quads_cover_what_their_triangles_cover() -> None:
+    fr = Framing(0.0, 1.0, 0.5, margin_bottom=0.0, margin_top=0.0, margin_side=0.0)
+    cam = Camera(fr, 20.0, 10.0)
+    rng = np.random.default_rng(3)
+    for _ in range(20):  # convex, concave and crossed quads, either winding
+        v = np.column_stack(
+            [rng.uniform(-0.5, 0.5, 4), rng.uniform(-0.1, 0.1, 4), rng.uniform(0, 1, 4)]
+        )
+        pair = np.array([[0, 1, 2], [0, 2, 3]])
+        apart = hit_mask(v, pair[:1], cam, 32) | hit_mask(v, pair[1:], cam, 32)
+        assert np.array_equal(hit_mask(v, pair, cam, 32), apart)
+        # front_only keeps a pair exactly when its triangles face the camera
+        front = hit_mask(v, pair[:1], cam, 32, True) | hit_mask(v, pair[1:], cam, 32, True)
+        assert np.array_equal(hit_mask(v, pair, cam, 32, front_only=True), front)
+
+
 @pytest.mark.parametrize("yaw", [0.0, 30.0, 145.0])
 def test_raster_matches_mitsuba_on_a_simple_tree(yaw: float) -> None:
     tree = simple_tree()
