@@ -189,9 +189,7 @@ class RasterScene:
             None if a is None else (a[0].reshape(-1, 3), a[1].reshape(-1, 3)) for a in parts
         ]
         verts = [p[0] for p in self._parts if p is not None]
-        self.framing = framing or Framing.from_vertices(
-            np.vstack(verts) if verts else np.zeros((0, 3))
-        )
+        self.framing = framing or Framing.from_parts(verts)
 
     @property
     def is_empty(self) -> bool:

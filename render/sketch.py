@@ -178,9 +178,7 @@ def sketch_mesh(
     from weberpenn import build_mesh
     from weberpenn.lod import drop_thin_stems
 
-    pts = np.asarray(skeleton.points, dtype=np.float64).reshape(-1, 3)
-    leaves = np.asarray(skeleton.leaf_positions, dtype=np.float64).reshape(-1, 3)
-    framing = Framing.from_vertices(np.vstack([pts, leaves]))
+    framing = Framing.from_parts([skeleton.points, skeleton.leaf_positions])
     width = sample_width(framing, size, config)
     return build_mesh(drop_thin_stems(skeleton, 0.5 * width), species=species)
 
