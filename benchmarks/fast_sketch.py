@@ -11,11 +11,16 @@ pixels that differ at all, % that differ by more than 64 grey levels, the larges
 difference, and the search's sketch distance (``refine.objective.metric_distance``,
 shape metric).  Per species: the triangles drawn, and the worst value over seeds and
 yaws of each column.
+
+``--coarse`` adds the level-of-detail cuts that were tried and left out, each on top of
+the fast path: tubes of 4 sides (``bevel_res`` 0) and 2 samples per curve segment
+(``res_u`` 2), as ``weberpenn.lod`` makes them for exports.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from pathlib import Path
 
@@ -46,14 +51,19 @@ def main() -> None:
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--yaws", type=float, nargs="+", default=[0.0, 37.0])
     ap.add_argument("--species", nargs="*", default=list(species.SPECIES))
+    ap.add_argument("--coarse", action="store_true", help="also coarser tubes (see above)")
     args = ap.parse_args()
+    coarse = {"bevel_res 0": {"bevel_res": 0}, "res_u 2": {"res_u": 2}} if args.coarse else {}
     print(
         "| species | full tris | fast tris | raster, full mesh: px differ % / > 64 % / max "
         "/ distance | fast path: px differ % / > 64 % / max / distance |"
+        + "".join(f" fast + {c}: tris, px differ % / > 64 % / max / distance |" for c in coarse)
     )
-    print("|---|---:|---:|---|---|")
+    print("|---|---:|---:|---|---|" + "---|" * len(coarse))
     for name in args.species:
         tris_full, tris_fast, worst_r, worst_f = [], [], [], []
+        worst_c: dict[str, list] = {c: [] for c in coarse}
+        tris_c: dict[str, list] = {c: [] for c in coarse}
         for seed in range(args.seeds):
             sk = grow(species.sample(name, seed))
             full = build_mesh(sk, species=name)
@@ -63,10 +73,18 @@ def main() -> None:
             ref = SketchRenderer(full)
             ras = SketchRenderer(full, engine="raster")
             fas = SketchRenderer(fast, engine="raster")
+            cut = fast.skeleton  # the skeleton sketch_mesh meshed: thin stems left out
+            rend_c = {}
+            for c, change in coarse.items():
+                m = build_mesh(dataclasses.replace(cut, **change), species=name)
+                tris_c[c].append(m.n_faces)
+                rend_c[c] = SketchRenderer(m, engine="raster")
             for yaw in args.yaws:
                 a = ref.sketch(yaw, args.size)
                 worst_r.append(compare(a, ras.sketch(yaw, args.size)))
                 worst_f.append(compare(a, fas.sketch(yaw, args.size)))
+                for c, r in rend_c.items():
+                    worst_c[c].append(compare(a, r.sketch(yaw, args.size)))
 
         def cell(rows: list[tuple[float, float, int, float]]) -> str:
             w = np.max(np.asarray(rows, dtype=np.float64), axis=0)
@@ -74,7 +92,8 @@ def main() -> None:
 
         print(
             f"| {name} | {int(np.median(tris_full))} | {int(np.median(tris_fast))} | "
-            f"{cell(worst_r)} | {cell(worst_f)} |",
+            f"{cell(worst_r)} | {cell(worst_f)} |"
+            + "".join(f" {int(np.median(tris_c[c]))}, {cell(worst_c[c])} |" for c in coarse),
             flush=True,
         )
 
