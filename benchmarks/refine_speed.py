@@ -34,9 +34,9 @@ def main() -> None:
     args = ap.parse_args()
     print(
         "| species | sketch | evaluations | per second | distance before | after "
-        "| result on the full sketch |"
+        "| result on the full sketch | stopped by |"
     )
-    print("|---|---|---:|---:|---:|---:|---:|")
+    print("|---|---|---:|---:|---:|---:|---:|---|")
     for name in args.species:
         truth = build_mesh(grow(species.sample(name, 1)), species=name)
         target = SketchRenderer(truth).sketch(0.0, 128)
@@ -48,7 +48,7 @@ def main() -> None:
             print(
                 f"| {name} | {'fast' if fast else 'full'} | {r.evaluations} | "
                 f"{r.evaluations / r.seconds:.1f} | {r.loss_before:.4f} | {r.loss_after:.4f} | "
-                f"{metric_distance(target, got, 128):.4f} |",
+                f"{metric_distance(target, got, 128):.4f} | {r.stopped_by} |",
                 flush=True,
             )
 
