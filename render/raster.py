@@ -3,16 +3,17 @@
 Orthographic ``ray_test`` rays that all travel along one direction hit a mesh exactly
 where their start point, projected on the image plane, lies inside the projection of
 some triangle.  :func:`hit_mask` answers that question for the same regular sample grid
-as :meth:`render.camera.Camera.rays` (sample centres, top row first), triangle by
-triangle and row by row: for every sample row a triangle spans, the row's entry and exit
-points on the triangle's edges give a run of covered samples, and all runs are summed
-into one difference image.  Its cost follows the number of sample rows the triangles
-span, not the triangle count, and nothing (no acceleration structure) is built first,
-so a tree that is drawn once costs a few milliseconds instead of mitsuba's BVH build.
+as :meth:`render.camera.Camera.rays` (sample centres, top row first), polygon by polygon
+and row by row: for every sample row a convex polygon (a triangle, or two triangles that
+make a convex quad on screen) spans, its edges bound a run of covered samples, and all
+runs are summed into one difference image.  Its cost follows the number of sample rows
+the polygons span, not the triangle count, and nothing (no acceleration structure) is
+built first, so a tree drawn once or twice costs milliseconds instead of mitsuba's BVH
+build.  :class:`RasterScene` draws branch tubes by their camera-facing half only.
 
-Samples that lie exactly on a triangle edge count as covered; mitsuba (Embree,
-float32) decides such ties its own way, so the two masks may differ in a handful of
-samples of a whole image (measured in ``benchmarks/RESULTS.md``, "Faster evaluations").
+Samples that lie exactly on an edge count as covered; mitsuba (Embree, float32) decides
+such ties its own way, so the two masks may differ in a handful of samples of a whole
+image (measured in ``benchmarks/RESULTS.md``, "Faster evaluations").
 """
 
 from __future__ import annotations
@@ -180,7 +181,7 @@ def _mask_coverage(mask: np.ndarray, ss: int) -> np.ndarray:
     samples per pixel, summed over strided views as small integers, times 1 / ss^2."""
     if ss == 1:
         return mask.astype(np.float32)
-    count = np.zeros((mask.shape[0] // ss, mask.shape[1] // ss), dtype=np.uint8)
+    count = np.zeros((mask.shape[0] // ss, mask.shape[1] // ss), dtype=np.uint16)
     for i in range(ss):
         for j in range(ss):
             count += mask[i::ss, j::ss]
@@ -224,12 +225,13 @@ class RasterScene:
         if ss < 1 or ss_leaf < 1:
             raise ValueError(f"supersample must be >= 1, got {supersample!r}, {leaf_supersample!r}")
         hits = []
-        for part, k in zip(self._parts, (ss, ss_leaf), strict=True):
+        # tubes: their front half covers them; leaves are seen from both sides
+        for part, k, front in zip(self._parts, (ss, ss_leaf), (True, False), strict=True):
             n = size * k
             if part is None:
                 hits.append(np.zeros((n, n), bool))
-            else:  # tubes: their front half covers them; leaves are seen from both sides
-                hits.append(hit_mask(*part, cam, n, front_only=len(hits) == 0))
+            else:
+                hits.append(hit_mask(*part, cam, n, front_only=front))
         cov_b = _mask_coverage(hits[0], ss)
         cov_l = _mask_coverage(hits[1], ss_leaf)
         return Coverage(cov_b, cov_l, hits[0] if keep_hr else None)
