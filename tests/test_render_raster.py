@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
+from render_helpers import simple_tree
 
 from refine.objective import SearchSpace, SketchObjective, framed, make_target, metric_distance
 from render.camera import Camera, Framing
 from render.raster import hit_mask
 from render.sketch import SketchRenderer, sample_width, sketch_mesh
-from tests.render_helpers import simple_tree
 from weberpenn import build_mesh, grow, species
 from weberpenn.lod import drop_thin_stems
 from weberpenn.treemesh import TreeMesh
