@@ -347,6 +347,12 @@ class SketchObjective:
     Counts evaluations (cache hits excluded), keeps the best point seen, and caches losses
     by the point rounded to ``decimals``.  The last tree's renderer is kept so points that
     differ only in yaw re-render without regrowing.
+
+    ``fast`` (default) draws each candidate the cheap way, the same sketch up to a few
+    pixels (``render.sketch.sketch_mesh`` without the stems too thin to be drawn,
+    rasterised by ``render.raster`` instead of a mitsuba scene built per tree:
+    ``benchmarks/RESULTS.md``, "Faster evaluations"); ``fast=False`` renders the full
+    mesh with mitsuba, as datasets and outputs are.
     """
 
     target: Any  # SketchTarget or refine.shape.ShapeTarget (``make_target``)
@@ -365,6 +371,7 @@ class SketchObjective:
     best_yaw: float = 0.0
     best_space: SearchSpace | None = None
     trace: list[tuple[int, float, float]] = field(default_factory=list)  # (eval, loss, best)
+    fast: bool = True
     _cache: dict[tuple[float, ...], float] = field(default_factory=dict, repr=False)
     _scene_key: tuple[float, ...] | None = field(default=None, repr=False)
     _renderer: Any = field(default=None, repr=False)
@@ -379,14 +386,18 @@ class SketchObjective:
 
     def sketch_at(self, x: Sequence[float]) -> np.ndarray:
         """The uint8 sketch of the tree at ``x`` (at the target's size)."""
-        from render.sketch import SketchRenderer
+        from render.sketch import SketchRenderer, sketch_mesh
 
         k = self.key(x)
         scene_key = k[: len(self.space.dims)]
         if self._scene_key != scene_key or self._renderer is None:
-            params = self.space.to_params(x)
-            mesh = build_mesh(grow(params), species=self.space.species)
-            self._renderer = SketchRenderer(mesh)
+            skeleton = grow(self.space.to_params(x))
+            name = self.space.species
+            if self.fast:
+                mesh = sketch_mesh(skeleton, self.target.size, name)
+                self._renderer = SketchRenderer(mesh, engine="raster")
+            else:
+                self._renderer = SketchRenderer(build_mesh(skeleton, species=name))
             self._scene_key = scene_key
         return self._renderer.sketch(self.space.yaw(x), self.target.size)
 

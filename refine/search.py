@@ -137,7 +137,9 @@ class RefineSettings:
     view / 180)^2``, so the front view is kept unless another fits clearly better;
     ``size`` is the side in pixels the search renders and compares at; ``metric`` is the
     sketch distance: ``"shape"`` (style-blind, ``refine.shape``) or ``"ink"`` (line
-    pixels, ``refine.objective.sketch_distance``).
+    pixels, ``refine.objective.sketch_distance``); ``fast_sketch`` (default) draws the
+    candidates the cheap way, the same sketch up to a few pixels (``SketchObjective``'s
+    ``fast``: thin stems left out, numpy rasteriser), False with mitsuba on the full mesh.
 
     Species by synthesis (``treesketch.Pipeline``): up to ``species_tries`` species are
     refined, the estimator's best and any other whose score is at least ``species_ratio``
@@ -166,6 +168,7 @@ class RefineSettings:
     species_tries: int = 2
     species_ratio: float = 0.5
     metric: str = "shape"
+    fast_sketch: bool = True
 
     def replace(self, **changes: Any) -> RefineSettings:
         return dataclasses.replace(self, **changes).validate()
@@ -208,6 +211,8 @@ class RefineSettings:
             raise ValueError(f"species_ratio must be in [0, 1], got {self.species_ratio!r}")
         if self.metric not in METRICS:
             raise ValueError(f"metric must be one of {', '.join(METRICS)}, got {self.metric!r}")
+        if not isinstance(self.fast_sketch, bool):
+            raise ValueError(f"fast_sketch must be True or False, got {self.fast_sketch!r}")
         if not isinstance(self.global_evals, int) or self.global_evals < 0:
             raise ValueError(f"global_evals must be an integer >= 0, got {self.global_evals!r}")
         return self
@@ -268,6 +273,7 @@ def refine(
         prior_weight=float(cfg.prior_weight),
         yaw_prior=0.0,
         yaw_weight=float(cfg.yaw_weight),
+        fast=cfg.fast_sketch,
     )
     stopped = ["tolerance"]
 

@@ -18,6 +18,7 @@ turning the camera never rescales or shifts the tree.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,14 +66,24 @@ class Framing:
     @classmethod
     def from_vertices(cls, vertices: np.ndarray, **margins: float) -> Framing:
         """Frame a point set (e.g. all vertices of a tree); empty -> a unit box."""
-        v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
-        v = v[np.isfinite(v).all(axis=1)]
-        if len(v) == 0:
+        return cls.from_parts([vertices], **margins)
+
+    @classmethod
+    def from_parts(cls, parts: Sequence[np.ndarray], **margins: float) -> Framing:
+        """:meth:`from_vertices` of the point sets stacked, without stacking them."""
+        z_lo, z_hi, r2 = [], [], []
+        for part in parts:
+            v = np.asarray(part, dtype=np.float64).reshape(-1, 3)
+            if not np.isfinite(v).all():  # (the row-wise filter is slow: only when needed)
+                v = v[np.isfinite(v).all(axis=1)]
+            if len(v):
+                z_lo.append(v[:, 2].min())
+                z_hi.append(v[:, 2].max())
+                r2.append((v[:, 0] ** 2 + v[:, 1] ** 2).max())
+        if not z_lo:
             return cls(0.0, 1.0, 0.5, **margins)
-        z_bottom = float(min(v[:, 2].min(), 0.0))
-        z_top = float(v[:, 2].max())
-        radius = float(np.sqrt((v[:, 0] ** 2 + v[:, 1] ** 2).max()))
-        return cls(z_bottom, z_top, radius, **margins)
+        z_bottom = float(min(min(z_lo), 0.0))
+        return cls(z_bottom, float(max(z_hi)), float(np.sqrt(max(r2))), **margins)
 
 
 def resolve_yaw(view: str | float) -> float:

@@ -53,7 +53,7 @@ def species_colours(species: str | None) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(bark, dtype=np.float64), np.asarray(leaf, dtype=np.float64)
 
 
-def _mesh_arrays(mesh: Any) -> tuple[np.ndarray, np.ndarray] | None:
+def mesh_arrays(mesh: Any) -> tuple[np.ndarray, np.ndarray] | None:
     """Contiguous float32 vertices and uint32 faces of a trimesh, or None when empty."""
     faces = np.asarray(mesh.faces)
     verts = np.asarray(mesh.vertices)
@@ -103,8 +103,8 @@ class TreeScene:
 
         self._mi = mi
         self.species = species or getattr(tree_mesh, "species", None)
-        b = _mesh_arrays(tree_mesh.branches)
-        lv = _mesh_arrays(tree_mesh.leaves)
+        b = mesh_arrays(tree_mesh.branches)
+        lv = mesh_arrays(tree_mesh.leaves)
         verts = [a[0].reshape(-1, 3) for a in (b, lv) if a is not None]
         self.framing = framing or Framing.from_vertices(
             np.vstack(verts) if verts else np.zeros((0, 3))
@@ -144,8 +144,8 @@ class TreeScene:
                 hits.append(self._ray_test(scene, origins, direction, n))
             else:
                 hits.append(self._render_scalar(scene, cam, n))
-        cov_b = _downsample(hits[0].astype(np.float32), ss)
-        cov_l = _downsample(hits[1].astype(np.float32), ss_leaf)
+        cov_b = downsample(hits[0].astype(np.float32), ss)
+        cov_l = downsample(hits[1].astype(np.float32), ss_leaf)
         return Coverage(cov_b, cov_l, hits[0] if keep_hr else None)
 
     def _ray_test(self, scene: Any, origins: np.ndarray, direction: np.ndarray, n: int) -> Any:
@@ -197,7 +197,7 @@ class TreeScene:
                 lam = np.abs(normal[sel] @ sun.astype(np.float32))  # two-sided leaves
                 shade = AMBIENT + (1.0 - AMBIENT) * lam
                 rgb[sel] = np.clip(col[None, :] * shade[:, None] * 1.25, 0.0, 1.0)
-        img = _downsample(rgb.reshape(n, n, 3), ss)
+        img = downsample(rgb.reshape(n, n, 3), ss)
         return np.round(np.clip(img, 0, 1) ** (1 / 2.2) * 255).astype(np.uint8)
 
     def _intersect(
@@ -226,7 +226,7 @@ class TreeScene:
         return t, normal
 
 
-def _downsample(img: np.ndarray, ss: int) -> np.ndarray:
+def downsample(img: np.ndarray, ss: int) -> np.ndarray:
     if ss == 1:
         return img
     n = img.shape[0] // ss

@@ -10,6 +10,13 @@ same tree (dataset builder, refinement loop, rotation sweep) use
 
 An empty tree (no faces at all) gives an all-white image.  The same mesh and arguments
 give identical pixels.
+
+``engine="raster"`` draws the silhouettes with :mod:`render.raster` (numpy, no
+acceleration structure to build) instead of mitsuba: the same sample grid, so the same
+sketch up to samples that lie exactly on a triangle edge, at a fraction of the cost of a
+tree drawn once or twice (the refinement loop).  Datasets and outputs use mitsuba.
+:func:`sample_width` is the world width of one silhouette sample: stems thinner than it
+cannot survive the branch thinning (``weberpenn.lod.drop_thin_stems``).
 """
 
 from __future__ import annotations
@@ -22,7 +29,18 @@ import numpy as np
 from .camera import VIEWS, Framing, check_size, resolve_yaw
 from .edges import EdgeConfig, branch_sketch, combine, foliage_sketch, thin_mask
 
-__all__ = ["VIEWS", "EdgeConfig", "SketchParts", "SketchRenderer", "sketch"]
+__all__ = [
+    "ENGINES",
+    "VIEWS",
+    "EdgeConfig",
+    "SketchParts",
+    "SketchRenderer",
+    "sample_width",
+    "sketch",
+    "sketch_mesh",
+]
+
+ENGINES = ("mitsuba", "raster")
 
 
 @dataclass(frozen=True)
@@ -45,17 +63,27 @@ class SketchRenderer:
         config: EdgeConfig | None = None,
         framing: Framing | None = None,
         species: str | None = None,
+        engine: str = "mitsuba",
     ) -> None:
         """``framing`` overrides the tree's own framing; ``species`` (for the colour
-        render's bark and leaf colours) overrides ``tree_mesh.species``."""
-        from .silhouette import TreeScene  # mitsuba is imported only when rendering
-
+        render's bark and leaf colours) overrides ``tree_mesh.species``; ``engine`` is
+        one of :data:`ENGINES` (``"raster"`` draws sketches only, no colour)."""
+        if engine not in ENGINES:
+            raise ValueError(f"unknown engine {engine!r}; choose one of {', '.join(ENGINES)}")
         if not (hasattr(tree_mesh, "branches") and hasattr(tree_mesh, "leaves")):
             raise TypeError(
                 f"expected a TreeMesh (with .branches and .leaves), got {type(tree_mesh).__name__}"
             )
         self.config = config or EdgeConfig()
-        self.scene = TreeScene(tree_mesh, framing, species)
+        self.engine = engine
+        if engine == "raster":
+            from .raster import RasterScene
+
+            self.scene: Any = RasterScene(tree_mesh, framing)
+        else:
+            from .silhouette import TreeScene  # mitsuba is imported only when rendering
+
+            self.scene = TreeScene(tree_mesh, framing, species)
 
     @property
     def framing(self) -> Framing:
@@ -63,7 +91,8 @@ class SketchRenderer:
 
     @property
     def variant(self) -> str:
-        return self.scene.backend.variant
+        """The mitsuba variant drawing the silhouettes, or ``"raster"``."""
+        return "raster" if self.engine == "raster" else self.scene.backend.variant
 
     def parts(self, yaw: float | str = 0.0, size: int = 256, pitch: float = 0.0) -> SketchParts:
         """The sketch and its intermediate images.
@@ -108,11 +137,50 @@ class SketchRenderer:
     ) -> np.ndarray:
         """(size, size, 3) uint8 shaded picture with the species' bark and leaf colours
         (``supersample``^2 rays per pixel; default ``config.supersample``)."""
+        if self.engine != "mitsuba":
+            raise ValueError(f"colour pictures need engine='mitsuba', not {self.engine!r}")
         size = check_size(size)
         ss = int(self.config.supersample if supersample is None else supersample)
         if not 1 <= ss <= 8:
             raise ValueError(f"supersample must be in 1..8, got {supersample!r}")
         return self.scene.colour(resolve_yaw(yaw), size, ss, pitch)
+
+
+def sample_width(framing: Framing, size: int, config: EdgeConfig | None = None) -> float:
+    """World width of one branch-silhouette sample of a ``size`` px sketch in ``framing``,
+    or 0.0 when the chain does not thin the branches.
+
+    The branch thinning erodes the sample mask by a square of ``k + 1`` samples (k >= 1),
+    so a sample survives only inside a 2 x 2 block of covered samples, which no stem
+    narrower than one sample spacing can hold on its own: such stems leave no trace in
+    the sketch except where they touch other branches.
+    """
+    cfg = config or EdgeConfig()
+    work = max(check_size(size), int(cfg.reference_size))
+    ss = int(cfg.supersample)
+    if int(round(2.0 * cfg.px(cfg.branch_thin_px, work) * ss)) < 1:
+        return 0.0
+    return framing.span / (work * ss)
+
+
+def sketch_mesh(
+    skeleton: Any, size: int, species: str | None = None, config: EdgeConfig | None = None
+) -> Any:
+    """The lightest TreeMesh of a grown ``skeleton`` that draws the same ``size`` px
+    sketch: its stems thinner than half a :func:`sample_width` are left out
+    (``weberpenn.lod.drop_thin_stems``); every kept stem and every leaf is meshed as
+    ``build_mesh`` meshes them.
+
+    The sample width comes from a framing of the skeleton's control points and leaf
+    positions, which lie inside the full mesh, so it is never wider than the full
+    tree's own: the cut errs on the side of keeping stems.
+    """
+    from weberpenn import build_mesh
+    from weberpenn.lod import drop_thin_stems
+
+    framing = Framing.from_parts([skeleton.points, skeleton.leaf_positions])
+    width = sample_width(framing, size, config)
+    return build_mesh(drop_thin_stems(skeleton, 0.5 * width), species=species)
 
 
 def _area_resize(img: np.ndarray, size: int) -> np.ndarray:

@@ -75,6 +75,16 @@ def test_deterministic() -> None:
     assert a.params.to_dict() == b.params.to_dict()
 
 
+def test_fast_and_full_sketch_start_alike() -> None:
+    img, _gt, start = _case(name="maple", seed=4)
+    fast = refine(img, start, RefineSettings(budget=1), species="maple", yaw=0.0)
+    cfg = RefineSettings(budget=1, fast_sketch=False)
+    full = refine(img, start, cfg, species="maple", yaw=0.0)
+    assert fast.loss_before == pytest.approx(full.loss_before, abs=0.005)
+    with pytest.raises(ValueError, match="fast_sketch must be True or False"):
+        RefineSettings(fast_sketch=1).validate()  # type: ignore[arg-type]
+
+
 @pytest.mark.parametrize("algorithm", ["sbplx", "cobyla"])
 def test_other_algorithms_and_budget(algorithm: str) -> None:
     img, _gt, start = _case(seed=6)

@@ -35,7 +35,7 @@ from .mesh import build_mesh
 from .skeleton import Skeleton
 from .treemesh import TreeMesh
 
-__all__ = ["MIN_FACES", "branch_faces", "lod", "lod_chain"]
+__all__ = ["MIN_FACES", "branch_faces", "drop_thin_stems", "lod", "lod_chain"]
 
 #: The smallest budget accepted: below it no tree stays recognisable.
 MIN_FACES = 100
@@ -82,8 +82,17 @@ def _thickest_stems(sk: Skeleton, budget: int, sides: int) -> Skeleton:
     order = np.argsort(-radius, kind="stable")
     fits = np.cumsum(cost[order]) <= budget
     fits[0] = True
-    keep = np.sort(order[fits])
-    idx = np.concatenate([np.arange(offsets[i], offsets[i + 1]) for i in keep])
+    return _keep_stems(sk, np.sort(order[fits]))
+
+
+def _keep_stems(sk: Skeleton, keep: np.ndarray) -> Skeleton:
+    """The skeleton with only the stems numbered ``keep`` (ascending); a kept stem whose
+    parent is dropped gets none.  Leaves are untouched."""
+    offsets = np.asarray(sk.offsets, dtype=np.int64)
+    counts = np.diff(offsets)
+    starts = offsets[:-1][keep]
+    lens = counts[keep]
+    idx = np.repeat(starts - (np.cumsum(lens) - lens), lens) + np.arange(int(lens.sum()))
     new_index = np.full(len(counts), -1, dtype=np.int64)
     new_index[keep] = np.arange(len(keep))
     parents = np.asarray(sk.parents, dtype=np.int64)[keep]
@@ -95,6 +104,36 @@ def _thickest_stems(sk: Skeleton, budget: int, sides: int) -> Skeleton:
         levels=np.asarray(sk.levels)[keep],
         parents=np.where(parents >= 0, new_index[np.maximum(parents, 0)], -1),
     )
+
+
+def drop_thin_stems(skeleton: Skeleton, min_radius: float) -> Skeleton:
+    """The skeleton without the stems whose thickest point is thinner than
+    ``min_radius`` (the trunk, stem 0, always stays); leaves are kept.
+
+    For drawings where such stems cannot show: a silhouette sampled on a grid whose
+    thinning needs a 2 x 2 block of covered samples (``render.sketch.sample_width``)
+    never keeps a stem narrower than one sample spacing, i.e. ``min_radius`` = half of
+    it.  The mesh of the result has the same tubes for every kept stem, so what is
+    drawn of it is the full tree's drawing up to where a dropped twig touched another
+    branch.  ``min_radius <= 0`` returns the skeleton itself.
+    """
+    r = float(min_radius)
+    if not np.isfinite(r):
+        raise ValueError(f"min_radius must be a finite number, got {min_radius!r}")
+    offsets = np.asarray(skeleton.offsets, dtype=np.int64)
+    counts = np.diff(offsets)
+    if r <= 0 or len(counts) == 0:
+        return skeleton
+    radii = np.asarray(skeleton.radii, dtype=np.float64)
+    thickest = np.full(len(counts), -np.inf)
+    has = counts > 0
+    if has.any():
+        thickest[has] = np.maximum.reduceat(radii, offsets[:-1][has])
+    keep = thickest >= r
+    keep[0] = True
+    if keep.all():
+        return skeleton
+    return _keep_stems(skeleton, np.flatnonzero(keep))
 
 
 def _leaf_growth(n: int, keep: int) -> float:
