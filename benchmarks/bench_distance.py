@@ -9,7 +9,8 @@ style is closer than another tree of the same species in the same style,
 recalibration (``benchmarks/shape_v1.py``, kept as the reference) and the ink distance made
 for SG-vs-SG comparison (``refine.objective.sketch_distance``); each style's share; and the
 CPU milliseconds of one refinement evaluation's comparison (the target prepared once, one
-candidate prepared and compared), median over the drawings.
+candidate prepared and compared), median over the drawings, and of framing one candidate
+(``refine.objective.framed``, against ``normalise_drawing`` at the work size, as before).
 
     .venv/bin/python benchmarks/bench_distance.py --pairs 100 --size 128
 """
@@ -28,7 +29,7 @@ sys.path.insert(0, str(ROOT))
 
 from benchmarks.shape_v1 import ShapeTarget as ShapeTargetV1  # noqa: E402
 from benchmarks.shape_v1 import shape_distance as shape_distance_v1  # noqa: E402
-from refine.objective import SketchTarget, sketch_distance  # noqa: E402
+from refine.objective import SketchTarget, framed, sketch_distance  # noqa: E402
 from refine.shape import ShapeTarget, shape_distance  # noqa: E402
 from render.reader import normalise_drawing  # noqa: E402
 from render.sketch import SketchRenderer  # noqa: E402
@@ -42,6 +43,13 @@ TARGETS = {"shape": ShapeTarget, "shape_v1": ShapeTargetV1, "ink": SketchTarget}
 def eval_ms(images: list[np.ndarray], size: int) -> dict[str, float]:
     """Median CPU ms to prepare one candidate and compare it with a prepared target."""
     out = {}
+    for m, frame in (("framed", framed), ("framed_v1", normalise_drawing)):
+        times = []
+        for img in images[1:]:
+            t = time.process_time()
+            frame(img, size)
+            times.append(1000 * (time.process_time() - t))
+        out[m] = float(np.median(times))
     for m, cls in TARGETS.items():
         target = cls.from_image(images[0], size)
         times = []
@@ -102,6 +110,10 @@ def main(argv: list[str] | None = None) -> int:
     print("|---|---:|---:|")
     for m in METRICS:
         print(f"| {m} | {np.mean(wins[m]):.0%} ({sum(wins[m])}/{len(wins[m])}) | {ms[m]:.1f} |")
+    print(
+        f"framing one candidate (CPU ms): refine.objective.framed {ms['framed']:.1f} "
+        f"(at twice the size, pooled), normalise_drawing at the size {ms['framed_v1']:.1f}"
+    )
     print()
     print("| style in the pair | pairs | " + " | ".join(METRICS) + " |")
     print("|---|---|" + "---|" * len(METRICS))

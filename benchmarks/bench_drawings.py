@@ -519,6 +519,21 @@ def part_estimate(args: argparse.Namespace) -> dict:
     return {"records": per, "summary": out}
 
 
+def rescore(path: Path) -> None:
+    """The line distance of every result in a warning ``--json`` recomputed by the current
+    ``tree_line_distance`` from the input and final sketches saved beside it (``.npz``):
+    the refinement's results kept, the warning's second test changed."""
+    doc = json.loads(path.read_text())
+    saved = np.load(path.with_suffix(".npz"))
+    size = RefineSettings().size
+    for rec in doc["records"]:
+        if "refused" not in rec:
+            drawing, after = saved[f"{rec['name']}/input"], saved[f"{rec['name']}/after"]
+            rec["ink_after"] = ts_pipeline.tree_line_distance(drawing, after, size)
+    doc["rescored"] = machine()
+    atomic_write(path, json.dumps(doc, indent=1))
+
+
 def markdown(doc: dict) -> str:
     part, recs = doc["part"], doc["records"]
     lines = [f"machine: {doc['machine']}", ""]
@@ -572,10 +587,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", type=Path, default=None)
     ap.add_argument("--resume", type=Path, default=None, help="warning: keep this JSON's records")
     ap.add_argument("--hand", action="store_true", help="warning: also examples/hand (reported)")
+    ap.add_argument(
+        "--rescore",
+        type=Path,
+        default=None,
+        help="warning: recompute a --json's line distances from its saved sketches (.npz)",
+    )
     ap.add_argument("--markdown", type=Path, default=None, help="print the tables of a --json")
     args = ap.parse_args(argv)
     if args.markdown is not None:
         print(markdown(json.loads(args.markdown.read_text())))
+        return 0
+    if args.rescore is not None:
+        rescore(args.rescore)
+        print(markdown(json.loads(args.rescore.read_text())))
         return 0
     if args.budget is None:
         args.budget = 20 if args.part == "warning" else 40

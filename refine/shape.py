@@ -25,9 +25,12 @@ differ most.
 
 :func:`line_distance` asks the other question, "is this drawing a tree at all?": the
 drawing's ink the tree's silhouette does not explain (farther outside it than the offset
-allowance: text, a grid, noise around the shape) and the tree's trunk where the drawing has
-no line (a face or a circle has no trunk below it).  Extra outline line that the filled shape
-explains costs nothing, so a plain outline drawing is not punished for being one.
+allowance: text, a grid, noise around the shape), the tree's trunk where the drawing has no
+line, and a drawing that does not stand on a stem (a face, a circle or a spiral is widest
+near its base; a tree, however drawn, has a trunk under its crown: at least ``MIN_STEM`` of
+its height narrower than ``TRUNK_WIDTH`` of its widest row).  Extra outline line that the
+filled shape explains costs nothing, so a plain outline drawing is not punished for being
+one.
 
 :class:`ShapeTarget` holds one sketch's features for repeated comparison (the refinement
 prepares the input once and each candidate once).
@@ -58,6 +61,8 @@ OFFSET_LIMIT = 0.06  # of the side: how far around the leaves an outline may be 
 CLOSE_RADIUS = 1 / 14  # of the side: gaps up to twice this close before the fill
 SPECK_AREA = 1e-3  # of the frame: smaller pieces of ink are dust, not drawing
 TRUNK_WIDTH = 0.2  # of the widest row: narrower rows at the bottom are the trunk
+MIN_STEM = 0.02  # of the height: a drawing with less trunk than this does not stand on one
+STEM_WEIGHT = 5.0  # line distance added per unit of missing stem (0.1 with no stem at all)
 # the frame of render.reader (trunk base row, top margin), as fractions of the side
 FRAME_BOTTOM = 0.969
 FRAME_EDGE = 0.043
@@ -180,6 +185,14 @@ class ShapeTarget:
         centre = (filled[trunk_rows] * cols).sum(axis=1) / width[trunk_rows]
         return np.stack([trunk_rows, centre], axis=1)
 
+    @property
+    def stem(self) -> float:
+        """The trunk's height as a fraction of the drawing's height (0 when blank)."""
+        rows = np.flatnonzero(self.ink.any(axis=1))
+        if rows.size == 0:
+            return 0.0
+        return len(self.trunk) / (rows[-1] - rows[0] + 1)
+
     def distance(self, other: ShapeTarget) -> float:
         return target_shape_distance(self, other)
 
@@ -221,7 +234,9 @@ def line_distance(drawing: ShapeTarget, tree: ShapeTarget) -> float:
     """How far ``drawing`` is from being a drawing of ``tree`` (both prepared at one size):
     the mean distance of the drawing's ink outside the tree's silhouette beyond the
     ``OFFSET_LIMIT`` allowance, plus the mean distance from the tree's trunk centre line
-    to the drawing's nearest line, both as fractions of the side (see the module text)."""
+    to the drawing's nearest line, both as fractions of the side, plus ``STEM_WEIGHT``
+    times the drawing's missing stem, ``max(0, MIN_STEM - drawing.stem)`` (see the module
+    text)."""
     if drawing.image.shape != tree.image.shape:
         raise ValueError(f"sketch sizes differ: {drawing.image.shape} vs {tree.image.shape}")
     side = drawing.size
@@ -229,9 +244,10 @@ def line_distance(drawing: ShapeTarget, tree: ShapeTarget) -> float:
         return 1.0
     outside = tree.levels[0].sdf[drawing.ink] - OFFSET_LIMIT * side
     stray = float(np.maximum(outside, 0.0).mean()) / side
+    stemless = STEM_WEIGHT * max(0.0, MIN_STEM - drawing.stem)
     pts = tree.trunk
     if len(pts) == 0:
-        return stray
+        return stray + stemless
     r = pts[:, 0].astype(int)
     c = np.clip(np.round(pts[:, 1]).astype(int), 0, side - 1)
-    return stray + float(drawing.ink_distance[r, c].mean()) / side
+    return stray + float(drawing.ink_distance[r, c].mean()) / side + stemless
