@@ -25,8 +25,8 @@ differ most.
 
 :func:`line_distance` asks the other question, "is this drawing a tree at all?": the
 drawing's ink the tree's silhouette does not explain (farther outside it than the offset
-allowance: text, a grid, noise around the shape), the tree's trunk where the drawing has no
-line, and a drawing that does not stand on a stem (a face, a circle or a spiral is widest
+allowance: text, a grid, noise around the shape), the tree's trunk where the drawing has
+nothing (outside its filled shape), and a drawing that does not stand on a stem (a face, a circle or a spiral is widest
 near its base; a tree, however drawn, has a trunk under its crown: at least ``MIN_STEM`` of
 its height narrower than ``TRUNK_WIDTH`` of its widest row).  Extra outline line that the
 filled shape explains costs nothing, so a plain outline drawing is not punished for being
@@ -233,8 +233,8 @@ def shape_distance(a: Any, b: Any, size: int = 128, scales: int = 3) -> float:
 def line_distance(drawing: ShapeTarget, tree: ShapeTarget) -> float:
     """How far ``drawing`` is from being a drawing of ``tree`` (both prepared at one size):
     the mean distance of the drawing's ink outside the tree's silhouette beyond the
-    ``OFFSET_LIMIT`` allowance, plus the mean distance from the tree's trunk centre line
-    to the drawing's nearest line, both as fractions of the side, plus ``STEM_WEIGHT``
+    ``OFFSET_LIMIT`` allowance, plus the mean distance of the tree's trunk centre line
+    outside the drawing's filled shape, both as fractions of the side, plus ``STEM_WEIGHT``
     times the drawing's missing stem, ``max(0, MIN_STEM - drawing.stem)`` (see the module
     text)."""
     if drawing.image.shape != tree.image.shape:
@@ -250,4 +250,7 @@ def line_distance(drawing: ShapeTarget, tree: ShapeTarget) -> float:
         return stray + stemless
     r = pts[:, 0].astype(int)
     c = np.clip(np.round(pts[:, 1]).astype(int), 0, side - 1)
-    return stray + float(drawing.ink_distance[r, c].mean()) / side + stemless
+    # from the drawing's filled shape, not its lines: a trunk drawn as two lines has
+    # its centre line between them
+    missing = float(np.maximum(drawing.levels[0].sdf[r, c], 0.0).mean()) / side
+    return stray + missing + stemless

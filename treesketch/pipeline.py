@@ -57,8 +57,8 @@ SKETCH_SIZE = 256  # the size sketches are prepared at (TSN crops and resizes fr
 # style-blind shape distance (a circle can pass for a crown) or by the line distance
 # (``refine.shape.line_distance``: ink the tree's shape does not explain, a trunk where
 # nothing is drawn); calibrated in RESULTS.md
-LOW_CONFIDENCE_LOSS = 0.6
-LOW_CONFIDENCE_INK = 0.84
+LOW_CONFIDENCE_LOSS = 0.7
+LOW_CONFIDENCE_INK = 0.035
 MAX_HEIGHT = 200.0  # metres: taller than any tree that grows
 
 
