@@ -74,7 +74,14 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--pairs", type=int, default=100)
     ap.add_argument("--size", type=int, default=128)
-    ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--seed", type=int, default=7, help="draws the species' styles and views")
+    ap.add_argument(
+        "--tree-seeds",
+        type=int,
+        nargs=2,
+        default=(50_000, 60_000),
+        help="first seed of the A trees and of the B trees (another set: 70000 80000)",
+    )
     args = ap.parse_args(argv)
     rng = np.random.default_rng(args.seed)
     names = list(STYLES)
@@ -87,8 +94,8 @@ def main(argv: list[str] | None = None) -> int:
         name = species.SPECIES[i % len(species.SPECIES)]
         x, y = rng.choice(names, size=2, replace=False)
         yaw = float(rng.uniform(0, 360))
-        a = drawings(name, 50_000 + i, (x, y), yaw)
-        b = drawings(name, 60_000 + i, (x,), yaw)
+        a = drawings(name, args.tree_seeds[0] + i, (x, y), yaw)
+        b = drawings(name, args.tree_seeds[1] + i, (x,), yaw)
         key = tuple(sorted((x, y)))
         seen += [a[x], a[y], b[x]]
         for m, fn in METRICS.items():

@@ -161,7 +161,7 @@ def test_what_is_not_a_tree_gets_the_warning(kind: str, refining: Pipeline) -> N
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["lollipop", "cloud_tree"])
-def test_a_plain_outline_tree_gets_no_warning(name: str, refining: Pipeline) -> None:
-    r = refining.run(HAND / f"{name}.png")
+def test_a_plain_outline_tree_gets_no_warning(refining: Pipeline) -> None:
+    # a child's tree: a cloud of a crown on a trunk drawn as two lines, nothing inside
+    r = refining.run(HAND / "cloud_tree.png")
     assert r.warning is None, r.losses
