@@ -7,8 +7,9 @@ is the shape: the crown's outline and the trunk below it.  So each sketch is red
 - its **ink**, seen at twice the work size and pooled ("any ink"), so a thin light line
   survives the downscale; dust (pieces of ink, joined over small gaps, smaller than
   ``SPECK_AREA`` of the frame) is dropped, and the rest is **framed by its height** (trunk
-  base on the bottom margin, as ``render.reader`` frames a tree, but never scaled by its
-  width: a cloud outline drawn wider than the leaves must not shrink the whole tree);
+  base on the bottom margin, as ``render.reader`` frames a tree, but without its side
+  margins, so the width decides only for a tree too wide for the frame: a cloud outline
+  drawn wider than the leaves must not shrink the whole tree);
 - its **filled silhouette**: ink closed over small gaps (broken pencil lines, a trunk drawn
   as two lines), holes filled, kept as a signed distance field (outside positive);
 - its **outline**, the silhouette's boundary.
@@ -161,13 +162,6 @@ class ShapeTarget:
     @property
     def size(self) -> int:
         return int(self.image.shape[0])
-
-    @cached_property
-    def ink_distance(self) -> np.ndarray:
-        """Distance (px) from every pixel to the nearest ink pixel (the side where none)."""
-        if not self.ink.any():
-            return np.full(self.ink.shape, float(self.size), np.float32)
-        return ndimage.distance_transform_edt(~self.ink).astype(np.float32)
 
     @cached_property
     def trunk(self) -> np.ndarray:
