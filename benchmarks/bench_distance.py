@@ -4,9 +4,13 @@ For N tree pairs (A, B of the same species, fresh seeds) and two styles X != Y d
 seeded choice from ``render.styles``, every drawing normalised as the pipeline does
 (``render.reader.normalise_drawing``): the distance wins when the same tree in another
 style is closer than another tree of the same species in the same style,
-``d(A_X, A_Y) < d(A_X, B_X)``.  Rows: the shape distance (``refine.shape``, what the
-refinement uses) and the ink distance (``refine.objective.sketch_distance``, the one before
-it), on the same pairs; plus each style pair's share.
+``d(A_X, A_Y) < d(A_X, B_X)``.  Rows, on the same pairs: the shape distance
+(``refine.shape``, what the refinement uses), the shape distance before issue 12's
+recalibration (``benchmarks/shape_v1.py``, kept as the reference) and the ink distance made
+for SG-vs-SG comparison (``refine.objective.sketch_distance``); each style's share; and the
+CPU milliseconds of one refinement evaluation's comparison (the target prepared once, one
+candidate prepared and compared), median over the drawings, and of framing one candidate
+(``refine.objective.framed``, against ``normalise_drawing`` at the work size, as before).
 
     .venv/bin/python benchmarks/bench_distance.py --pairs 100 --size 128
 """
@@ -14,7 +18,6 @@ it), on the same pairs; plus each style pair's share.
 from __future__ import annotations
 
 import argparse
-import itertools
 import sys
 import time
 from pathlib import Path
@@ -24,14 +27,38 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from refine.objective import sketch_distance  # noqa: E402
-from refine.shape import shape_distance  # noqa: E402
+from benchmarks.shape_v1 import ShapeTarget as ShapeTargetV1  # noqa: E402
+from benchmarks.shape_v1 import shape_distance as shape_distance_v1  # noqa: E402
+from refine.objective import SketchTarget, framed, sketch_distance  # noqa: E402
+from refine.shape import ShapeTarget, shape_distance  # noqa: E402
 from render.reader import normalise_drawing  # noqa: E402
 from render.sketch import SketchRenderer  # noqa: E402
 from render.styles import STYLES, Silhouettes, draw  # noqa: E402
 from weberpenn import build_mesh, grow, species  # noqa: E402
 
-METRICS = {"shape": shape_distance, "ink": sketch_distance}
+METRICS = {"shape": shape_distance, "shape_v1": shape_distance_v1, "ink": sketch_distance}
+TARGETS = {"shape": ShapeTarget, "shape_v1": ShapeTargetV1, "ink": SketchTarget}
+
+
+def eval_ms(images: list[np.ndarray], size: int) -> dict[str, float]:
+    """Median CPU ms to prepare one candidate and compare it with a prepared target."""
+    out = {}
+    for m, frame in (("framed", framed), ("framed_v1", normalise_drawing)):
+        times = []
+        for img in images[1:]:
+            t = time.process_time()
+            frame(img, size)
+            times.append(1000 * (time.process_time() - t))
+        out[m] = float(np.median(times))
+    for m, cls in TARGETS.items():
+        target = cls.from_image(images[0], size)
+        times = []
+        for img in images[1:]:
+            t = time.process_time()
+            target.distance(cls.from_image(img, size))
+            times.append(1000 * (time.process_time() - t))
+        out[m] = float(np.median(times))
+    return out
 
 
 def drawings(name: str, seed: int, styles: tuple[str, ...], yaw: float) -> dict[str, np.ndarray]:
@@ -47,36 +74,61 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--pairs", type=int, default=100)
     ap.add_argument("--size", type=int, default=128)
-    ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--seed", type=int, default=7, help="draws the species' styles and views")
+    ap.add_argument(
+        "--tree-seeds",
+        type=int,
+        nargs=2,
+        default=(50_000, 60_000),
+        help="first seed of the A trees and of the B trees (another set: 70000 80000)",
+    )
     args = ap.parse_args(argv)
     rng = np.random.default_rng(args.seed)
     names = list(STYLES)
     wins = {m: [] for m in METRICS}
     by_pair: dict[tuple[str, str], dict[str, list[bool]]] = {}
+    by_style: dict[str, dict[str, list[bool]]] = {}
+    seen: list[np.ndarray] = []
     t0 = time.perf_counter()
     for i in range(args.pairs):
         name = species.SPECIES[i % len(species.SPECIES)]
         x, y = rng.choice(names, size=2, replace=False)
         yaw = float(rng.uniform(0, 360))
-        a = drawings(name, 50_000 + i, (x, y), yaw)
-        b = drawings(name, 60_000 + i, (x,), yaw)
+        a = drawings(name, args.tree_seeds[0] + i, (x, y), yaw)
+        b = drawings(name, args.tree_seeds[1] + i, (x,), yaw)
         key = tuple(sorted((x, y)))
+        seen += [a[x], a[y], b[x]]
         for m, fn in METRICS.items():
             same_tree = fn(a[x], a[y], args.size)
             same_style = fn(a[x], b[x], args.size)
             wins[m].append(same_tree < same_style)
             by_pair.setdefault(key, {k: [] for k in METRICS})[m].append(same_tree < same_style)
+            for st in {x, y}:
+                by_style.setdefault(st, {k: [] for k in METRICS})[m].append(same_tree < same_style)
         print(
             f"{i:3d} {name:7s} {x:>8s}/{y:<8s} "
             + " ".join(f"{m} {'win' if wins[m][-1] else 'LOSS'}" for m in METRICS),
             flush=True,
         )
     print()
+    ms = eval_ms(seen[:61], args.size)
     print(f"{args.pairs} pairs, {args.size} px, {time.perf_counter() - t0:.0f} s")
-    print("| distance | same tree, other style closer than other tree, same style |")
-    print("|---|---|")
+    print("| distance | same tree, other style closer | CPU ms per evaluation |")
+    print("|---|---:|---:|")
     for m in METRICS:
-        print(f"| {m} | {np.mean(wins[m]):.0%} ({sum(wins[m])}/{len(wins[m])}) |")
+        print(f"| {m} | {np.mean(wins[m]):.0%} ({sum(wins[m])}/{len(wins[m])}) | {ms[m]:.1f} |")
+    print(
+        f"framing one candidate (CPU ms): refine.objective.framed {ms['framed']:.1f} "
+        f"(at twice the size, pooled), normalise_drawing at the size {ms['framed_v1']:.1f}"
+    )
+    print()
+    print("| style in the pair | pairs | " + " | ".join(METRICS) + " |")
+    print("|---|---|" + "---|" * len(METRICS))
+    for st in names:
+        if st in by_style:
+            v = by_style[st]
+            n = len(v["shape"])
+            print(f"| {st} | {n} | " + " | ".join(f"{np.mean(v[m]):.0%}" for m in METRICS) + " |")
     print()
     print("| styles | pairs | " + " | ".join(METRICS) + " |")
     print("|---|---|" + "---|" * len(METRICS))
@@ -88,7 +140,6 @@ def main(argv: list[str] | None = None) -> int:
             + " | ".join(f"{np.mean(v[m]):.0%}" for m in METRICS)
             + " |"
         )
-    _ = itertools
     return 0
 
 

@@ -4,17 +4,34 @@ People draw the same tree many ways (the paper's blobs, a clean pen outline, a c
 scribble, light broken pencil, a few felt-tip strokes: ``render.styles``).  What they share
 is the shape: the crown's outline and the trunk below it.  So each sketch is reduced to
 
+- its **ink**, seen at twice the work size and pooled ("any ink"), so a thin light line
+  survives the downscale; dust (pieces of ink, joined over small gaps, smaller than
+  ``SPECK_AREA`` of the frame) is dropped, and the rest is **framed by its height** (trunk
+  base on the bottom margin, as ``render.reader`` frames a tree, but without its side
+  margins, so the width decides only for a tree too wide for the frame: a cloud outline
+  drawn wider than the leaves must not shrink the whole tree);
 - its **filled silhouette**: ink closed over small gaps (broken pencil lines, a trunk drawn
-  as two lines), holes filled, then blurred (a soft mask, so the distance changes smoothly
-  as the tree changes);
-- its **outline**: the boundary of the filled silhouette, compared by a symmetric chamfer
-  distance (mean distance from each outline pixel of one sketch to the other's outline,
-  via Euclidean distance transforms, as a fraction of the side);
+  as two lines), holes filled, kept as a signed distance field (outside positive);
+- its **outline**, the silhouette's boundary.
 
-at each level of an image pyramid (2x2 "any ink" pooling, so coarse levels also close
-larger gaps), and ``shape_distance = mean over levels of (1 - soft IoU) + OUTLINE_WEIGHT *
-chamfer``.  What is inside the crown (blobs, scribbles, branch strokes) is left out on
-purpose: it is where drawing styles differ most.
+Two silhouettes are compared at each level of an image pyramid ("any ink" pooling, so coarse
+levels also close larger gaps) *modulo a uniform offset*: the signed distances of each
+outline from the other silhouette give the offset ``c`` (their median, at most
+``OFFSET_LIMIT`` of the side: an outline drawn around the leaves rather than through them),
+and the level's distance is ``(1 - soft IoU of the silhouettes moved c/2 towards each
+other) + OUTLINE_WEIGHT * mean |signed outline distance - c| + OFFSET_WEIGHT * |c|`` (lengths
+as fractions of the side); ``shape_distance`` is the mean over levels.  What is inside the
+crown (blobs, scribbles, branch strokes) is left out on purpose: it is where drawing styles
+differ most.
+
+:func:`line_distance` asks the other question, "is this drawing a tree at all?": the
+drawing's ink the tree's silhouette does not explain (farther outside it than the offset
+allowance: text, a grid, noise around the shape), the tree's trunk where the drawing has
+nothing (outside its filled shape), and a drawing that does not stand on a stem (a face, a circle or a spiral is widest
+near its base; a tree, however drawn, has a trunk under its crown: at least ``MIN_STEM`` of
+its height narrower than ``TRUNK_WIDTH`` of its widest row).  Extra outline line that the
+filled shape explains costs nothing, so a plain outline drawing is not punished for being
+one.
 
 :class:`ShapeTarget` holds one sketch's features for repeated comparison (the refinement
 prepares the input once and each candidate once).
@@ -23,6 +40,7 @@ prepares the input once and each candidate once).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -30,19 +48,72 @@ from scipy import ndimage
 
 from .prepare import prepare_sketch
 
-__all__ = ["OUTLINE_WEIGHT", "ShapeTarget", "shape_distance"]
+__all__ = [
+    "OFFSET_LIMIT",
+    "OUTLINE_WEIGHT",
+    "ShapeTarget",
+    "line_distance",
+    "shape_distance",
+]
 
 OUTLINE_WEIGHT = 4.0  # one side-fraction of mean outline offset weighs as 4 IoU units
+OFFSET_WEIGHT = 2.0  # the forgiven uniform offset still costs a little
+OFFSET_LIMIT = 0.06  # of the side: how far around the leaves an outline may be drawn
 CLOSE_RADIUS = 1 / 14  # of the side: gaps up to twice this close before the fill
+SPECK_AREA = 1e-3  # of the frame: smaller pieces of ink are dust, not drawing
+TRUNK_WIDTH = 0.2  # of the widest row: narrower rows at the bottom are the trunk
+MIN_STEM = 0.02  # of the height: a drawing with less trunk than this does not stand on one
+STEM_WEIGHT = 5.0  # line distance added per unit of missing stem (0.1 with no stem at all)
+# the frame of render.reader (trunk base row, top margin), as fractions of the side
+FRAME_BOTTOM = 0.969
+FRAME_EDGE = 0.043
 _DARK = 0.5
 
 
 @dataclass(frozen=True)
 class _ShapeLevel:
-    soft: np.ndarray  # float32 0..1, blurred filled silhouette
-    outline: np.ndarray  # bool
-    dist: np.ndarray  # float32, distance to the nearest outline pixel
+    sdf: np.ndarray  # float32 signed distance to the outline (outside > 0, inside < 0), px
+    outline: np.ndarray  # bool, boundary pixels of the filled silhouette
     n: int  # outline pixels
+
+
+def _drop_dust(ink: np.ndarray) -> np.ndarray:
+    """``ink`` without pieces (joined over gaps of ``side / 64``) of less than
+    ``SPECK_AREA`` of the frame; unchanged if that would leave nothing."""
+    side = ink.shape[0]
+    joined = ndimage.binary_dilation(ink, iterations=max(1, side // 64))
+    lab, k = ndimage.label(joined, structure=np.ones((3, 3)))
+    if k <= 1:
+        return ink
+    sizes = ndimage.sum_labels(ink, lab, index=np.arange(1, k + 1))
+    keep = sizes >= SPECK_AREA * ink.size
+    if not keep.any():
+        return ink
+    return ink & np.concatenate([[False], keep])[lab]
+
+
+def _frame_by_height(ink: np.ndarray) -> np.ndarray:
+    """``ink`` moved and scaled so its base is on the bottom margin, its trunk axis on the
+    centre line and its height fills the frame (its width only when it would not fit)."""
+    side = ink.shape[0]
+    ys = np.flatnonzero(ink.any(axis=1))
+    xs = np.flatnonzero(ink.any(axis=0))
+    top, bottom, left, right = ys[0], ys[-1], xs[0], xs[-1]
+    base = ink[max(top, bottom - max(2, (bottom - top) // 40)) : bottom + 1]
+    bx = np.flatnonzero(base.any(axis=0))
+    axis = (bx[0] + bx[-1] + 1) / 2.0
+    half = max(axis - left, right + 1 - axis, 0.5)
+    scale = min((FRAME_BOTTOM - FRAME_EDGE) * side / (bottom - top + 1), 0.5 * side / half)
+    rows = (np.arange(side) + 0.5 - FRAME_BOTTOM * side) / scale + bottom + 0.5
+    cols = (np.arange(side) + 0.5 - side / 2) / scale + axis - 0.5
+    if scale >= 1.0:  # enlarging: nearest pixel keeps lines binary and as thin as drawn
+        ri, ci = np.round(rows).astype(int), np.round(cols).astype(int)
+        okr, okc = (ri >= 0) & (ri < side), (ci >= 0) & (ci < side)
+        out = np.zeros_like(ink)
+        out[np.ix_(okr, okc)] = ink[np.ix_(ri[okr], ci[okc])]
+        return out
+    grid = np.meshgrid(rows, cols, indexing="ij")
+    return ndimage.map_coordinates(ink.astype(np.float32), grid, order=1, cval=0.0) > 0.25
 
 
 def _level(ink: np.ndarray) -> _ShapeLevel:
@@ -52,17 +123,15 @@ def _level(ink: np.ndarray) -> _ShapeLevel:
     # closing with a disk of radius r, by distance transforms (linear time at any r)
     fat = ndimage.distance_transform_edt(~np.pad(ink, pad)) <= r
     filled = ndimage.distance_transform_edt(ndimage.binary_fill_holes(fat)) > r
-    filled = filled[pad:-pad, pad:-pad]
-    filled |= ink
-    soft = ndimage.gaussian_filter(filled.astype(np.float32), sigma=max(0.5, side / 96))
+    filled = filled[pad:-pad, pad:-pad] | ink
     outline = filled & ~ndimage.binary_erosion(filled, border_value=0)
     n = int(outline.sum())
-    dist = (
-        ndimage.distance_transform_edt(~outline).astype(np.float32)
-        if n
-        else np.zeros(ink.shape, np.float32)
-    )
-    return _ShapeLevel(soft, outline, dist, n)
+    if n == 0:
+        return _ShapeLevel(np.zeros(ink.shape, np.float32), outline, 0)
+    # zero on the outline pixels (the silhouette's own boundary), negative inside
+    inside = np.maximum(ndimage.distance_transform_edt(filled) - 1.0, 0.0)
+    sdf = ndimage.distance_transform_edt(~filled) - inside
+    return _ShapeLevel(sdf.astype(np.float32), outline, n)
 
 
 @dataclass(frozen=True)
@@ -70,12 +139,17 @@ class ShapeTarget:
     """A sketch's shape features at every pyramid level (see the module text)."""
 
     image: np.ndarray  # float32 0..1 (1 = white), the prepared sketch
+    ink: np.ndarray  # bool, the cleaned, height-framed ink at full size
     levels: tuple[_ShapeLevel, ...]
 
     @classmethod
     def from_image(cls, img: Any, size: int = 128, scales: int = 3) -> ShapeTarget:
         f = prepare_sketch(img, size)
-        ink = f < _DARK
+        fine = prepare_sketch(img, 2 * size) < _DARK
+        ink = fine.reshape(size, 2, size, 2).any(axis=(1, 3))
+        if ink.any():
+            ink = _frame_by_height(_drop_dust(ink))
+        top = ink
         levels = []
         for _ in range(scales):
             levels.append(_level(ink))
@@ -83,27 +157,57 @@ class ShapeTarget:
             if s < 16:
                 break
             ink = ink[: 2 * s, : 2 * s].reshape(s, 2, s, 2).any(axis=(1, 3))
-        return cls(f, tuple(levels))
+        return cls(f, top, tuple(levels))
 
     @property
     def size(self) -> int:
         return int(self.image.shape[0])
+
+    @cached_property
+    def trunk(self) -> np.ndarray:
+        """(k, 2) row, column of the trunk's centre line: the rows at the bottom of the
+        filled silhouette narrower than ``TRUNK_WIDTH`` of its widest row."""
+        filled = self.levels[0].sdf <= 0 if self.levels[0].n else self.ink
+        width = filled.sum(axis=1)
+        rows = np.flatnonzero(width)
+        if rows.size == 0:
+            return np.zeros((0, 2))
+        narrow = width[rows] < TRUNK_WIDTH * width.max()
+        k = int(np.argmin(narrow[::-1])) if not narrow.all() else rows.size
+        trunk_rows = rows[rows.size - k :]
+        cols = np.arange(filled.shape[1])
+        centre = (filled[trunk_rows] * cols).sum(axis=1) / width[trunk_rows]
+        return np.stack([trunk_rows, centre], axis=1)
+
+    @property
+    def stem(self) -> float:
+        """The trunk's height as a fraction of the drawing's height (0 when blank)."""
+        rows = np.flatnonzero(self.ink.any(axis=1))
+        if rows.size == 0:
+            return 0.0
+        return len(self.trunk) / (rows[-1] - rows[0] + 1)
 
     def distance(self, other: ShapeTarget) -> float:
         return target_shape_distance(self, other)
 
 
 def _level_distance(a: _ShapeLevel, b: _ShapeLevel) -> float:
-    side = a.soft.shape[0]
+    side = a.sdf.shape[0]
     if a.n == 0 and b.n == 0:
         return 0.0
     if a.n == 0 or b.n == 0:
         return 1.0 + OUTLINE_WEIGHT
-    inter = float(np.minimum(a.soft, b.soft).sum())
-    union = float(np.maximum(a.soft, b.soft).sum())
-    iou = inter / union if union > 0 else 1.0
-    chamfer = 0.5 * (float(b.dist[a.outline].mean()) + float(a.dist[b.outline].mean())) / side
-    return (1.0 - iou) + OUTLINE_WEIGHT * chamfer
+    # a's outline seen from b (outside b > 0) and b's from a, with a's sign: an outline
+    # drawn t pixels around the other gives t everywhere
+    v = np.concatenate([b.sdf[a.outline], -a.sdf[b.outline]])
+    c = float(np.clip(np.median(v), -OFFSET_LIMIT * side, OFFSET_LIMIT * side))
+    chamfer = float(np.abs(v - c).mean()) / side
+    ramp = max(2.0, side / 48)  # soft edge: the distance moves smoothly with the outline
+    sa = np.clip(0.5 - (a.sdf + 0.5 * c) / ramp, 0.0, 1.0)
+    sb = np.clip(0.5 - (b.sdf - 0.5 * c) / ramp, 0.0, 1.0)
+    union = float(np.maximum(sa, sb).sum())
+    iou = float(np.minimum(sa, sb).sum()) / union if union > 0 else 1.0
+    return (1.0 - iou) + OUTLINE_WEIGHT * chamfer + OFFSET_WEIGHT * abs(c) / side
 
 
 def target_shape_distance(a: ShapeTarget, b: ShapeTarget) -> float:
@@ -118,3 +222,29 @@ def shape_distance(a: Any, b: Any, size: int = 128, scales: int = 3) -> float:
     return target_shape_distance(
         ShapeTarget.from_image(a, size, scales), ShapeTarget.from_image(b, size, scales)
     )
+
+
+def line_distance(drawing: ShapeTarget, tree: ShapeTarget) -> float:
+    """How far ``drawing`` is from being a drawing of ``tree`` (both prepared at one size):
+    the mean distance of the drawing's ink outside the tree's silhouette beyond the
+    ``OFFSET_LIMIT`` allowance, plus the mean distance of the tree's trunk centre line
+    outside the drawing's filled shape, both as fractions of the side, plus ``STEM_WEIGHT``
+    times the drawing's missing stem, ``max(0, MIN_STEM - drawing.stem)`` (see the module
+    text)."""
+    if drawing.image.shape != tree.image.shape:
+        raise ValueError(f"sketch sizes differ: {drawing.image.shape} vs {tree.image.shape}")
+    side = drawing.size
+    if not drawing.ink.any() or tree.levels[0].n == 0:
+        return 1.0
+    outside = tree.levels[0].sdf[drawing.ink] - OFFSET_LIMIT * side
+    stray = float(np.maximum(outside, 0.0).mean()) / side
+    stemless = STEM_WEIGHT * max(0.0, MIN_STEM - drawing.stem)
+    pts = tree.trunk
+    if len(pts) == 0:
+        return stray + stemless
+    r = pts[:, 0].astype(int)
+    c = np.clip(np.round(pts[:, 1]).astype(int), 0, side - 1)
+    # from the drawing's filled shape, not its lines: a trunk drawn as two lines has
+    # its centre line between them
+    missing = float(np.maximum(drawing.levels[0].sdf[r, c], 0.0).mean()) / side
+    return stray + missing + stemless

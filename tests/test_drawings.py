@@ -1,13 +1,19 @@
 """A person's drawing, not only our renderer's: pencil on grey paper, a drawing in a corner of
 a big page, a dark page, noise.  The one reader normalises them; the network and the
-refinement see the same normalised image."""
+refinement see the same normalised image.  The style-blind distance puts one tree drawn in
+two styles closer than two trees of a species, and the low-confidence warning flags what is
+not a tree but not a plain outline drawing of one."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
+from PIL import Image, ImageDraw
 
 from refine.objective import SearchSpace
+from refine.shape import shape_distance
 from render.reader import FRAME_BOTTOM, SketchError, normalise_drawing
 from treesketch import Pipeline, RefineSettings
 from treesketch.pipeline import prepare_input
@@ -100,11 +106,70 @@ def test_dark_page_is_a_clear_error() -> None:
         prepare_input(disc)
 
 
+def _drawn(seed: int, style: str, index: int) -> np.ndarray:
+    """Maple ``seed`` at yaw 30 drawn in ``style`` (as benchmarks/bench_distance.py draws)."""
+    from render.sketch import SketchRenderer
+    from render.styles import Silhouettes, draw
+
+    tree = build_mesh(grow(species.sample("maple", seed)), species="maple")
+    sil = Silhouettes.from_parts(SketchRenderer(tree).parts(30.0, 256))
+    return normalise_drawing(draw(style, sil, np.random.default_rng([seed, index]), 256), 256)
+
+
+def test_one_tree_in_two_styles_is_closer_than_two_trees_of_a_species() -> None:
+    a_sg, a_cloud = _drawn(1, "sg", 0), _drawn(1, "cloud", 1)
+    b_sg, b_cloud = _drawn(2, "sg", 0), _drawn(2, "cloud", 1)
+    same_tree = shape_distance(a_sg, a_cloud)
+    assert shape_distance(a_sg, a_sg) == 0.0
+    assert same_tree == pytest.approx(shape_distance(a_cloud, a_sg), abs=1e-9)
+    assert same_tree < 0.8 * shape_distance(a_sg, b_sg)
+    assert same_tree < 0.8 * shape_distance(a_cloud, b_cloud)
+
+
+def _face() -> np.ndarray:
+    im = Image.new("L", (256, 256), 255)
+    d = ImageDraw.Draw(im)
+    d.ellipse((28, 28, 228, 228), outline=0, width=3)
+    d.ellipse((78, 80, 98, 100), fill=0)
+    d.ellipse((158, 80, 178, 100), fill=0)
+    d.arc((78, 110, 178, 190), 20, 160, fill=0, width=3)
+    return np.asarray(im)
+
+
+def _house() -> np.ndarray:
+    im = Image.new("L", (256, 256), 255)
+    d = ImageDraw.Draw(im)
+    d.rectangle((50, 115, 205, 230), outline=0, width=3)
+    d.line([(40, 115), (128, 40), (215, 115)], fill=0, width=3)
+    d.rectangle((112, 170, 143, 230), outline=0, width=3)
+    return np.asarray(im)
+
+
+HAND = Path(__file__).resolve().parents[1] / "examples" / "hand"
+NOT_TREES = {
+    "noise": lambda: ((np.random.default_rng(0).random((256, 256)) > 0.6) * 255).astype(np.uint8),
+    "face": _face,
+    "house": _house,
+}
+
+
+@pytest.fixture(scope="module")
+def refining() -> Pipeline:
+    return Pipeline("tsn", RefineSettings(budget=10, species_tries=1))
+
+
 @pytest.mark.slow
-def test_noise_gets_the_warning() -> None:
-    noise = ((np.random.default_rng(0).random((256, 256)) > 0.6) * 255).astype(np.uint8)
-    r = Pipeline("tsn", RefineSettings(budget=6)).run(noise)
-    assert r.warning is not None and "low confidence" in r.warning
+@pytest.mark.parametrize("kind", sorted(NOT_TREES))
+def test_what_is_not_a_tree_gets_the_warning(kind: str, refining: Pipeline) -> None:
+    r = refining.run(NOT_TREES[kind]())
+    assert r.warning is not None and "low confidence" in r.warning, r.losses
+
+
+@pytest.mark.slow
+def test_a_plain_outline_tree_gets_no_warning(refining: Pipeline) -> None:
+    # a child's tree: a cloud of a crown on a trunk drawn as two lines, nothing inside
+    r = refining.run(HAND / "cloud_tree.png")
+    assert r.warning is None, r.losses
 
 
 def on_lined_paper(img: np.ndarray, page: int = 512) -> np.ndarray:

@@ -24,9 +24,10 @@ from typing import Any
 
 import numpy as np
 
-from refine.objective import metric_distance
+from refine.objective import framed, metric_distance
 from refine.search import Cancelled, RefineResult, RefineSettings
 from refine.search import refine as refine_search
+from refine.shape import ShapeTarget, line_distance
 from render.reader import DRAWING_SIDE, SketchError, normalise_drawing, read_sketch
 from weberpenn import TreeParams, build_mesh, grow
 
@@ -48,14 +49,16 @@ __all__ = [
     "predict_then_refine",
     "prepare_input",
     "rescale_height",
+    "tree_line_distance",
 ]
 
 SKETCH_SIZE = DRAWING_SIDE  # the size sketches are prepared at (TSN crops and resizes from it)
 # the result is flagged when the best tree's sketch is this far from the input, by the
-# style-blind shape distance (a circle can pass for a crown) or by the line distance (a
-# drawing of a tree has a trunk and branches somewhere); calibrated in RESULTS.md
-LOW_CONFIDENCE_LOSS = 0.6
-LOW_CONFIDENCE_INK = 0.84
+# style-blind shape distance (a circle can pass for a crown) or by the line distance
+# (``refine.shape.line_distance``: ink the tree's shape does not explain, a trunk where
+# nothing is drawn); calibrated in RESULTS.md
+LOW_CONFIDENCE_LOSS = 0.7
+LOW_CONFIDENCE_INK = 0.035
 MAX_HEIGHT = 200.0  # metres: taller than any tree that grows
 
 
@@ -164,6 +167,16 @@ def rescale_height(params: TreeParams, height: float) -> TreeParams:
         g = height / again
         out = out.replace(scale=float(out["scale"]) * g, scaleV=float(out["scaleV"]) * g)
     return out
+
+
+def tree_line_distance(drawing: Any, tree_sketch: Any, size: int) -> float:
+    """``refine.shape.line_distance`` of a drawing and a tree's sketch, both framed as the
+    refinement frames them (a tree too small to draw anything is as far as can be)."""
+    try:
+        tree = ShapeTarget.from_image(framed(tree_sketch, size), size)
+    except SketchError:
+        return 1.0
+    return line_distance(ShapeTarget.from_image(framed(drawing, size), size), tree)
 
 
 def _confidence(loss: float, ink: float) -> tuple[float, str | None]:
@@ -302,7 +315,7 @@ class Pipeline:
             mesh1 = build_mesh(grow(params1), species=name)
             timings["height"] = time.perf_counter() - t
 
-        ink_after = metric_distance(img, after, cfg.size, "ink")
+        ink_after = tree_line_distance(img, after, cfg.size)
         confidence, warning = _confidence(loss_after, ink_after)
         timings["total"] = sum(timings.values())
         return Result(
