@@ -2,7 +2,7 @@
 
     .venv/bin/python benchmarks/bench_styles.py timing [--trees 5]
     .venv/bin/python benchmarks/bench_styles.py loso --data DS --hold-out pencil,cloud \\
-        [--epochs 3] [--work DIR] [--init checkpoints/tsn_lite0.pt] [--json OUT.json]
+        [--epochs 3] [--work DIR] [--init checkpoints/tsn_lite0_sg.pt] [--json OUT.json]
 
 ``timing``: milliseconds per 256-pixel sketch of every style on the silhouettes of one
 tree of each species (``species.sample(name, seed=1)``, front view), median of
@@ -172,7 +172,11 @@ def main() -> None:
     lo = sub.add_parser("loso")
     lo.add_argument("--data", required=True)
     lo.add_argument("--hold-out", default="pencil,cloud")
-    lo.add_argument("--init", default=str(ROOT / "checkpoints" / "tsn_lite0.pt"))
+    lo.add_argument(
+        "--init",
+        default=str(ROOT / "checkpoints" / "tsn_lite0_sg.pt"),
+        help="checkpoint to start from: one that never saw the held-out style (SG only)",
+    )
     lo.add_argument("--work", default="/tmp/bench_styles")
     lo.add_argument("--cache", default=None, help="feature cache folder (default WORK/cache)")
     lo.add_argument("--epochs", type=int, default=3)
