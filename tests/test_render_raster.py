@@ -16,9 +16,11 @@ from weberpenn.lod import drop_thin_stems
 from weberpenn.treemesh import TreeMesh
 
 # fast path vs the full one, on a 128 px sketch (measured worst over the five species,
-# seeds 0-2, two yaws: 0.73 % of pixels, distance 0.0005; benchmarks/RESULTS.md)
+# seeds 0-2, two yaws: 0.73 % of pixels, distance 0.0005 with the shape distance of the
+# time, benchmarks/RESULTS.md; the style-blind distance that frames at twice the size
+# gives up to 0.0056 on the bonsai here)
 MAX_PIXELS_CHANGED = 0.015
-MAX_DISTANCE = 0.005
+MAX_DISTANCE = 0.01
 
 
 def test_hit_mask_covers_exactly_the_sample_centres_inside() -> None:

@@ -53,6 +53,9 @@ def client(ray_session: None, tmp_path_factory: pytest.TempPathFactory) -> Itera
         estimator=ESTIMATOR,
         default_budget=3,
         executor="ray",
+        # the cancel test checks the flag path: on a busy 2-core machine one evaluation can
+        # outlast the default 3 s grace, and the kill would hide whether the flag worked
+        cancel_grace=30.0,
     )
     with TestClient(create_app(config)) as c:
         yield c
@@ -158,8 +161,8 @@ def test_cancel_a_running_job(client: TestClient, sketch: bytes) -> None:
     r = client.delete(f"/jobs/{job_id}")
     assert r.status_code == 202 and r.json()["cancelling"]
     t0 = time.monotonic()
-    body = wait_for(client, job_id, finished, timeout=30)
-    assert body["state"] == "cancelled" and time.monotonic() - t0 < 10
+    body = wait_for(client, job_id, finished, timeout=40)
+    assert body["state"] == "cancelled" and time.monotonic() - t0 < 25
     assert pool.replaced == replaced  # stopped by its flag, not killed
     assert client.get("/health").json()["busy"] == 0
 
