@@ -178,6 +178,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--budget", type=int, default=RefineSettings().budget)
     ap.add_argument("--time-limit", type=float, default=RefineSettings().time_limit)
     ap.add_argument("--samples", type=int, default=DEFAULT_SAMPLES)
+    ap.add_argument(
+        "--global-evals",
+        type=int,
+        default=RefineSettings().global_evals,
+        help="evaluations of the global stage (GN_CRS2_LM) before the local search, within the budget",
+    )
     args = ap.parse_args(argv)
     if args.markdown is not None:
         print(markdown(json.loads(args.markdown.read_text())))
@@ -185,7 +191,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.samples < 1:
         ap.error(f"--samples must be >= 1, got {args.samples}")
     try:
-        settings = RefineSettings(budget=args.budget, time_limit=args.time_limit).validate()
+        settings = RefineSettings(
+            budget=args.budget, time_limit=args.time_limit, global_evals=args.global_evals
+        ).validate()
     except ValueError as e:
         ap.error(str(e))
     files = gt_files(args.species)

@@ -206,6 +206,12 @@ def main(argv: list[str] | None = None) -> int:
         "--prior-weight", type=float, default=None, help="pull towards the first estimate"
     )
     ap.add_argument(
+        "--global-evals",
+        type=int,
+        default=None,
+        help="evaluations of the global stage (GN_CRS2_LM) before the local one, within the budget",
+    )
+    ap.add_argument(
         "--align-step", type=float, default=15.0, help="turns tried for the aligned distance"
     )
     ap.add_argument("--json", type=Path, default=None)
@@ -232,6 +238,8 @@ def main(argv: list[str] | None = None) -> int:
         settings = settings.replace(initial_step=args.initial_step)
     if args.prior_weight is not None:
         settings = settings.replace(prior_weight=args.prior_weight)
+    if args.global_evals is not None:
+        settings = settings.replace(global_evals=args.global_evals)
     if args.hold is not None:
         settings = settings.replace(hold=tuple(k for k in args.hold.split(",") if k))
     try:
