@@ -184,6 +184,11 @@ def main(argv: list[str] | None = None) -> int:
         default=RefineSettings().global_evals,
         help="evaluations of the global stage (GN_CRS2_LM) before the local search, within the budget",
     )
+    ap.add_argument(
+        "--known-yaw",
+        action="store_true",
+        help="keep the view at the front, the sketch's true view (an oracle): no yaw search",
+    )
     args = ap.parse_args(argv)
     if args.markdown is not None:
         print(markdown(json.loads(args.markdown.read_text())))
@@ -192,7 +197,10 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(f"--samples must be >= 1, got {args.samples}")
     try:
         settings = RefineSettings(
-            budget=args.budget, time_limit=args.time_limit, global_evals=args.global_evals
+            budget=args.budget,
+            time_limit=args.time_limit,
+            global_evals=args.global_evals,
+            search_yaw=not args.known_yaw,
         ).validate()
     except ValueError as e:
         ap.error(str(e))
