@@ -128,8 +128,8 @@ def markdown(recs: list[dict]) -> str:
     """Per-tree and per-species tables and the summary against the issue's targets."""
     out = [
         "| tree | species (TSN -> refined) | TSN max | refined max | TSN p->g / g->p "
-        "| refined p->g / g->p | sketch loss | evals | s |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| refined p->g / g->p | sketch loss | yaw found | evals | s |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in recs:
         t, f = r["tsn"], r["refined"]
@@ -138,7 +138,8 @@ def markdown(recs: list[dict]) -> str:
             f"| {t['max']:.4f} | {f['max']:.4f} "
             f"| {t['pred_to_gt_vertex']:.4f} / {t['gt_to_pred_vertex']:.4f} "
             f"| {f['pred_to_gt_vertex']:.4f} / {f['gt_to_pred_vertex']:.4f} "
-            f"| {r['loss_before']:.4f} -> {r['loss_after']:.4f} | {r['evaluations']} "
+            f"| {r['loss_before']:.4f} -> {r['loss_after']:.4f} | {r['yaw_found']:.0f} "
+            f"| {r['evaluations']} "
             f"| {r['seconds']:.0f} |"
         )
     out += [
