@@ -128,8 +128,8 @@ def markdown(recs: list[dict]) -> str:
     """Per-tree and per-species tables and the summary against the issue's targets."""
     out = [
         "| tree | species (TSN -> refined) | TSN max | refined max | TSN p->g / g->p "
-        "| refined p->g / g->p | sketch loss | evals | s |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| refined p->g / g->p | sketch loss | yaw found | evals | s |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in recs:
         t, f = r["tsn"], r["refined"]
@@ -138,7 +138,8 @@ def markdown(recs: list[dict]) -> str:
             f"| {t['max']:.4f} | {f['max']:.4f} "
             f"| {t['pred_to_gt_vertex']:.4f} / {t['gt_to_pred_vertex']:.4f} "
             f"| {f['pred_to_gt_vertex']:.4f} / {f['gt_to_pred_vertex']:.4f} "
-            f"| {r['loss_before']:.4f} -> {r['loss_after']:.4f} | {r['evaluations']} "
+            f"| {r['loss_before']:.4f} -> {r['loss_after']:.4f} | {r['yaw_found']:.0f} "
+            f"| {r['evaluations']} "
             f"| {r['seconds']:.0f} |"
         )
     out += [
@@ -178,6 +179,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--budget", type=int, default=RefineSettings().budget)
     ap.add_argument("--time-limit", type=float, default=RefineSettings().time_limit)
     ap.add_argument("--samples", type=int, default=DEFAULT_SAMPLES)
+    ap.add_argument(
+        "--global-evals",
+        type=int,
+        default=RefineSettings().global_evals,
+        help="evaluations of the global stage (GN_CRS2_LM) before the local search, within the budget",
+    )
+    ap.add_argument(
+        "--known-yaw",
+        action="store_true",
+        help="keep the view at the front, the sketch's true view (an oracle): no yaw search",
+    )
     args = ap.parse_args(argv)
     if args.markdown is not None:
         print(markdown(json.loads(args.markdown.read_text())))
@@ -185,7 +197,12 @@ def main(argv: list[str] | None = None) -> int:
     if args.samples < 1:
         ap.error(f"--samples must be >= 1, got {args.samples}")
     try:
-        settings = RefineSettings(budget=args.budget, time_limit=args.time_limit).validate()
+        settings = RefineSettings(
+            budget=args.budget,
+            time_limit=args.time_limit,
+            global_evals=args.global_evals,
+            search_yaw=not args.known_yaw,
+        ).validate()
     except ValueError as e:
         ap.error(str(e))
     files = gt_files(args.species)

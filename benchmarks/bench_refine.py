@@ -59,8 +59,9 @@ from weberpenn.fileio import atomic_write  # noqa: E402
 VIEW_ORDER = ("front", "left", "back", "right")
 
 
-def pick_rows(data: Path, per_species: int) -> list[dict]:
-    rows = read_manifest(data, split="test")
+def pick_rows(data: Path, per_species: int, style: str = "sg") -> list[dict]:
+    # a mixed-style dataset has one row per style of each view: keep one style
+    rows = [r for r in read_manifest(data, split="test") if r.get("style", "sg") == style]
     out = []
     for name in species.SPECIES:
         trees = sorted({r["tree_id"] for r in rows if r["species"] == name})[:per_species]
@@ -176,6 +177,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=Path("/work/data/ds_v1"))
     ap.add_argument("--per-species", type=int, default=5)
+    ap.add_argument("--style", default="sg", help="drawing style of a mixed-style dataset")
     ap.add_argument("--budget", type=int, default=RefineSettings().budget)
     ap.add_argument("--time-limit", type=float, default=RefineSettings().time_limit)
     ap.add_argument("--estimator", choices=("tsn", "nns", "perturbed"), default="tsn")
@@ -206,6 +208,12 @@ def main(argv: list[str] | None = None) -> int:
         "--prior-weight", type=float, default=None, help="pull towards the first estimate"
     )
     ap.add_argument(
+        "--global-evals",
+        type=int,
+        default=None,
+        help="evaluations of the global stage (GN_CRS2_LM) before the local one, within the budget",
+    )
+    ap.add_argument(
         "--align-step", type=float, default=15.0, help="turns tried for the aligned distance"
     )
     ap.add_argument("--json", type=Path, default=None)
@@ -232,6 +240,8 @@ def main(argv: list[str] | None = None) -> int:
         settings = settings.replace(initial_step=args.initial_step)
     if args.prior_weight is not None:
         settings = settings.replace(prior_weight=args.prior_weight)
+    if args.global_evals is not None:
+        settings = settings.replace(global_evals=args.global_evals)
     if args.hold is not None:
         settings = settings.replace(hold=tuple(k for k in args.hold.split(",") if k))
     try:
@@ -241,7 +251,7 @@ def main(argv: list[str] | None = None) -> int:
     only = None if args.species is None else set(args.species.split(","))
     cases = [
         (k, row)
-        for k, row in enumerate(pick_rows(args.data, args.per_species))
+        for k, row in enumerate(pick_rows(args.data, args.per_species, args.style))
         if only is None or row["species"] in only
     ]
     worker = CaseWorker(

@@ -268,11 +268,16 @@ def _ink_of(flat: np.ndarray) -> np.ndarray:
 RULED_ROW = 0.6  # a thin horizontal line over this much of the page width is ruling
 RULED_COLUMN = 0.8  # a thin vertical line over this much of the page height (a margin)
 RULED_THICK = 5  # rows (columns) a ruled line, tilt included, may cover at most
+# a ruling belongs to the page: it runs to (nearly) both page edges; a drawn stroke that
+# spans most of the page (a palm's or a pine's trunk in a framed sketch) stops short of
+# them (the renderer's frame keeps 3-4 % of the side blank all round)
+RULED_EDGE = 0.02
 
 
 def _drop_ruled_lines(ink: np.ndarray) -> np.ndarray:
     """Ink without the ruled lines and margin of lined paper (long, thin, straight lines
-    across the page), keeping the drawing's strokes where they cross them."""
+    across the page, from edge to edge), keeping the drawing's strokes where they cross
+    them."""
     from scipy import ndimage
 
     out = ink.copy()
@@ -289,6 +294,10 @@ def _drop_ruled_lines(ink: np.ndarray) -> np.ndarray:
         for i, sl in enumerate(ndimage.find_objects(runs), start=1):
             lo, hi = sl[0].start, sl[0].stop
             if hi - lo > RULED_THICK or i > n:  # a dense scribble, not a ruled line
+                continue
+            band = a[lo:hi].any(axis=0)
+            edge = max(1, round(RULED_EDGE * band.size))
+            if not (band[:edge].any() and band[-edge:].any()):  # a stroke, not the page's
                 continue
             lo, hi = max(lo - 1, 0), min(hi + 1, a.shape[0])
             above = a[lo - 1] if lo > 0 else np.zeros(a.shape[1], bool)
