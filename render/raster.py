@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from .camera import Camera, Framing, check_size
-from .silhouette import Coverage, mesh_arrays
+from .silhouette import Coverage, downsample, mesh_arrays
 
 __all__ = ["RasterScene", "hit_mask"]
 
@@ -176,18 +176,6 @@ def _convex_runs(
     return row[keep], c0[keep].astype(np.int64), c1[keep].astype(np.int64)
 
 
-def _mask_coverage(mask: np.ndarray, ss: int) -> np.ndarray:
-    """``downsample(mask.astype(np.float32), ss)``, the same values: the count of covered
-    samples per pixel, summed over strided views as small integers, times 1 / ss^2."""
-    if ss == 1:
-        return mask.astype(np.float32)
-    count = np.zeros((mask.shape[0] // ss, mask.shape[1] // ss), dtype=np.uint16)
-    for i in range(ss):
-        for j in range(ss):
-            count += mask[i::ss, j::ss]
-    return count.astype(np.float32) * np.float32(1.0 / (ss * ss))
-
-
 class RasterScene:
     """A tree's branch and leaf triangles, drawn by :func:`hit_mask` (no mitsuba); the
     branch tubes by their triangles facing the camera.
@@ -232,6 +220,6 @@ class RasterScene:
                 hits.append(np.zeros((n, n), bool))
             else:
                 hits.append(hit_mask(*part, cam, n, front_only=front))
-        cov_b = _mask_coverage(hits[0], ss)
-        cov_l = _mask_coverage(hits[1], ss_leaf)
+        cov_b = downsample(hits[0].astype(np.float32), ss)
+        cov_l = downsample(hits[1].astype(np.float32), ss_leaf)
         return Coverage(cov_b, cov_l, hits[0] if keep_hr else None)

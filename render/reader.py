@@ -290,10 +290,10 @@ def _drop_ruled_lines(ink: np.ndarray) -> np.ndarray:
         flagged = near.mean(axis=1) > frac
         if not flagged.any():
             continue
-        runs, n = ndimage.label(flagged)
-        for i, sl in enumerate(ndimage.find_objects(runs), start=1):
+        runs, _ = ndimage.label(flagged)
+        for sl in ndimage.find_objects(runs):
             lo, hi = sl[0].start, sl[0].stop
-            if hi - lo > RULED_THICK or i > n:  # a dense scribble, not a ruled line
+            if hi - lo > RULED_THICK:  # a dense scribble, not a ruled line
                 continue
             band = a[lo:hi].any(axis=0)
             edge = max(1, round(RULED_EDGE * band.size))
