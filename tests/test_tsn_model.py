@@ -5,7 +5,14 @@ from __future__ import annotations
 import pytest
 import torch
 
-from tsn.model import BACKBONES, TSN, ModelError, lite0_weights_path, make_backbone
+from tsn.model import (
+    BACKBONES,
+    TSN,
+    ModelError,
+    fold_batchnorm,
+    lite0_weights_path,
+    make_backbone,
+)
 from weberpenn.params import HEAD_KEYS, HEADS
 
 
@@ -57,3 +64,26 @@ def test_registry_and_second_backbone() -> None:
     assert len(net.frozen_modules(2)) == 2
     with pytest.raises(ModelError, match="unknown backbone"):
         make_backbone("vgg99")
+
+
+@pytest.mark.parametrize("backbone", ["lite0", "resnet_small"])
+def test_folded_batchnorm_gives_the_same_outputs(backbone: str) -> None:
+    torch.manual_seed(1)
+    net = TSN(backbone, pretrained=False)
+    # non-trivial running statistics, as a trained network has
+    for m in net.modules():
+        if isinstance(m, torch.nn.BatchNorm2d):
+            m.running_mean.uniform_(-0.5, 0.5)
+            m.running_var.uniform_(0.5, 2.0)
+            m.weight.data.uniform_(0.5, 1.5)
+            m.bias.data.uniform_(-0.2, 0.2)
+    net.eval()
+    folded = fold_batchnorm(net)
+    assert not any(isinstance(m, torch.nn.BatchNorm2d) for m in folded.modules())
+    # the original is untouched (training goes on with its batch norms)
+    assert any(isinstance(m, torch.nn.BatchNorm2d) for m in net.modules())
+    x = torch.rand(3, 1, 96, 96)  # even and odd "same" paddings both occur
+    with torch.no_grad():
+        a, b = net(x), folded(x)
+    for h in HEADS:
+        torch.testing.assert_close(b[h], a[h], rtol=1e-4, atol=1e-5)
