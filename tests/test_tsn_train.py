@@ -246,7 +246,8 @@ def test_styles_filter_and_fine_tune_from_a_checkpoint(tmp_path: Path) -> None:
 
 def test_training_sketches_are_normalised_like_predicts_input(tiny: Path, tmp_path: Path) -> None:
     from render.reader import normalise_drawing
-    from tsn.train import cache_key, normalised
+    from tsn.model import TSN
+    from tsn.train import cache_key, frozen_digest, normalised
 
     split = load_split(tiny, "train")
     img = split.images[0]
@@ -259,9 +260,23 @@ def test_training_sketches_are_normalised_like_predicts_input(tiny: Path, tmp_pa
     # normalised and raw features never share a cache file
     on = TrainConfig(str(tiny), str(tmp_path / "a.pt"))
     off = TrainConfig(str(tiny), str(tmp_path / "a.pt"), normalise=False)
-    assert on.normalise and cache_key(on, 3, split, "train", None) != cache_key(
-        off, 3, split, "train", None
+    assert on.normalise and cache_key(on, 3, split, "train", None, "w") != cache_key(
+        off, 3, split, "train", None, "w"
     )
+    # the key follows the frozen weights, not the init checkpoint's path
+    assert cache_key(on, 3, split, "train", None, "w") != cache_key(
+        on, 3, split, "train", None, "v"
+    )
+    torch.manual_seed(0)
+    a, b = TSN("resnet_small", pretrained=False), TSN("resnet_small", pretrained=False)
+    b.load_state_dict(a.state_dict())
+    assert frozen_digest(a, 2) == frozen_digest(b, 2)
+    with torch.no_grad():
+        b.heads["angle"][1].bias.add_(1.0)  # trained past the cut: same features
+    assert frozen_digest(a, 2) == frozen_digest(b, 2)
+    with torch.no_grad():
+        b.backbone.stem[0].weight.mul_(1.01)  # a frozen stage changed: new features
+    assert frozen_digest(a, 2) != frozen_digest(b, 2)
     ck = tmp_path / "n.pt"
     r = CliRunner().invoke(
         app,

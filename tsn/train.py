@@ -226,7 +226,23 @@ def fit_species_id(split: Split, normaliser: encoding.Normaliser) -> SpeciesIden
 
 
 # ----------------------------------------------------------------------------- cache
-def cache_key(cfg: TrainConfig, cut: int, split: Split, tag: str, data: str | None) -> str:
+def frozen_digest(model: TSN, cut: int) -> str:
+    """A digest of the weights of the first ``cut`` stages: the cached features are a
+    function of these (not of where the init checkpoint lives: a renamed checkpoint keeps
+    its cache, one overwritten with other weights does not)."""
+    h = hashlib.sha1()
+    for i, m in enumerate(model.frozen_modules(cut)):
+        for name, t in sorted(m.state_dict().items()):
+            h.update(f"{i}.{name}:{tuple(t.shape)}:{t.dtype}".encode())
+            h.update(t.detach().cpu().contiguous().numpy().tobytes())
+    return h.hexdigest()
+
+
+def cache_key(
+    cfg: TrainConfig, cut: int, split: Split, tag: str, data: str | None, frozen: str
+) -> str:
+    """Name of a feature cache: the data, its split, the input recipe and ``frozen``
+    (:func:`frozen_digest` of the network that computes the features)."""
     h = hashlib.sha1()
     h.update(
         json.dumps(
@@ -236,8 +252,7 @@ def cache_key(cfg: TrainConfig, cut: int, split: Split, tag: str, data: str | No
         ).encode()
     )
     h.update(str(Path(data or cfg.data).resolve()).encode())
-    if cfg.init is not None:  # frozen stages come from that checkpoint
-        h.update(("init:" + str(Path(cfg.init).resolve())).encode())
+    h.update(("frozen:" + frozen).encode())
     h.update("|".join(split.tree_ids).encode())
     return h.hexdigest()[:16]
 
@@ -281,7 +296,8 @@ def build_cache(
     """``(copies + 1, N, ...)`` fp16: version 0 clean, 1.. augmented (seeded per image;
     ``part`` > 0 for the ``more_data`` datasets, so their augmentations differ)."""
     cfg.cache_dir.mkdir(parents=True, exist_ok=True)
-    path = cfg.cache_dir / f"cache_{tag}_{cache_key(cfg, cut, split, tag, data)}.pt"
+    key = cache_key(cfg, cut, split, tag, data, frozen_digest(model, cut))
+    path = cfg.cache_dir / f"cache_{tag}_{key}.pt"
     if path.is_file():
         try:
             t = torch.load(path, map_location="cpu", weights_only=True)
