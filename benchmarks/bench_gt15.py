@@ -38,6 +38,7 @@ sys.path.insert(0, str(ROOT))
 
 from eval.hausdorff import DEFAULT_SAMPLES, rotate_about_trunk, tree_hausdorff  # noqa: E402
 from treesketch import Estimate, Pipeline, RefineSettings, load_estimator  # noqa: E402
+from treesketch.pipeline import rescale_height, tree_height  # noqa: E402
 from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
 from weberpenn.fileio import atomic_write  # noqa: E402
 
@@ -88,23 +89,30 @@ def distances(pred_mesh, gt_mesh, samples: int) -> dict:
     }
 
 
-def run_tree(path: Path, inner, settings: RefineSettings, samples: int) -> dict:
+def run_tree(
+    path: Path, inner, settings: RefineSettings, samples: int, known_height: bool = False
+) -> dict:
     from render.sketch import SketchRenderer
 
     name = species_of(path)
     gt = load_params(path)
     gt_mesh = build_mesh(grow(gt), species=name)
     img = SketchRenderer(gt_mesh, species=name).sketch(0, 256)
+    # a framed sketch shows shape, not size: with ``known_height`` both trees are given
+    # the ground truth's height, as a user passes ``height=`` (pipeline.rescale_height)
+    height = tree_height(gt) if known_height else None
     t0 = time.perf_counter()
-    run = Pipeline(Seeded(inner, int(gt["seed"])), settings).run(img)
+    run = Pipeline(Seeded(inner, int(gt["seed"])), settings).run(img, height=height)
     seconds = time.perf_counter() - t0
     est = run.estimate
-    tsn_mesh = build_mesh(grow(est.params), species=est.species)
+    tsn_params = est.params if height is None else rescale_height(est.params, height)
+    tsn_mesh = build_mesh(grow(tsn_params), species=est.species)
     ref_mesh = rotate_about_trunk(run.tree_mesh, -run.yaw)
     r = run.refinement
     return {
         "file": path.name,
         "species": name,
+        "height_given": height,
         "species_tsn": est.species,
         "species_refined": run.species,
         "tsn": distances(tsn_mesh, gt_mesh, samples),
@@ -190,6 +198,12 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="keep the view at the front, the sketch's true view (an oracle): no yaw search",
     )
+    ap.add_argument(
+        "--known-height",
+        action="store_true",
+        help="give both trees the ground truth's height (as `predict --height`): size is "
+        "not in a framed sketch",
+    )
     args = ap.parse_args(argv)
     if args.markdown is not None:
         print(markdown(json.loads(args.markdown.read_text())))
@@ -210,7 +224,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{len(files)} trees, {settings!r}", flush=True)
     recs: list[dict] = []
     for path in files:
-        rec = run_tree(path, inner, settings, args.samples)
+        rec = run_tree(path, inner, settings, args.samples, args.known_height)
         recs.append(rec)
         print(
             f"{rec['file']:>24} TSN {rec['tsn']['max']:.4f} refined {rec['refined']['max']:.4f}"

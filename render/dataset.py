@@ -66,6 +66,7 @@ import functools
 import io
 import json
 import logging
+import math
 import os
 import sys
 import tempfile
@@ -142,11 +143,20 @@ class DatasetConfig:
             raise DatasetError(f"species listed twice: {', '.join(self.species)}")
         if not self.views:
             raise DatasetError("no views given")
+        yaws = []
         for v in self.views:
-            if v not in VIEWS:
-                raise DatasetError(f"unknown view {v!r}: choose from {', '.join(VIEWS)}")
-        if len(set(self.views)) != len(self.views):
-            raise DatasetError(f"views listed twice: {', '.join(self.views)}")
+            try:
+                yaw = resolve_yaw(v)
+            except ValueError:
+                yaw = math.nan
+            if v not in VIEWS and not (math.isfinite(yaw) and 0 <= yaw < 360 and v == f"{yaw:g}"):
+                raise DatasetError(
+                    f"unknown view {v!r}: choose from {', '.join(VIEWS)} or a yaw in degrees "
+                    "in [0, 360) written plainly (45, 22.5)"
+                )
+            yaws.append(yaw)
+        if len(set(yaws)) != len(yaws):
+            raise DatasetError(f"views listed twice (same yaw): {', '.join(self.views)}")
         for name in ("size", "render_size"):
             v = getattr(self, name)
             if v is not None and (isinstance(v, bool) or int(v) != v or not 32 <= int(v) <= 2048):

@@ -85,12 +85,22 @@ def test_plan_seeds_are_deterministic_and_distinct():
     assert [j.tree_seed for j in alone] == [j.tree_seed for j in jobs if j.species == "palm"]
 
 
+def test_views_between_the_axes_are_yaws_in_degrees():
+    cfg = DatasetConfig(out="x", views=("front", "45", "22.5", "315"))
+    assert cfg.views == ("front", "45", "22.5", "315")
+
+
 @pytest.mark.parametrize(
     "kwargs, match",
     [
         ({"species": ("oak",)}, "unknown species 'oak'"),
         ({"views": ("top",)}, "unknown view 'top'"),
         ({"views": ("front", "front")}, "twice"),
+        ({"views": ("0", "front")}, "twice"),
+        ({"views": ("45.0",)}, "unknown view '45.0'"),
+        ({"views": ("360",)}, "unknown view '360'"),
+        ({"views": ("-30",)}, "unknown view '-30'"),
+        ({"views": ("nan",)}, "unknown view 'nan'"),
         ({"size": 10}, "size"),
         ({"trees_per_species": 0}, "trees_per_species"),
         ({"seed": -1}, "seed"),
