@@ -15,15 +15,15 @@ import multiprocessing as mp
 import os
 import threading
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from multiprocessing.connection import Connection, wait
 from typing import Any
 
+from .progress import LiveProgress
 from .store import JobStore
 
 __all__ = ["WorkerPool"]
 
-SAVE_PROGRESS_EVERY = 1.0
 RESPAWN_BACKOFF = 5.0  # seconds before retrying a worker that could not load its model
 LOAD_ATTEMPTS = 3  # failed loads in a row after which the pool gives up (``broken``)
 
@@ -37,8 +37,6 @@ class _Worker:
     job: str | None = None
     job_started: float = 0.0
     cancel_at: float | None = None
-    saved_at: float = 0.0
-    pending: dict[str, Any] = field(default_factory=dict)
 
 
 class WorkerPool:
@@ -65,7 +63,7 @@ class WorkerPool:
         self._ctx = mp.get_context("spawn")
         self._workers: list[_Worker] = []
         self._lock = threading.Lock()
-        self._live: dict[str, dict[str, Any]] = {}
+        self._live = LiveProgress(store)
         self._wake_r, self._wake_w = self._ctx.Pipe(duplex=False)
         self._stopping = threading.Event()
         self._thread: threading.Thread | None = None
@@ -131,9 +129,7 @@ class WorkerPool:
         return False
 
     def live(self, job_id: str) -> dict[str, Any] | None:
-        with self._lock:
-            p = self._live.get(job_id)
-            return None if p is None else dict(p)
+        return self._live.get(job_id)
 
     def status(self) -> list[dict[str, Any]]:
         with self._lock:
@@ -185,16 +181,10 @@ class WorkerPool:
                 job = self.store.claim_next()
                 if job is None:
                     return
+                self._live.begin(job.id, job.options)
                 with self._lock:
                     w.cancel.value = 0
                     w.job, w.job_started, w.cancel_at = job.id, time.monotonic(), None
-                    self._live[job.id] = {
-                        "evaluations": 0,
-                        "budget": int(job.options.get("budget", 0)),
-                        "best_loss": None,
-                        "elapsed": 0.0,
-                        "stage": "start",
-                    }
                 # a dying process fails the send; _replace then fails the job
                 with contextlib.suppress(OSError):
                     w.conn.send((job.id, job.options))
@@ -216,14 +206,7 @@ class WorkerPool:
             self.error = str(payload)
             return
         if kind == "progress":
-            with self._lock:
-                live = self._live.get(job_id)
-                if live is not None:
-                    live.update(payload)
-            if time.monotonic() - w.saved_at > SAVE_PROGRESS_EVERY:
-                w.saved_at = time.monotonic()
-                budget = live["budget"] if live else None
-                self.store.set_progress(job_id, {**payload, "budget": budget})
+            self._live.update(job_id, payload)
             return
         if kind == "done":
             self.store.finish(job_id, payload)
@@ -233,7 +216,7 @@ class WorkerPool:
             self.store.fail(job_id, str(payload["message"]), input_error=bool(payload["input"]))
         with self._lock:
             w.job, w.cancel_at = None, None
-            self._live.pop(job_id, None)
+        self._live.end(job_id)
 
     def _replace(self, i: int) -> None:
         w = self._workers[i]
@@ -247,8 +230,7 @@ class WorkerPool:
                     f"the worker process died while running this job (exit code {code}); "
                     "submit it again",
                 )
-            with self._lock:
-                self._live.pop(w.job, None)
+            self._live.end(w.job)
         if not w.ready:  # died while loading: retry a few times, slowly, then give up
             self.error = self.error or f"a worker exited while loading (exit code {code})"
             self._load_failures += 1

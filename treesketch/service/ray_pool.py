@@ -30,7 +30,8 @@ import traceback
 from dataclasses import dataclass
 from typing import Any
 
-from .pool import LOAD_ATTEMPTS, RESPAWN_BACKOFF, SAVE_PROGRESS_EVERY
+from .pool import LOAD_ATTEMPTS, RESPAWN_BACKOFF
+from .progress import LiveProgress
 from .store import JobStore
 
 __all__ = ["MAX_ATTEMPTS", "RayWorkerPool"]
@@ -56,7 +57,6 @@ class _Actor:
     run_ref: Any = None
     poll_ref: Any = None
     polled_at: float = 0.0
-    saved_at: float = 0.0
     cancel_at: float | None = None
     killed: bool = False
 
@@ -97,7 +97,7 @@ class RayWorkerPool:
         self._load_failures = 0
         self._actors: list[_Actor] = []
         self._lock = threading.Lock()
-        self._live: dict[str, dict[str, Any]] = {}
+        self._live = LiveProgress(store)
         self._attempts: dict[str, int] = {}  # job id -> runs lost with their actor
         self._wake = threading.Event()
         self._stopping = threading.Event()
@@ -172,9 +172,7 @@ class RayWorkerPool:
             return next((a.handle for a in self._actors if a.job == job_id), None)
 
     def live(self, job_id: str) -> dict[str, Any] | None:
-        with self._lock:
-            p = self._live.get(job_id)
-            return None if p is None else dict(p)
+        return self._live.get(job_id)
 
     def status(self) -> list[dict[str, Any]]:
         with self._lock:
@@ -246,16 +244,10 @@ class RayWorkerPool:
                 self.store.fail(job.id, f"the uploaded sketch is gone: {exc}")
                 continue
             attempt = self._attempts.get(job.id, 0) + 1
+            self._live.begin(job.id, job.options)
             with self._lock:
                 a.job, a.attempt, a.cancel_at = job.id, attempt, None
-                a.polled_at = a.saved_at = time.monotonic()
-                self._live[job.id] = {
-                    "evaluations": 0,
-                    "budget": int(job.options.get("budget", 0)),
-                    "best_loss": None,
-                    "elapsed": 0.0,
-                    "stage": "start",
-                }
+                a.polled_at = time.monotonic()
             a.run_ref = a.handle.run.remote(job.id, job.options, sketch)
 
     def _check(self, i: int) -> None:
@@ -267,7 +259,7 @@ class RayWorkerPool:
             with contextlib.suppress(self._ray.exceptions.RayError):  # run_ref tells why
                 info = self._ray.get(a.poll_ref)
                 if info is not None and a.job is not None:
-                    self._progress(a, info)
+                    self._live.update(a.job, info)
             a.poll_ref = None
         if self._done(a.run_ref):
             self._on_result(i)
@@ -292,17 +284,6 @@ class RayWorkerPool:
             a.ready, a.loaded, a.node, a.pid = True, True, info["node"], int(info["pid"])
             a.actor = info["actor"]
         self._load_failures = 0
-
-    def _progress(self, a: _Actor, info: dict[str, Any]) -> None:
-        assert a.job is not None
-        with self._lock:
-            live = self._live.get(a.job)
-            if live is not None:
-                live.update(info)
-        if time.monotonic() - a.saved_at > SAVE_PROGRESS_EVERY:
-            a.saved_at = time.monotonic()
-            budget = live["budget"] if live else None
-            self.store.set_progress(a.job, {**info, "budget": budget})
 
     def _on_result(self, i: int) -> None:
         from weberpenn.fileio import write_together
@@ -361,7 +342,7 @@ class RayWorkerPool:
     def _release(self, a: _Actor, job_id: str, keep_attempts: bool = False) -> None:
         with self._lock:
             a.job, a.cancel_at = None, None
-            self._live.pop(job_id, None)
+        self._live.end(job_id)
         if not keep_attempts:
             self._attempts.pop(job_id, None)
 
