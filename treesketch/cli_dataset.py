@@ -28,7 +28,10 @@ def build(
         250, "--trees-per-species", min=1, max=100_000, help="Trees per species."
     ),
     views: str = typer.Option(
-        "front,back,left,right", "--views", help="Comma-separated views: front,back,left,right."
+        "front,back,left,right",
+        "--views",
+        help="Comma-separated views: front, back, left, right, or yaws in degrees in [0, 360) "
+        "(45,135,225,315: the views between the axes).",
     ),
     species: str = typer.Option(
         "maple,pine,bonsai,palm,cherry", "--species", help="Comma-separated species."
