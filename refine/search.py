@@ -140,6 +140,9 @@ class RefineSettings:
     pixels, ``refine.objective.sketch_distance``); ``fast_sketch`` (default) draws the
     candidates the cheap way, the same sketch up to a few pixels (``SketchObjective``'s
     ``fast``: thin stems left out, numpy rasteriser), False with mitsuba on the full mesh.
+    ``keep_height`` (``treesketch.Pipeline``, when no height is given): the refined tree is
+    scaled to the height of the estimator's tree of its species, since a sketch framed to
+    its tree shows shape but not size, so the search's size drift is noise.
 
     Species by synthesis (``treesketch.Pipeline``): up to ``species_tries`` species are
     refined, the estimator's best and any other whose score is at least ``species_ratio``
@@ -169,6 +172,7 @@ class RefineSettings:
     species_ratio: float = 0.5
     metric: str = "shape"
     fast_sketch: bool = True
+    keep_height: bool = True
 
     def replace(self, **changes: Any) -> RefineSettings:
         return dataclasses.replace(self, **changes).validate()
@@ -211,8 +215,9 @@ class RefineSettings:
             raise ValueError(f"species_ratio must be in [0, 1], got {self.species_ratio!r}")
         if self.metric not in METRICS:
             raise ValueError(f"metric must be one of {', '.join(METRICS)}, got {self.metric!r}")
-        if not isinstance(self.fast_sketch, bool):
-            raise ValueError(f"fast_sketch must be True or False, got {self.fast_sketch!r}")
+        for flag in ("fast_sketch", "keep_height"):
+            if not isinstance(getattr(self, flag), bool):
+                raise ValueError(f"{flag} must be True or False, got {getattr(self, flag)!r}")
         if not isinstance(self.global_evals, int) or self.global_evals < 0:
             raise ValueError(f"global_evals must be an integer >= 0, got {self.global_evals!r}")
         return self

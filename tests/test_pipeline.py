@@ -90,6 +90,24 @@ def test_no_refine_and_height() -> None:
         rescale_height(species.sample("palm", 1), -2.0)
 
 
+def test_refined_tree_keeps_the_estimates_height() -> None:
+    # the estimate is a bonsai of another seed: the search changes the trunk's length and
+    # bend, which a sketch framed to its tree cannot tell from the tree's size
+    img = _gt_sketch("bonsai", 3)
+    start = tree_height(Fixed("bonsai", 9).tree)
+    kept = Pipeline(Fixed("bonsai", 9), RefineSettings(budget=25)).run(img)
+    free = Pipeline(Fixed("bonsai", 9), RefineSettings(budget=25, keep_height=False)).run(img)
+    assert abs(tree_height(free.params) - start) > 0.01 * start
+    lo, hi = kept.tree_mesh.bounds()
+    assert hi[2] - lo[2] == pytest.approx(start, rel=0.01)
+    # the same shape: only scale and scaleV differ, and the sketch is the refined one
+    differ = {k for k in kept.params.to_dict() if kept.params[k] != free.params[k]}
+    assert differ <= {"scale", "scaleV"}
+    assert kept.losses == free.losses
+    with pytest.raises(ValueError, match="keep_height"):
+        RefineSettings(keep_height=1).validate()
+
+
 @pytest.mark.parametrize("height", [float("inf"), 1e308, float("nan"), 0.0, -1.0])
 def test_bad_height_is_refused_before_any_work(height: float) -> None:
     est = Fixed("palm", 9)

@@ -145,17 +145,22 @@ def check_height(height: float | None) -> float | None:
     return float(height)
 
 
-def tree_height(params: TreeParams) -> float:
-    lo, hi = build_mesh(grow(params)).bounds()
+def mesh_height(mesh: Any) -> float:
+    lo, hi = mesh.bounds()
     return float(np.asarray(hi)[2] - np.asarray(lo)[2])
 
 
-def rescale_height(params: TreeParams, height: float) -> TreeParams:
-    """Scale ``scale`` and ``scaleV`` so the grown tree is ``height`` tall (metres)."""
+def tree_height(params: TreeParams) -> float:
+    return mesh_height(build_mesh(grow(params)))
+
+
+def rescale_height(params: TreeParams, height: float, current: float | None = None) -> TreeParams:
+    """Scale ``scale`` and ``scaleV`` so the grown tree is ``height`` tall (metres);
+    ``current``: the tree's height when already known (saves growing it once)."""
     height = check_height(height)
     if height is None:
         raise ValueError("height must be given")
-    current = tree_height(params)
+    current = tree_height(params) if current is None else float(current)
     if current <= 0:
         raise ValueError("the tree has no height to rescale")
     f = height / current
@@ -309,9 +314,15 @@ class Pipeline:
             loss_before = loss_after = metric_distance(img, before, cfg.size, cfg.metric)
         timings["render"] = time.perf_counter() - t
 
+        if height is None and cfg.keep_height and params1 is not est.params:
+            # the drawing is framed to its tree: it shows shape, not size, so the size the
+            # search drifted to is noise; the estimator's size for this species is the
+            # best guess there is
+            same = name == est.species
+            height = mesh_height(mesh0) if same else tree_height(est.params_for(name))
         if height is not None:
             t = time.perf_counter()
-            params1 = rescale_height(params1, height)
+            params1 = rescale_height(params1, height, current=mesh_height(mesh1))
             mesh1 = build_mesh(grow(params1), species=name)
             timings["height"] = time.perf_counter() - t
 
