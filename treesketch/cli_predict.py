@@ -30,7 +30,10 @@ def predict_command(
         None, "--time-limit", help="Refinement: most seconds (default 50)."
     ),
     height: float = typer.Option(
-        None, "--height", help="Make the tree this tall (metres); a sketch has no size."
+        None,
+        "--height",
+        help="Make the tree this tall (metres); a sketch has no size: without it the tree "
+        "keeps the network's size for its species.",
     ),
     params_path: Path | None = typer.Option(
         None, "--params", help="Also write the parameters (JSON)."
