@@ -10,7 +10,7 @@ import pytest
 from PIL import Image
 from tsn_helpers import make_checkpoint
 
-from render.reader import SketchError
+from render.reader import SketchError, normalise_drawing
 from tsn import predict as tp
 from tsn.checkpoint import CheckpointError
 from tsn.data import augment, preprocess
@@ -141,3 +141,16 @@ def test_shipped_checkpoint_predicts_species() -> None:
         pred = model.predict(img)
         assert pred.species == name
         assert isinstance(pred.params, TreeParams)
+
+
+def test_views_checkpoint_reads_trees_between_the_axes() -> None:
+    from render.sketch import SketchRenderer
+
+    path = Path(__file__).resolve().parents[1] / "checkpoints" / "tsn_lite0_views.pt"
+    model = tp.load_model(path)
+    assert model.size == 192 and model.info["config"]["normalise"] is True
+    for name, seed, yaw in (("palm", 9011, 45.0), ("bonsai", 9012, 160.0), ("pine", 9013, 290.0)):
+        img = SketchRenderer(build_mesh(grow(species.sample(name, seed)), species=name)).sketch(
+            yaw, 256
+        )
+        assert model.predict(normalise_drawing(img)).species == name
