@@ -320,9 +320,10 @@ class Pipeline:
             # best guess there is
             same = name == est.species
             height = mesh_height(mesh0) if same else tree_height(est.params_for(name))
-        if height is not None:
+        current = mesh_height(mesh1)
+        if height is not None and abs(current - height) > 1e-6 * height:
             t = time.perf_counter()
-            params1 = rescale_height(params1, height, current=mesh_height(mesh1))
+            params1 = rescale_height(params1, height, current=current)
             mesh1 = build_mesh(grow(params1), species=name)
             timings["height"] = time.perf_counter() - t
 
