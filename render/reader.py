@@ -265,6 +265,37 @@ def _ink_of(flat: np.ndarray) -> np.ndarray:
     return remove_small_objects(ink, max_size=min_px - 1)
 
 
+STRAY_GAP = 0.08  # of the page's longer side: ink this far from the drawing is apart
+STRAY_SHARE = 0.02  # a part apart from the drawing with less of its ink than this is dust
+
+
+def _drop_strays(ink: np.ndarray) -> np.ndarray:
+    """Ink without the stray marks away from the drawing: groups of ink (strokes joined
+    over gaps up to ``STRAY_GAP`` of the page) holding less than ``STRAY_SHARE`` of the
+    ink, such as pencil dust, a smudge or a speck of dirt in a photo.  They would
+    otherwise stretch the frame and shrink the tree into a corner of it."""
+    from scipy import ndimage
+
+    total = int(ink.sum())
+    if total == 0:
+        return ink
+    r = max(1, int(round(STRAY_GAP * max(ink.shape) / 2)))
+    # join over the gap on a coarse grid (cheap at any page size): blocks of r pixels
+    h, w = ink.shape
+    hb, wb = -(-h // r), -(-w // r)
+    padded = np.pad(ink, ((0, hb * r - h), (0, wb * r - w)))
+    counts = padded.reshape(hb, r, wb, r).sum(axis=(1, 3))
+    near = ndimage.binary_dilation(counts > 0, structure=np.ones((3, 3), bool))
+    lab, n = ndimage.label(near)
+    if n <= 1:
+        return ink
+    share = ndimage.sum_labels(counts, lab, index=np.arange(1, n + 1)) / total
+    keep = np.concatenate([[False], share >= STRAY_SHARE])
+    keep[1 + int(np.argmax(share))] = True
+    mask = np.repeat(np.repeat(keep[lab], r, axis=0), r, axis=1)[:h, :w]
+    return ink & mask
+
+
 RULED_ROW = 0.6  # a thin horizontal line over this much of the page width is ruling
 RULED_COLUMN = 0.8  # a thin vertical line over this much of the page height (a margin)
 RULED_THICK = 5  # rows (columns) a ruled line, tilt included, may cover at most
@@ -340,7 +371,7 @@ def normalise_drawing(img: np.ndarray, size: int = DRAWING_SIDE) -> np.ndarray:
         shape = (max(MIN_SIDE, round(a.shape[1] * s)), max(MIN_SIDE, round(a.shape[0] * s)))
         a = np.asarray(Image.fromarray(a).resize(shape, Image.Resampling.BOX))
     flat = flatten_paper(a)
-    ink = _drop_ruled_lines(_ink_of(flat))
+    ink = _drop_strays(_drop_ruled_lines(_ink_of(flat)))
     frac = float(ink.mean())
     if frac < MIN_INK:
         raise SketchError("the sketch is blank: draw a tree (dark lines on a light page)")

@@ -92,6 +92,26 @@ def test_drawing_in_a_corner_gives_the_same_tree(sketches, pipeline) -> None:
         assert diff.mean() < 0.05 and diff.max() < 0.25
 
 
+def _frame_box(img: np.ndarray) -> tuple[int, int, int, int]:
+    ys = np.flatnonzero((img < 128).any(axis=1))
+    xs = np.flatnonzero((img < 128).any(axis=0))
+    return int(ys[0]), int(ys[-1]), int(xs[0]), int(xs[-1])
+
+
+def test_specks_away_from_the_drawing_do_not_shrink_it(sketches) -> None:
+    """Pencil dust or a speck of dirt far from the tree is not part of the drawing: the
+    tree is framed as without it (not shrunk towards the middle to make room for it)."""
+    for img in sketches.values():
+        page = np.full((512, 512), 255, np.uint8)
+        page[128:384, 128:384] = img
+        dusty = page.copy()
+        for y, x in ((20, 30), (480, 470), (60, 440), (300, 15)):
+            dusty[y : y + 3, x : x + 3] = 60  # a few specks, each 3 x 3 px
+        clean, with_dust = normalise_drawing(page, 256), normalise_drawing(dusty, 256)
+        assert np.abs(np.subtract(_frame_box(clean), _frame_box(with_dust))).max() <= 1
+        assert np.mean(clean != with_dust) < 0.002
+
+
 def test_dark_page_is_a_clear_error() -> None:
     rng = np.random.default_rng(1)
     dark = np.clip(rng.normal(30, 8, (300, 300)), 0, 255).astype(np.uint8)
