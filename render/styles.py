@@ -14,6 +14,8 @@ draws the style's free choices: wave, stroke width, gaps, ...) and the output si
 - ``scribble``: the crown filled with a looping scribble, a filled trunk and branches.
 - ``pencil``: thin, light, broken and doubled lines on off-white or grey textured paper.
 - ``felt``: a felt tip: few thick strokes, a smooth crown outline, the trunk as one stroke.
+- ``bare``: a winter tree: no foliage, the trunk and branches down to the twigs as pen
+  strokes (the thick parts often as two lines).
 
 Each function takes its constants as keyword arguments (pixel sizes are for a 256-pixel
 drawing and scale with the work size); ``STYLES`` maps a name to its function and
@@ -39,6 +41,7 @@ __all__ = [
     "STYLES",
     "Silhouettes",
     "StyleFn",
+    "bare",
     "check_styles",
     "cloud",
     "draw",
@@ -261,14 +264,43 @@ def pen(
         wave = _noise(rng, g.n, rng.uniform(*wave_sigma_px) * s) * rng.uniform(*wave_px) * s
         width = lw * (1.0 + 0.25 * _noise(rng, g.n, 12 * s))
         ink = np.maximum(ink, _stroke(_sdf(crown) + wave, width))
+    ink = np.maximum(ink, _branch_lines(g, rng, lw, twig_px, two_line_trunk))
+    ink = _warp(ink, rng, rng.uniform(*wobble_px) * s, 14 * s)
+    return _finish(ink, size)
+
+
+def _branch_lines(
+    g: _Geometry, rng: np.random.Generator, lw: float, twig_px: float, two_line_trunk: float
+) -> np.ndarray:
+    """Trunk and branches down to ``twig_px`` wide as pen strokes of varying width; with
+    probability ``two_line_trunk`` the thick parts are drawn as two lines instead."""
+    s = g.s
     main = g.main_branches(twig_px)
     if rng.random() < two_line_trunk:  # thick parts as two lines, thin ones as strokes
         thick = _opening(g.branches, 2.5 * s)
-        ink = np.maximum(ink, _stroke(_sdf(thick), lw))
+        ink = _stroke(_sdf(thick), lw)
         main = main & ~ndimage.binary_dilation(thick, iterations=2)
-        ink = np.maximum(ink, _skeleton_strokes(g, main, (0.0, 2.0, 3.5), 1.0, lw / s))
-    else:
-        ink = np.maximum(ink, _skeleton_strokes(g, main, (0.0, 2.0, 3.5, 6.0, 10.0), 1.0, lw / s))
+        return np.maximum(ink, _skeleton_strokes(g, main, (0.0, 2.0, 3.5), 1.0, lw / s))
+    return _skeleton_strokes(g, main, (0.0, 2.0, 3.5, 6.0, 10.0), 1.0, lw / s)
+
+
+def bare(
+    sil: Silhouettes,
+    rng: np.random.Generator,
+    size: int = 256,
+    *,
+    line_px: tuple[float, float] = (1.2, 2.4),
+    twig_px: tuple[float, float] = (0.5, 1.2),
+    two_line_trunk: float = 0.6,
+    wobble_px: tuple[float, float] = (0.5, 1.5),
+) -> np.ndarray:
+    """A bare (winter) tree: no foliage at all, the trunk and the branches down to the
+    twigs as pen strokes (the thick parts often as two lines), as people draw a tree's
+    branching when they leave out its leaves."""
+    g = _geometry(sil)
+    s = g.s
+    lw = rng.uniform(*line_px) * s
+    ink = _branch_lines(g, rng, lw, rng.uniform(*twig_px), two_line_trunk)
     ink = _warp(ink, rng, rng.uniform(*wobble_px) * s, 14 * s)
     return _finish(ink, size)
 
@@ -442,6 +474,7 @@ STYLES: dict[str, StyleFn] = {
     "scribble": scribble,
     "pencil": pencil,
     "felt": felt,
+    "bare": bare,
 }
 
 

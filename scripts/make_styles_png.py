@@ -31,6 +31,7 @@ BLURB = {
     "scribble": "scribbled foliage",
     "pencil": "pencil, textured paper",
     "felt": "felt tip",
+    "bare": "bare (winter) tree",
 }
 
 

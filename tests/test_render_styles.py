@@ -91,3 +91,16 @@ def test_bad_arguments(sil):
         draw("pen", sil, 0, 512)
     with pytest.raises(ValueError, match="square images"):
         Silhouettes(np.ones((4, 5)), np.ones((4, 5)))
+
+
+def test_bare_tree_draws_branches_and_no_foliage(sil):
+    a = draw("bare", sil, 2, 256)
+    ink = a < 128
+    branches = np.asarray(sil.branches) < 0.5
+    leaves_only = (np.asarray(sil.leaves) < 0.9) & (ndimage.distance_transform_edt(~branches) > 6)
+    assert leaves_only.sum() > 500  # the test tree has foliage away from its branches
+    assert ink[leaves_only].mean() < 0.01  # ... and a bare tree draws none of it
+    near_branches = ndimage.distance_transform_edt(~branches) <= 3
+    assert ink[near_branches].mean() > 0.2 and ink[~near_branches].mean() < 0.002
+    pen = draw("pen", sil, 2, 256) < 128
+    assert pen[leaves_only].mean() > 5 * ink[leaves_only].mean()  # the crown outline
