@@ -154,3 +154,18 @@ def test_views_checkpoint_reads_trees_between_the_axes() -> None:
             yaw, 256
         )
         assert model.predict(normalise_drawing(img)).species == name
+
+
+def test_shipped_checkpoint_reads_bare_winter_trees() -> None:
+    """A tree drawn without its foliage (``render.styles.bare``): the shipped network was
+    trained on such drawings and reads the species from the branching alone."""
+    from render.sketch import SketchRenderer
+    from render.styles import Silhouettes, draw
+
+    model = tp.load_model()
+    cases = (("maple", 9021, 20.0), ("cherry", 9022, 200.0), ("bonsai", 9023, 110.0))
+    for name, seed, yaw in cases:
+        tree = build_mesh(grow(species.sample(name, seed)), species=name)
+        sil = Silhouettes.from_parts(SketchRenderer(tree).parts(yaw, 256))
+        img = draw("bare", sil, np.random.default_rng(seed), 256)
+        assert model.predict(normalise_drawing(img)).species == name
