@@ -355,7 +355,9 @@ def calibrate(records: list[dict]) -> dict:
 
 
 def part_warning(args: argparse.Namespace) -> dict:
-    pipe = Pipeline("tsn", RefineSettings(budget=args.budget, species_tries=1))
+    pipe = Pipeline(
+        "tsn", RefineSettings(budget=args.budget, species_tries=1, embedding=args.embedding)
+    )
     cases = [("non-tree", n, img, None) for n, img in non_trees(0)]
     cases += [("tree", d["name"], d["image"], d) for d in tree_drawings(900, 5)]
     if args.hand:  # drawn outside every style: checked, never calibrated on
@@ -407,7 +409,7 @@ def part_warning(args: argparse.Namespace) -> dict:
 def part_refine(args: argparse.Namespace) -> dict:
     from eval.hausdorff import aligned_tree_hausdorff, bbox_diagonal, hausdorff, rotate_about_trunk
 
-    pipe = Pipeline("tsn", RefineSettings(budget=args.budget))
+    pipe = Pipeline("tsn", RefineSettings(budget=args.budget, embedding=args.embedding))
     records: list[dict] = []
     # one of each species at a time, and each case saved as it ends: a run stopped early
     # still has a balanced, readable record
@@ -607,6 +609,11 @@ def main(argv: list[str] | None = None) -> int:
         help="warning: recompute a --json's line distances from its saved sketches (.npz)",
     )
     ap.add_argument("--markdown", type=Path, default=None, help="print the tables of a --json")
+    ap.add_argument(
+        "--embedding",
+        default="shipped",
+        help="RefineSettings.embedding: shipped, none or a checkpoint (warning and refine)",
+    )
     args = ap.parse_args(argv)
     if args.markdown is not None:
         print(markdown(json.loads(args.markdown.read_text())))
@@ -618,7 +625,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.budget is None:
         args.budget = 20 if args.part == "warning" else 40
     try:
-        RefineSettings(budget=args.budget).validate()
+        RefineSettings(budget=args.budget, embedding=args.embedding).validate()
     except ValueError as exc:
         ap.error(str(exc))
     run = {"warning": part_warning, "refine": part_refine, "estimate": part_estimate}[args.part]

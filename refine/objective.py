@@ -185,20 +185,23 @@ def framed(img: Any, size: int) -> np.ndarray:
     return big.reshape(size, 2, size, 2).min(axis=(1, 3))
 
 
-def make_target(img: Any, size: int, metric: str = "shape") -> Any:
+def make_target(img: Any, size: int, metric: str = "shape", embedder: Any = None) -> Any:
     """A prepared sketch for the chosen metric (``ShapeTarget`` or :class:`SketchTarget`);
-    both compare with ``.distance(other)``."""
+    both compare with ``.distance(other)``.  ``embedder`` (``refine.embed.ShapeEmbedder``,
+    shape metric only) adds the learned embedding's term."""
     if metric == "shape":
-        return ShapeTarget.from_image(img, size)
+        return ShapeTarget.from_image(img, size, embedder=embedder)
     if metric == "ink":
         return SketchTarget.from_image(img, size)
     raise ValueError(f"unknown metric {metric!r}; choose one of {', '.join(METRICS)}")
 
 
-def metric_distance(a: Any, b: Any, size: int = 128, metric: str = "shape") -> float:
+def metric_distance(
+    a: Any, b: Any, size: int = 128, metric: str = "shape", embedder: Any = None
+) -> float:
     """The distance the refinement minimises, between two sketches framed alike."""
-    return make_target(framed(a, size), size, metric).distance(
-        make_target(framed(b, size), size, metric)
+    return make_target(framed(a, size), size, metric, embedder).distance(
+        make_target(framed(b, size), size, metric, embedder)
     )
 
 
@@ -375,6 +378,7 @@ class SketchObjective:
     best_space: SearchSpace | None = None
     trace: list[tuple[int, float, float]] = field(default_factory=list)  # (eval, loss, best)
     fast: bool = True
+    embedder: Any = None  # refine.embed.ShapeEmbedder: the one that made the target's embedding
     _cache: dict[tuple[float, ...], float] = field(default_factory=dict, repr=False)
     _scene_key: tuple[float, ...] | None = field(default=None, repr=False)
     _renderer: Any = field(default=None, repr=False)
@@ -409,11 +413,10 @@ class SketchObjective:
         was; a tree too small to draw anything gets the largest distance)."""
         size = self.target.size
         try:
-            cand = make_target(framed(img, size), size, self.metric)
+            cand = make_target(framed(img, size), size, self.metric, self.embedder)
         except SketchError:
-            return self.target.distance(
-                make_target(np.full((size, size), 255, np.uint8), size, self.metric)
-            )
+            blank = np.full((size, size), 255, np.uint8)
+            return self.target.distance(make_target(blank, size, self.metric, self.embedder))
         return self.target.distance(cand)
 
     def penalty(self, x: Sequence[float]) -> float:

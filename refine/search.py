@@ -16,6 +16,7 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -56,6 +57,7 @@ YAW_WEIGHT = 0.06
 # the search would trade the estimator's size for pixel noise.
 DEFAULT_HOLD = ("scaleV",)
 MAX_BUDGET = 10_000
+EMBEDDINGS = ("shipped", "none")
 MAX_TIME_LIMIT = 3600.0
 
 Progress = Callable[[int, float], None]
@@ -140,6 +142,9 @@ class RefineSettings:
     pixels, ``refine.objective.sketch_distance``); ``fast_sketch`` (default) draws the
     candidates the cheap way, the same sketch up to a few pixels (``SketchObjective``'s
     ``fast``: thin stems left out, numpy rasteriser), False with mitsuba on the full mesh.
+    ``embedding`` (shape metric): the learned style-blind embedding added to the shape
+    distance (``refine.embed``): ``"shipped"`` (``checkpoints/shape_embed.pt``), a
+    checkpoint's path, or ``"none"`` for the hand-made shape distance alone.
     ``keep_height`` (``treesketch.Pipeline``, when no height is given): the refined tree is
     scaled to the height of the estimator's tree of its species, since a sketch framed to
     its tree shows shape but not size, so the search's size drift is noise.
@@ -173,6 +178,7 @@ class RefineSettings:
     metric: str = "shape"
     fast_sketch: bool = True
     keep_height: bool = True
+    embedding: str = "shipped"
 
     def replace(self, **changes: Any) -> RefineSettings:
         return dataclasses.replace(self, **changes).validate()
@@ -220,7 +226,22 @@ class RefineSettings:
                 raise ValueError(f"{flag} must be True or False, got {getattr(self, flag)!r}")
         if not isinstance(self.global_evals, int) or self.global_evals < 0:
             raise ValueError(f"global_evals must be an integer >= 0, got {self.global_evals!r}")
+        e = self.embedding
+        if not isinstance(e, str) or not (e in EMBEDDINGS or Path(e).is_file()):
+            raise ValueError(
+                f"embedding must be {' or '.join(map(repr, EMBEDDINGS))} or a checkpoint "
+                f"file, got {e!r}"
+            )
         return self
+
+    def load_embedder(self) -> Any:
+        """The ``refine.embed.ShapeEmbedder`` these settings ask for, or None (the ink
+        metric, or ``embedding="none"``)."""
+        if self.metric != "shape" or self.embedding == "none":
+            return None
+        from .embed import load_embedder
+
+        return load_embedder(None if self.embedding == "shipped" else self.embedding)
 
 
 class Cancelled(Exception):
@@ -236,9 +257,14 @@ def refine(
     yaw: float | None = None,
     progress: Progress | None = None,
     cancel: Callable[[], bool] | None = None,
+    embedder: Any = None,
 ) -> RefineResult:
     """Refine ``initial_params`` so its sketch matches ``sketch`` (see the module text and
     :class:`RefineSettings`).
+
+    ``embedder``: the loaded ``refine.embed.ShapeEmbedder`` to use (a caller that refines
+    many sketches loads it once, ``settings.load_embedder()``); by default the settings'
+    own is loaded.
 
     ``yaw`` fixes the view (degrees) instead of searching it; ``progress(evaluations,
     best_loss)`` is called after each new evaluation; ``cancel()`` is asked before each
@@ -257,7 +283,11 @@ def refine(
     from weberpenn import species as _species
 
     name = _species.canonical(species) if species else guess_species(initial_params)
-    target = make_target(framed(sketch, cfg.size), cfg.size, cfg.metric)
+    if embedder is None:
+        embedder = cfg.load_embedder()
+    elif cfg.metric != "shape":
+        raise ValueError("a learned embedder works with the shape metric only")
+    target = make_target(framed(sketch, cfg.size), cfg.size, cfg.metric, embedder)
     deadline = None if cfg.time_limit is None else t0 + float(cfg.time_limit)
     if yaw is None and not cfg.search_yaw:
         yaw = 0.0
@@ -279,6 +309,7 @@ def refine(
         yaw_prior=0.0,
         yaw_weight=float(cfg.yaw_weight),
         fast=cfg.fast_sketch,
+        embedder=embedder,
     )
     stopped = ["tolerance"]
 

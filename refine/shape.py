@@ -33,15 +33,22 @@ its height narrower than ``TRUNK_WIDTH`` of its widest row).  Extra outline line
 filled shape explains costs nothing, so a plain outline drawing is not punished for being
 one.
 
+The silhouette alone cannot always tell two trees of one species apart once a style has
+smoothed or scalloped the crown; a learned embedding of the same two masks
+(``refine.embed``, trained so the same tree in two styles is closer than another tree in
+one style) adds ``EMBED_WEIGHT * (1 - cos)`` when both sketches carry one
+(``ShapeTarget.from_image(..., embedder=...)``; the refinement uses the shipped one).
+
 :class:`ShapeTarget` holds one sketch's features for repeated comparison (the refinement
 prepares the input once and each candidate once).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from scipy import ndimage
@@ -49,9 +56,12 @@ from scipy import ndimage
 from .prepare import prepare_sketch
 
 __all__ = [
+    "EMBED_WEIGHT",
+    "Embedder",
     "OFFSET_LIMIT",
     "OUTLINE_WEIGHT",
     "ShapeTarget",
+    "embedding_distance",
     "line_distance",
     "shape_distance",
 ]
@@ -68,6 +78,17 @@ STEM_WEIGHT = 5.0  # line distance added per unit of missing stem (0.1 with no s
 FRAME_BOTTOM = 0.969
 FRAME_EDGE = 0.043
 _DARK = 0.5
+# one unit of the learned embedding's distance (1 - cos, ``refine.embed``) weighs as this
+# much shape distance: chosen on the benchmark's development pairs (RESULTS.md)
+EMBED_WEIGHT = 4.0
+
+
+class Embedder(Protocol):
+    """What :meth:`ShapeTarget.from_image` needs of ``refine.embed.ShapeEmbedder``."""
+
+    size: int  # the work size its network reads
+
+    def embed(self, target: ShapeTarget) -> np.ndarray: ...
 
 
 @dataclass(frozen=True)
@@ -141,9 +162,14 @@ class ShapeTarget:
     image: np.ndarray  # float32 0..1 (1 = white), the prepared sketch
     ink: np.ndarray  # bool, the cleaned, height-framed ink at full size
     levels: tuple[_ShapeLevel, ...]
+    embedding: np.ndarray | None = None  # unit vector from a learned embedder, if one is used
 
     @classmethod
-    def from_image(cls, img: Any, size: int = 128, scales: int = 3) -> ShapeTarget:
+    def from_image(
+        cls, img: Any, size: int = 128, scales: int = 3, embedder: Embedder | None = None
+    ) -> ShapeTarget:
+        """``img``'s shape features; with ``embedder`` (``refine.embed.ShapeEmbedder``) its
+        learned embedding too, which :meth:`distance` then adds in."""
         f = prepare_sketch(img, size)
         fine = prepare_sketch(img, 2 * size) < _DARK
         ink = fine.reshape(size, 2, size, 2).any(axis=(1, 3))
@@ -157,7 +183,11 @@ class ShapeTarget:
             if s < 16:
                 break
             ink = ink[: 2 * s, : 2 * s].reshape(s, 2, s, 2).any(axis=(1, 3))
-        return cls(f, top, tuple(levels))
+        out = cls(f, top, tuple(levels))
+        if embedder is not None:  # the network reads its own work size, whatever ours is
+            seen = out if size == embedder.size else cls.from_image(img, embedder.size, scales)
+            out = dataclasses.replace(out, embedding=np.asarray(embedder.embed(seen), np.float32))
+        return out
 
     @property
     def size(self) -> int:
@@ -213,14 +243,28 @@ def _level_distance(a: _ShapeLevel, b: _ShapeLevel) -> float:
 def target_shape_distance(a: ShapeTarget, b: ShapeTarget) -> float:
     if a.image.shape != b.image.shape:
         raise ValueError(f"sketch sizes differ: {a.image.shape} vs {b.image.shape}")
+    if (a.embedding is None) != (b.embedding is None):
+        raise ValueError("one sketch has a learned embedding and the other has none")
     terms = [_level_distance(x, y) for x, y in zip(a.levels, b.levels, strict=False)]
-    return float(np.mean(terms))
+    d = float(np.mean(terms))
+    if a.embedding is not None and b.embedding is not None:
+        d += EMBED_WEIGHT * embedding_distance(a.embedding, b.embedding)
+    return d
 
 
-def shape_distance(a: Any, b: Any, size: int = 128, scales: int = 3) -> float:
-    """Style-blind distance between two sketch images (any size; both resized to ``size``)."""
+def embedding_distance(a: np.ndarray, b: np.ndarray) -> float:
+    """``1 - cos`` of two unit vectors, in [0, 2]."""
+    return float(np.clip(1.0 - float(np.dot(a, b)), 0.0, 2.0))
+
+
+def shape_distance(
+    a: Any, b: Any, size: int = 128, scales: int = 3, embedder: Embedder | None = None
+) -> float:
+    """Style-blind distance between two sketch images (any size; both resized to ``size``),
+    with the learned embedding's term when ``embedder`` is given."""
     return target_shape_distance(
-        ShapeTarget.from_image(a, size, scales), ShapeTarget.from_image(b, size, scales)
+        ShapeTarget.from_image(a, size, scales, embedder),
+        ShapeTarget.from_image(b, size, scales, embedder),
     )
 
 

@@ -219,6 +219,8 @@ class Pipeline:
     ) -> None:
         self.estimator = load_estimator(estimator)
         self.settings = (settings or RefineSettings()).validate()
+        # the learned shape embedding the distance adds (None: not used), loaded once
+        self.embedder = self.settings.load_embedder()
 
     def __repr__(self) -> str:
         return f"Pipeline({self.estimator.name!r}, {self.settings!r})"
@@ -284,6 +286,7 @@ class Pipeline:
                     yaw=None if cfg.search_yaw else yaw0,
                     progress=lambda n, best, done=done: tell("refine", done + n, best),
                     cancel=cancel,
+                    embedder=self.embedder,
                 )
                 done += rr.evaluations
                 tried[candidate] = rr.loss_after
@@ -311,7 +314,9 @@ class Pipeline:
         if result_refine is not None:
             loss_before, loss_after = loss0, result_refine.loss_after
         else:
-            loss_before = loss_after = metric_distance(img, before, cfg.size, cfg.metric)
+            loss_before = loss_after = metric_distance(
+                img, before, cfg.size, cfg.metric, self.embedder
+            )
         timings["render"] = time.perf_counter() - t
 
         if height is None and cfg.keep_height and params1 is not est.params:
