@@ -4,24 +4,31 @@ The hand-made shape distance (:mod:`refine.shape`) compares filled silhouettes a
 outlines.  Drawing styles change exactly those at the scale that tells two trees of one
 species apart (a felt tip's smooth blob, a cloud's scallops, a scribble's ragged fill), so
 on its own it puts the same tree drawn two ways closer than two trees drawn one way in only
-84-88 % of pairs (``benchmarks/bench_distance.py``).  This module learns what survives the
-styles instead: a small CNN maps a prepared sketch (its framed ink and filled silhouette,
-the two masks :class:`refine.shape.ShapeTarget` already holds) to a unit vector, trained
-with a triplet loss so that the same tree in two styles is closer than another tree of the
-same species, at the same view, in the same style (the hardest negative there is), plus
-every other tree in the batch.  Labels are exact because every style is drawn from the same
+84-88 % of pairs (``benchmarks/bench_distance.py``).  This module learns a distance that
+looks through the styles: a small CNN maps a prepared sketch (its framed ink and filled
+silhouette, the two masks :class:`refine.shape.ShapeTarget` already holds) to a point, and
+is trained so that the Euclidean distance of two points is the *style-free* shape distance
+of the two trees: zero for one tree drawn in two styles, and for two trees of one species
+at one view (in any styles) the hand-made distance of their drawings in the renderer's own
+style, where it is reliable.  Labels are exact because every style is drawn from the same
 tree view (:mod:`render.styles`); the trees are fresh seeds, never those of the benchmarks.
 
-- :class:`ShapeEmbedNet`: four strided 3x3 convolutions (5x5 first) with batch norm, a 1x1
+Distilling a distance (rather than learning "is it the very same tree", a triplet loss) is
+what the refinement needs: a search can reach a tree's shape but never its random details,
+so its objective must fall smoothly as the shape comes closer (measured: a triplet-trained
+embedding separated the benchmark's pairs as well but made the refined meshes worse;
+RESULTS.md).
+
+- :class:`ShapeEmbedNet`: four strided convolutions (5x5 then 3x3) with batch norm, a 1x1
   reduction and a linear layer on the 8x8 map (position matters: a crown's place above the
-  trunk is shape), unit-length output.
+  trunk is shape).
 - :class:`ShapeEmbedder`: a loaded checkpoint (:func:`load_embedder`); ``embed(target)``.
 - :func:`build_pairs` draws the training data (every style of both trees of each pair, at
   one random view); :func:`train_embedder` trains; ``scripts/train_shape_embed.py`` runs
   both (the shipped ``checkpoints/shape_embed.pt``: command in ``checkpoints/README.md``).
 
-The embedding distance ``1 - cos`` lies in [0, 2]; ``refine.shape`` adds
-``EMBED_WEIGHT`` times it to the shape distance when both sketches carry an embedding.
+``refine.shape`` adds ``EMBED_WEIGHT`` times the embedding distance to the shape distance
+when both sketches carry an embedding.
 """
 
 from __future__ import annotations
@@ -52,16 +59,18 @@ __all__ = [
     "load_embedder",
     "shape_input",
     "train_embedder",
+    "true_distances",
 ]
 
 EMBED_SIZE = 128  # the masks' side the network reads
 DEFAULT_EMBEDDER = Path(__file__).resolve().parents[1] / "checkpoints" / "shape_embed.pt"
 PAIR_STYLES = ("sg", "pen", "cloud", "scribble", "pencil", "felt")
-_FORMAT = "treesketch-shape-embed-1"
+_FORMAT = "treesketch-shape-embed-2"
 
 
 class ShapeEmbedNet(nn.Module):
-    """(N, 2, 128, 128) masks (ink, filled silhouette) -> (N, dim) unit vectors."""
+    """(N, 2, 128, 128) masks (ink, filled silhouette) -> (N, dim) points whose Euclidean
+    distance is the learned shape distance."""
 
     def __init__(self, dim: int = 64, widths: tuple[int, ...] = (16, 32, 64, 96)) -> None:
         super().__init__()
@@ -81,7 +90,7 @@ class ShapeEmbedNet(nn.Module):
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         for conv, bn in zip(self.convs, self.bns, strict=True):
             x = F.relu(bn(conv(x)))
-        return F.normalize(self.head(x), dim=1)
+        return self.head(x)
 
 
 def shape_input(target: ShapeTarget) -> np.ndarray:
@@ -115,7 +124,7 @@ class ShapeEmbedder:
         return self.net(x).numpy().astype(np.float32)
 
     def embed(self, target: ShapeTarget) -> np.ndarray:
-        """(dim,) unit vector of one prepared sketch."""
+        """(dim,) point of one prepared sketch."""
         return self.embed_many([target])[0]
 
 
@@ -171,6 +180,17 @@ class PairData:
                 styles=np.array(self.styles),
             )
 
+    @property
+    def pairs(self) -> int:
+        return int(self.meta[:, 0].max()) + 1 if len(self.meta) else 0
+
+    def extend(self, more: PairData) -> PairData:
+        if more.styles != self.styles:
+            raise ValueError(f"styles differ: {self.styles} vs {more.styles}")
+        return PairData(
+            np.concatenate([self.x, more.x]), np.concatenate([self.meta, more.meta]), self.styles
+        )
+
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> PairData:
         with np.load(path) as d:
@@ -206,51 +226,84 @@ def build_pairs(
     styles: Sequence[str] = PAIR_STYLES,
     workers: int = 1,
     log: Callable[[str], None] | None = None,
+    start: int = 0,
 ) -> PairData:
-    """``pairs`` pairs of trees (the species in turn), seeds ``first_seed + 2t`` and
-    ``+ 2t + 1``, each drawn in every style at one random view of the pair."""
+    """Pairs ``start .. pairs - 1`` of trees (the species in turn), seeds ``first_seed +
+    2t`` and ``+ 2t + 1``, each drawn in every style at one random view of the pair (so a
+    set can be extended: :meth:`PairData.extend`)."""
     from render.styles import check_styles
 
     styles = check_styles(tuple(styles))
-    jobs = [(t, int(first_seed), styles) for t in range(int(pairs))]
+    jobs = [(t, int(first_seed), styles) for t in range(int(start), int(pairs))]
+    if not jobs:
+        raise ValueError(f"no pairs to draw: start {start}, pairs {pairs}")
     xs, metas = [], []
     with ProcessPoolExecutor(max_workers=max(1, workers)) as pool:
         for k, (x, m) in enumerate(pool.map(_pair_masks, jobs, chunksize=4)):
             xs.append(x)
             metas.append(m)
             if log is not None and (k + 1) % 25 == 0:
-                log(f"{k + 1}/{pairs} pairs drawn")
+                log(f"{k + 1}/{len(jobs)} pairs drawn")
     return PairData(np.concatenate(xs), np.concatenate(metas), styles)
 
 
 # --------------------------------------------------------------------------- training
+def true_distances(data: PairData) -> np.ndarray:
+    """Per pair, how different its two trees' shapes are: the hand-made shape distance
+    (``refine.shape``) of their ``sg`` drawings, the renderer's own style, where that
+    distance is reliable (same style on both sides)."""
+    if "sg" not in data.styles:
+        raise ValueError("the training pairs need the sg style (the reference distance)")
+    sg = data.styles.index("sg")
+    rows = {(int(t), int(w)): r for r, (t, w, s, _) in enumerate(data.meta) if s == sg}
+    pairs = sorted({int(t) for t in data.meta[:, 0]})
+    out = np.zeros(max(pairs) + 1, np.float32)
+
+    def image(r: int) -> np.ndarray:
+        return np.where(data.x[r, 0], 0, 255).astype(np.uint8)
+
+    for t in pairs:
+        a = ShapeTarget.from_image(image(rows[(t, 0)]), EMBED_SIZE)
+        b = ShapeTarget.from_image(image(rows[(t, 1)]), EMBED_SIZE)
+        out[t] = a.distance(b)
+    return out
+
+
 def train_embedder(
     data: PairData,
-    epochs: int = 20,
+    epochs: int = 12,
     hold_out: Sequence[str] = (),
     batch: int = 64,
     lr: float = 2e-3,
-    margin: float = 0.2,
+    margin: float = 0.3,
     seed: int = 0,
     log: Callable[[str], None] | None = None,
 ) -> ShapeEmbedNet:
-    """Triplets (tree A in style X, A in style Y, the pair's other tree B in style X) and
-    every other tree of the batch as further negatives; styles in ``hold_out`` are never
-    seen (for leave-one-style-out).  An epoch is 30 triplets per pair; one-cycle schedule,
-    a shift of up to 2 pixels as augmentation."""
+    """Distil a style-free shape distance into the embedding's Euclidean distance:
+
+    - the same tree in two styles: distance 0 (squared error);
+    - the pair's other tree (same species and view) in any style: the two trees' shape
+      distance in the renderer's style (:func:`true_distances`), squared error, so the
+      embedding's distance means "how different are the trees", not "is it the very
+      same tree" (a search cannot reach a tree's random details, only its shape);
+    - trees of other species in the batch: at least ``margin`` apart (squared hinge).
+
+    Styles in ``hold_out`` are never seen (leave-one-style-out).  An epoch is 30 samples
+    per pair; one-cycle schedule; a shift of up to 2 pixels as augmentation."""
     styles = [i for i, s in enumerate(data.styles) if s not in set(hold_out)]
     if len(styles) < 2:
         raise ValueError("training needs at least two styles that are not held out")
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
+    target = torch.from_numpy(true_distances(data))
     index = {(int(t), int(w), int(s)): r for r, (t, w, s, _) in enumerate(data.meta)}
-    pairs = sorted({int(t) for t in data.meta[:, 0]})
+    kind = {int(t): int(k) for t, _, _, k in data.meta}
+    pairs = sorted(kind)
     x_all = torch.from_numpy(data.x.astype(np.float32))
     net = ShapeEmbedNet()
     opt = torch.optim.AdamW(net.parameters(), lr, weight_decay=1e-4)
     steps = max(1, epochs * len(pairs) * 30 // batch)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, lr, total_steps=steps)
-    eye = torch.eye(batch, dtype=torch.bool)
 
     def shifted(rows: list[int]) -> torch.Tensor:
         dy, dx = (int(v) for v in rng.integers(-2, 3, 2))
@@ -259,25 +312,31 @@ def train_embedder(
     t0 = time.perf_counter()
     net.train()
     for step in range(steps):
-        a, p, n = [], [], []
+        a, p, n, ts = [], [], [], []
         for _ in range(batch):
             t = pairs[int(rng.integers(len(pairs)))]
             sx, sy = rng.choice(styles, 2, replace=False)
             w = int(rng.integers(2))
             a.append(index[(t, w, int(sx))])
             p.append(index[(t, w, int(sy))])
-            n.append(index[(t, 1 - w, int(sx))])
+            n.append(index[(t, 1 - w, int(rng.choice(styles)))])
+            ts.append(t)
         ea, ep, en = net(shifted(a)), net(shifted(p)), net(shifted(n))
-        d_pos = 1 - (ea * ep).sum(1)
-        d_neg = 1 - (ea * en).sum(1)
-        d_all = 1 - ea @ ep.T  # every other positive in the batch is another tree
-        others = F.relu(d_pos[:, None] - d_all + margin + 0.1).masked_fill(eye, 0.0)
-        loss = F.relu(d_pos - d_neg + margin).mean() + 0.5 * others.mean()
+        same = ((ea - ep) ** 2).sum(1)
+        other = ((ea - en) ** 2).sum(1).clamp_min(1e-9).sqrt()
+        spec = torch.tensor([kind[t] for t in ts])
+        apart = (spec[:, None] != spec[None, :]).float()
+        far = F.relu(margin - torch.cdist(ea, ep)) ** 2 * apart
+        loss = same.mean() + ((other - target[ts]) ** 2).mean() + 0.5 * far.mean()
         opt.zero_grad()
         loss.backward()
         opt.step()
         sched.step()
         if log is not None and (step % 200 == 0 or step == steps - 1):
-            log(f"step {step + 1}/{steps} loss {loss.item():.4f} {time.perf_counter() - t0:.0f} s")
+            log(
+                f"step {step + 1}/{steps} loss {loss.item():.5f} same {same.mean().item():.5f} "
+                f"other err {(other - target[ts]).abs().mean().item():.4f} "
+                f"{time.perf_counter() - t0:.0f} s"
+            )
     net.eval()
     return net

@@ -35,8 +35,8 @@ one.
 
 The silhouette alone cannot always tell two trees of one species apart once a style has
 smoothed or scalloped the crown; a learned embedding of the same two masks
-(``refine.embed``, trained so the same tree in two styles is closer than another tree in
-one style) adds ``EMBED_WEIGHT * (1 - cos)`` when both sketches carry one
+(``refine.embed``, trained so its Euclidean distance is the style-free shape distance of
+the two trees) adds ``EMBED_WEIGHT`` times that distance when both sketches carry one
 (``ShapeTarget.from_image(..., embedder=...)``; the refinement uses the shipped one).
 
 :class:`ShapeTarget` holds one sketch's features for repeated comparison (the refinement
@@ -78,8 +78,9 @@ STEM_WEIGHT = 5.0  # line distance added per unit of missing stem (0.1 with no s
 FRAME_BOTTOM = 0.969
 FRAME_EDGE = 0.043
 _DARK = 0.5
-# one unit of the learned embedding's distance (1 - cos, ``refine.embed``) weighs as this
-# much shape distance: chosen on the benchmark's development pairs (RESULTS.md)
+# one unit of the learned embedding's distance (``refine.embed``) weighs as this much
+# hand-made shape distance: chosen on the benchmark's development pairs and the style
+# drawings' refinement (RESULTS.md)
 EMBED_WEIGHT = 4.0
 
 
@@ -162,7 +163,7 @@ class ShapeTarget:
     image: np.ndarray  # float32 0..1 (1 = white), the prepared sketch
     ink: np.ndarray  # bool, the cleaned, height-framed ink at full size
     levels: tuple[_ShapeLevel, ...]
-    embedding: np.ndarray | None = None  # unit vector from a learned embedder, if one is used
+    embedding: np.ndarray | None = None  # from a learned embedder (refine.embed), if one is used
 
     @classmethod
     def from_image(
@@ -253,8 +254,8 @@ def target_shape_distance(a: ShapeTarget, b: ShapeTarget) -> float:
 
 
 def embedding_distance(a: np.ndarray, b: np.ndarray) -> float:
-    """``1 - cos`` of two unit vectors, in [0, 2]."""
-    return float(np.clip(1.0 - float(np.dot(a, b)), 0.0, 2.0))
+    """Euclidean distance of two embeddings (``refine.embed``: in shape-distance units)."""
+    return float(np.linalg.norm(np.asarray(a, np.float64) - np.asarray(b, np.float64)))
 
 
 def shape_distance(

@@ -45,16 +45,21 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(f"--hold-out must be one of {', '.join(PAIR_STYLES)}")
     torch.set_num_threads(args.threads)
     data = PairData.load(args.data) if args.data.is_file() else None
-    if data is None or len(set(data.meta[:, 0].tolist())) < args.pairs:
-        log(f"drawing {args.pairs} pairs in {len(PAIR_STYLES)} styles -> {args.data}")
-        data = build_pairs(args.pairs, args.first_seed, PAIR_STYLES, args.workers, log)
+    have = 0 if data is None else data.pairs
+    if have < args.pairs:  # draw the missing pairs only: the first ``have`` are the same
+        log(f"drawing pairs {have}..{args.pairs - 1} in {len(PAIR_STYLES)} styles -> {args.data}")
+        more = build_pairs(args.pairs, args.first_seed, PAIR_STYLES, args.workers, log, have)
+        data = more if data is None else data.extend(more)
         args.data.parent.mkdir(parents=True, exist_ok=True)
         data.save(args.data)
+    elif have > args.pairs:
+        keep = data.meta[:, 0] < args.pairs
+        data = PairData(data.x[keep], data.meta[keep], data.styles)
     t0 = time.perf_counter()
     hold = (args.hold_out,) if args.hold_out else ()
     net = train_embedder(data, args.epochs, hold, seed=args.seed, log=log)
     info = {
-        "pairs": int(len(set(data.meta[:, 0].tolist()))),
+        "pairs": data.pairs,
         "first_seed": args.first_seed,
         "styles": [s for s in data.styles if s not in hold],
         "held_out": list(hold),

@@ -144,3 +144,9 @@ def test_export_options(tmp_path, sketch_png) -> None:
     assert summary["export"]["max_faces"] == 3000 and "yaw" in summary
     bad = runner.invoke(app, [*args[:5], "10", "--out", str(tmp_path / "x.glb")])
     assert bad.exit_code == 2 and "max_faces" in bad.output
+
+
+def test_embedding_option_is_checked_before_work(tmp_path, sketch_png) -> None:
+    res = runner.invoke(app, _args(tmp_path, sketch_png, "--embedding", str(tmp_path / "e.pt")))
+    assert res.exit_code == 2 and "embedding" in res.output
+    assert not (tmp_path / "out").exists() or list((tmp_path / "out").iterdir()) == []

@@ -71,6 +71,13 @@ def predict_command(
     ),
     algorithm: str = typer.Option("bobyqa", "--algorithm", help="bobyqa, sbplx or cobyla."),
     seed: int = typer.Option(0, "--seed", help="Refinement seed (nlopt)."),
+    embedding: str = typer.Option(
+        "shipped",
+        "--embedding",
+        help="The learned style-blind shape embedding the refinement adds to its distance: "
+        "shipped (checkpoints/shape_embed.pt), none (the hand-made shape distance alone) or "
+        "a checkpoint file.",
+    ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
     """Turn a sketch of a tree into a 3D tree: a first estimate (TSN), refined so the
@@ -108,7 +115,9 @@ def predict_command(
     if checkpoint is not None and estimator != "tsn":
         fail("--checkpoint is for --estimator tsn")
     try:
-        settings = RefineSettings(refine=not no_refine, algorithm=algorithm, seed=seed)
+        settings = RefineSettings(
+            refine=not no_refine, algorithm=algorithm, seed=seed, embedding=embedding
+        )
         if budget is not None:
             settings = settings.replace(budget=budget)
         if time_limit is not None:
@@ -178,6 +187,7 @@ def _option_message(text: str) -> str:
         ("time_limit", "--time-limit"),
         ("budget", "--budget"),
         ("height", "--height"),
+        ("embedding", "--embedding"),
     ):
         if text.startswith(name + " "):
             return opt + text[len(name) :]
