@@ -458,6 +458,7 @@ def part_refine(args: argparse.Namespace) -> dict:
             "yaw_view": d["yaw"],
             "yaw_found": res.yaw,
             "warned": res.warning is not None,
+            "tried": res.extras.get("tried", {}),
             "seconds": secs,
         }
         records.append(rec)

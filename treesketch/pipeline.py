@@ -54,10 +54,11 @@ __all__ = [
 
 SKETCH_SIZE = DRAWING_SIDE  # the size sketches are prepared at (TSN crops and resizes from it)
 # the result is flagged when the best tree's sketch is this far from the input, by the
-# style-blind shape distance (a circle can pass for a crown) or by the line distance
+# style-blind shape distance the refinement minimises (with the learned embedding's term
+# when it is on; a circle can pass for a crown) or by the line distance
 # (``refine.shape.line_distance``: ink the tree's shape does not explain, a trunk where
-# nothing is drawn); calibrated in RESULTS.md
-LOW_CONFIDENCE_LOSS = 0.7
+# nothing is drawn); calibrated in RESULTS.md ("A learned style-blind shape distance")
+LOW_CONFIDENCE_LOSS = 1.75
 LOW_CONFIDENCE_INK = 0.035
 MAX_HEIGHT = 200.0  # metres: taller than any tree that grows
 
@@ -292,8 +293,14 @@ class Pipeline:
                 tried[candidate] = rr.loss_after
                 if i == 0:
                     yaw0, loss0 = rr.start_yaw, rr.loss_before
-                if result_refine is None or rr.loss_after < result_refine.loss_after:
+                if result_refine is None:
                     result_refine, name = rr, candidate
+                else:
+                    # the estimator's species (refined first) keeps its place unless another
+                    # fits clearly better (RefineSettings.species_margin)
+                    keep = 1.0 - cfg.species_margin if name == est.species else 1.0
+                    if rr.loss_after < keep * result_refine.loss_after:
+                        result_refine, name = rr, candidate
             assert result_refine is not None
             params1, yaw1 = result_refine.params, result_refine.yaw
         else:
