@@ -142,9 +142,12 @@ def test_view_prior_keeps_front_unless_another_view_fits_clearly() -> None:
     img, gt, _ = _case(name="maple", seed=2, yaw=90.0)
     r = refine(img, gt, RefineSettings(budget=10), species="maple")
     assert r.yaw == pytest.approx(90.0) and r.start_yaw == 90.0  # clearly better: taken
-    assert r.loss_before == pytest.approx(0.0, abs=1e-9)  # the sketch distance, no penalty
+    # the sketch distance, without the view's penalty (0.015 at 90 degrees); not exactly 0:
+    # candidates are drawn the fast way, and the learned embedding sees the few pixels of
+    # thin stems that differ from the full render
+    assert r.loss_before == pytest.approx(0.0, abs=0.01)
     front, gt, _ = _case(name="maple", seed=2, yaw=0.0)
     r0 = refine(front, gt, RefineSettings(budget=10, yaw_weight=1e3), species="maple")
-    assert r0.start_yaw == 0.0 and r0.loss_after == pytest.approx(0.0, abs=1e-9)
+    assert r0.start_yaw == 0.0 and r0.loss_after == pytest.approx(0.0, abs=0.01)
     with pytest.raises(ValueError, match="yaw_weight"):
         refine(front, gt, RefineSettings(budget=5, yaw_weight=float("nan")))
