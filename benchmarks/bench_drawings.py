@@ -278,7 +278,14 @@ def _loss(rec: dict) -> float:
     return _get(rec, "loss_after")
 
 
-def calibrate(records: list[dict]) -> dict:
+def shape_limit(embedding: str) -> float:
+    """The pipeline's shape limit for the distance a run used (``--embedding``)."""
+    if embedding == "none":
+        return ts_pipeline.LOW_CONFIDENCE_LOSS_SHAPE
+    return ts_pipeline.LOW_CONFIDENCE_LOSS
+
+
+def calibrate(records: list[dict], embedding: str = "shipped") -> dict:
     """Flag rates at the current limits; the shape limits (the line limit kept) that flag
     <= 10 % of trees and >= 95 % of non-trees; the same for each distance alone."""
     ink_limit = ts_pipeline.LOW_CONFIDENCE_INK
@@ -294,7 +301,7 @@ def calibrate(records: list[dict]) -> dict:
         fo = np.mean([flagged(r, limit, ink_limit) for r in other])
         return float(ft), float(fo)
 
-    current = ts_pipeline.LOW_CONFIDENCE_LOSS
+    current = shape_limit(embedding)
     cands = sorted({0.0, *(r["loss_after"] for r in records if "refused" not in r)})
     # between consecutive observed distances every limit gives the same flags
     mids = [(a + b) / 2 for a, b in zip(cands, cands[1:], strict=False)] + [cands[-1] + 0.1]
@@ -403,7 +410,7 @@ def part_warning(args: argparse.Namespace) -> dict:
             f"ink {rec['ink_after']:.3f} warned {rec['warned']} {rec['seconds']:.1f}s",
             flush=True,
         )
-    return {"records": records, "summary": calibrate(records)}
+    return {"records": records, "summary": calibrate(records, args.embedding)}
 
 
 def part_refine(args: argparse.Namespace) -> dict:
@@ -588,7 +595,8 @@ def markdown(doc: dict) -> str:
             "|---|---|---|---|---|---|---:|",
             *map(refine_line, recs),
         ]
-    summary = calibrate(recs) if part == "warning" else doc["summary"]
+    embedding = doc.get("args", {}).get("embedding", "shipped")
+    summary = calibrate(recs, embedding) if part == "warning" else doc["summary"]
     lines += ["", "```", json.dumps(summary, indent=1), "```"]
     return "\n".join(lines)
 

@@ -57,8 +57,8 @@ YAW_WEIGHT = 0.06
 # the search would trade the estimator's size for pixel noise.
 DEFAULT_HOLD = ("scaleV",)
 MAX_BUDGET = 10_000
-EMBEDDINGS = ("shipped", "none")
 MAX_TIME_LIMIT = 3600.0
+EMBEDDINGS = ("shipped", "none")  # RefineSettings.embedding's names (else a checkpoint path)
 
 Progress = Callable[[int, float], None]
 
@@ -156,8 +156,8 @@ class RefineSettings:
     whose sketch matches best wins, but another species replaces the estimator's only when
     its distance is lower by more than ``species_margin`` (a fraction of the estimator's
     species' distance): the network names the species far more reliably than a sketch
-    distance between two close species does.  ``species_tries`` 1 refines the estimator's species
-    only.
+    distance between two close species does.  ``species_tries`` 1 refines the estimator's
+    species only.
     """
 
     refine: bool = True

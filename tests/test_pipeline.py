@@ -18,7 +18,12 @@ from treesketch import (
     load_sketch,
     predict_then_refine,
 )
-from treesketch.pipeline import rescale_height, tree_height
+from treesketch.pipeline import (
+    LOW_CONFIDENCE_LOSS,
+    LOW_CONFIDENCE_LOSS_SHAPE,
+    rescale_height,
+    tree_height,
+)
 from weberpenn import build_mesh, grow, species
 
 
@@ -182,17 +187,22 @@ def test_blank_page_is_a_clear_error() -> None:
         Pipeline(Fixed("palm", 1)).run(np.full((200, 300), 255, np.uint8))
 
 
+@pytest.mark.parametrize("embedding", ["shipped", "none"])
 @pytest.mark.parametrize("kind", ["circle", "noise"])
-def test_non_trees_are_flagged(kind: str) -> None:
+def test_non_trees_are_flagged(kind: str, embedding: str) -> None:
     n = 256
     if kind == "circle":
         yy, xx = np.mgrid[:n, :n]
         img = np.where(np.abs(np.hypot(yy - n / 2, xx - n / 2) - 80) < 2, 0, 255)
     else:
         img = (np.random.default_rng(0).random((n, n)) > 0.5) * 255
-    r = Pipeline(Fixed("maple", 1), RefineSettings(budget=6)).run(img.astype(np.uint8))
+    cfg = RefineSettings(budget=6, embedding=embedding)
+    r = Pipeline(Fixed("maple", 1), cfg).run(img.astype(np.uint8))
     assert r.warning is not None and "low confidence" in r.warning
     assert r.low_confidence and r.confidence < 0.5
+    # each distance is judged by the limit calibrated for it
+    limit = LOW_CONFIDENCE_LOSS if embedding == "shipped" else LOW_CONFIDENCE_LOSS_SHAPE
+    assert f"limit {limit};" in r.warning
 
 
 def test_load_sketch_inputs(tmp_path) -> None:

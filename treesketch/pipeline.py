@@ -37,6 +37,7 @@ from .estimators import load_estimator
 __all__ = [
     "LOW_CONFIDENCE_INK",
     "LOW_CONFIDENCE_LOSS",
+    "LOW_CONFIDENCE_LOSS_SHAPE",
     "MAX_HEIGHT",
     "Cancelled",
     "Pipeline",
@@ -59,6 +60,10 @@ SKETCH_SIZE = DRAWING_SIDE  # the size sketches are prepared at (TSN crops and r
 # (``refine.shape.line_distance``: ink the tree's shape does not explain, a trunk where
 # nothing is drawn); calibrated in RESULTS.md ("A learned style-blind shape distance")
 LOW_CONFIDENCE_LOSS = 1.75
+# the same limit for the hand-made shape distance alone (``RefineSettings(embedding="none")``
+# or the ink metric), calibrated before the embedding existed (RESULTS.md, "Style-blind
+# distance and warning, recalibrated")
+LOW_CONFIDENCE_LOSS_SHAPE = 0.7
 LOW_CONFIDENCE_INK = 0.035
 MAX_HEIGHT = 200.0  # metres: taller than any tree that grows
 
@@ -185,16 +190,17 @@ def tree_line_distance(drawing: Any, tree_sketch: Any, size: int) -> float:
     return line_distance(ShapeTarget.from_image(framed(drawing, size), size), tree)
 
 
-def _confidence(loss: float, ink: float) -> tuple[float, str | None]:
+def _confidence(loss: float, ink: float, limit: float) -> tuple[float, str | None]:
     """Confidence in 0..1 (1 at a perfect match, exp(-1) at either threshold) and the
-    warning when either distance passes its threshold."""
-    worst = max(max(0.0, loss) / LOW_CONFIDENCE_LOSS, max(0.0, ink) / LOW_CONFIDENCE_INK)
+    warning when either distance passes its threshold (``limit`` for the shape distance:
+    the one calibrated for the distance in use)."""
+    worst = max(max(0.0, loss) / limit, max(0.0, ink) / LOW_CONFIDENCE_INK)
     confidence = float(math.exp(-worst))
     if worst <= 1.0:
         return confidence, None
     return confidence, (
         f"low confidence: the best tree's sketch is far from the input (shape distance "
-        f"{loss:.3f}, limit {LOW_CONFIDENCE_LOSS}; line distance {ink:.3f}, limit "
+        f"{loss:.3f}, limit {limit}; line distance {ink:.3f}, limit "
         f"{LOW_CONFIDENCE_INK}); is this a sketch of a tree?"
     )
 
@@ -340,7 +346,8 @@ class Pipeline:
             timings["height"] = time.perf_counter() - t
 
         ink_after = tree_line_distance(img, after, cfg.size)
-        confidence, warning = _confidence(loss_after, ink_after)
+        limit = LOW_CONFIDENCE_LOSS if self.embedder is not None else LOW_CONFIDENCE_LOSS_SHAPE
+        confidence, warning = _confidence(loss_after, ink_after, limit)
         timings["total"] = sum(timings.values())
         return Result(
             params=params1,
