@@ -363,7 +363,13 @@ def calibrate(records: list[dict], embedding: str = "shipped") -> dict:
 
 def part_warning(args: argparse.Namespace) -> dict:
     pipe = Pipeline(
-        "tsn", RefineSettings(budget=args.budget, species_tries=1, embedding=args.embedding)
+        "tsn",
+        RefineSettings(
+            budget=args.budget,
+            species_tries=1,
+            embedding=args.embedding,
+            tree_seeds=args.tree_seeds,
+        ),
     )
     cases = [("non-tree", n, img, None) for n, img in non_trees(0)]
     cases += [("tree", d["name"], d["image"], d) for d in tree_drawings(900, 5)]
@@ -416,7 +422,10 @@ def part_warning(args: argparse.Namespace) -> dict:
 def part_refine(args: argparse.Namespace) -> dict:
     from eval.hausdorff import aligned_tree_hausdorff, bbox_diagonal, hausdorff, rotate_about_trunk
 
-    pipe = Pipeline("tsn", RefineSettings(budget=args.budget, embedding=args.embedding))
+    pipe = Pipeline(
+        "tsn",
+        RefineSettings(budget=args.budget, embedding=args.embedding, tree_seeds=args.tree_seeds),
+    )
     records: list[dict] = []
     # one of each species at a time, and each case saved as it ends: a run stopped early
     # still has a balanced, readable record
@@ -623,6 +632,12 @@ def main(argv: list[str] | None = None) -> int:
         default="shipped",
         help="RefineSettings.embedding: shipped, none or a checkpoint (warning and refine)",
     )
+    ap.add_argument(
+        "--tree-seeds",
+        type=int,
+        default=RefineSettings().tree_seeds,
+        help="RefineSettings.tree_seeds (warning and refine; 1: the estimate's seed only)",
+    )
     args = ap.parse_args(argv)
     if args.markdown is not None:
         print(markdown(json.loads(args.markdown.read_text())))
@@ -634,7 +649,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.budget is None:
         args.budget = 20 if args.part == "warning" else 40
     try:
-        RefineSettings(budget=args.budget, embedding=args.embedding).validate()
+        RefineSettings(
+            budget=args.budget, embedding=args.embedding, tree_seeds=args.tree_seeds
+        ).validate()
     except ValueError as exc:
         ap.error(str(exc))
     run = {"warning": part_warning, "refine": part_refine, "estimate": part_estimate}[args.part]

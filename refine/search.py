@@ -2,7 +2,10 @@
 tree's sketch matches the input sketch.
 
 ``refine(sketch, initial_params)`` evaluates the start point first (at the four standard
-views plus the diagonals, keeping the best yaw), optionally tries neighbouring values of
+views plus the diagonals, keeping the best yaw), then the same values grown from a few
+other tree seeds at the best two views (the seed draws a tree's random details: which way
+a trunk leans, where the big branches sit; no continuous value reaches them, so the seed
+whose tree already looks most like the drawing is the better start), optionally tries neighbouring values of
 the discrete keys that matter most (``baseSplits``, ``nrings``), optionally runs a short
 global stage (CRS2), then an nlopt local search (BOBYQA by default) in the unit cube.  It
 stops on the evaluation budget, the time limit or nlopt's tolerances, and always returns
@@ -57,6 +60,7 @@ YAW_WEIGHT = 0.06
 # the search would trade the estimator's size for pixel noise.
 DEFAULT_HOLD = ("scaleV",)
 MAX_BUDGET = 10_000
+MAX_TREE_SEEDS = 16
 MAX_TIME_LIMIT = 3600.0
 EMBEDDINGS = ("shipped", "none")  # RefineSettings.embedding's names (else a checkpoint path)
 
@@ -145,6 +149,9 @@ class RefineSettings:
     ``embedding`` (shape metric): the learned style-blind embedding added to the shape
     distance (``refine.embed``): ``"shipped"`` (``checkpoints/shape_embed.pt``), a
     checkpoint's path, or ``"none"`` for the hand-made shape distance alone.
+    ``tree_seeds``: how many tree seeds the start tries (the start's own, then the next
+    ones), each at the two best views of the first; 1 keeps the start's seed.  Skipped
+    when they would take the start past half the budget, or when every value is held.
     ``keep_height`` (``treesketch.Pipeline``, when no height is given): the refined tree is
     scaled to the height of the estimator's tree of its species, since a sketch framed to
     its tree shows shape but not size, so the search's size drift is noise.
@@ -183,6 +190,7 @@ class RefineSettings:
     fast_sketch: bool = True
     keep_height: bool = True
     embedding: str = "shipped"
+    tree_seeds: int = 4
 
     def replace(self, **changes: Any) -> RefineSettings:
         return dataclasses.replace(self, **changes).validate()
@@ -231,6 +239,9 @@ class RefineSettings:
         for flag in ("fast_sketch", "keep_height"):
             if not isinstance(getattr(self, flag), bool):
                 raise ValueError(f"{flag} must be True or False, got {getattr(self, flag)!r}")
+        n = self.tree_seeds
+        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_TREE_SEEDS:
+            raise ValueError(f"tree_seeds must be an integer in 1..{MAX_TREE_SEEDS}, got {n!r}")
         if not isinstance(self.global_evals, int) or self.global_evals < 0:
             raise ValueError(f"global_evals must be an integer >= 0, got {self.global_evals!r}")
         e = self.embedding
@@ -348,17 +359,38 @@ def refine(
     loss_before = start_total = math.inf
     start_yaw = float(yaw or 0.0)
     yaws = START_YAWS if yaw is None else (float(yaw),)
+    start_cap = max(1, budget // 3)
+    start_space, x_start = space, x0  # the start's own seed at its best view
     try:
+        seen: list[tuple[float, float]] = []  # (loss, yaw) of the start's own seed
         for i, y in enumerate(yaws):
-            if i > 0 and (obj.evaluations >= max(1, budget // 3) or out_of_budget()):
+            if i > 0 and (obj.evaluations >= start_cap or out_of_budget()):
                 break
             x = x0.copy()
             if space.search_yaw:
                 x[-1] = (y % 360.0) / 360.0
             loss = evaluate(x)  # sketch distance + the view's penalty
+            seen.append((loss, y))
             if loss < start_total:
                 start_total, start_yaw, x0 = loss, y, x
+                x_start = x
                 loss_before = loss - obj.penalty(obj.key(x))  # the sketch distance
+        # 1b. other tree seeds at the best views, while the start keeps within half the
+        # budget and something is searched at all; "before" stays the start's own seed
+        best_views = [y for _, y in sorted(seen)[:2]]
+        seed0 = int(space.base["seed"])
+        extra = (cfg.tree_seeds - 1) * len(best_views)
+        if extra and space.n > 0 and obj.evaluations + extra <= budget // 2:
+            for k in range(1, cfg.tree_seeds):
+                obj.rebase(space.with_base(space.base.replace(seed=seed0 + k)))
+                for y in best_views:
+                    x = x0.copy()
+                    if space.search_yaw:
+                        x[-1] = (y % 360.0) / 360.0
+                    evaluate(x)
+            space = obj.best_space or space
+            x0 = obj.best_x if obj.best_x is not None else x0
+            obj.rebase(space)
         # 2. neighbouring discrete values
         if cfg.discrete_neighbours:
             for cand in _discrete_candidates(name, space.base):
@@ -421,7 +453,7 @@ def refine(
         loss_after = obj.best_sketch_loss  # <= best objective <= objective at the start
         best_params, best_yaw = obj.best_params, obj.best_yaw
     if loss_after > loss_before:  # the view penalty traded sketch match for the front view
-        loss_after, best_params, best_yaw = loss_before, space.to_params(x0), start_yaw
+        loss_after, best_params, best_yaw = loss_before, start_space.to_params(x_start), start_yaw
     return RefineResult(
         params=best_params,
         yaw=float(best_yaw),

@@ -115,6 +115,27 @@ def test_time_limit_respected() -> None:
     assert r.loss_after <= r.loss_before
 
 
+def test_tree_seeds_find_the_drawn_trees_random_details() -> None:
+    # the drawing is seed 7's tree; the start has its values but seed 5: no continuous
+    # value reaches seed 7's branching, trying seeds 5..8 does
+    img, gt, _ = _case(name="bonsai", seed=7)
+    start = gt.replace(seed=5)
+    one = refine(img, start, RefineSettings(budget=12, tree_seeds=1), species="bonsai", yaw=0.0)
+    assert one.params["seed"] == 5
+    r = refine(img, start, RefineSettings(budget=12, tree_seeds=4), species="bonsai", yaw=0.0)
+    assert r.params["seed"] == 7
+    assert r.loss_before == pytest.approx(one.loss_before)  # "before" is the start's seed
+    assert r.loss_after < 0.5 * one.loss_after
+    assert r.loss_after == pytest.approx(0.0, abs=0.05)  # fast candidates vs the full render
+    assert r.evaluations <= 12
+    # no room in the budget (the start would pass half of it): the start's seed only
+    tight = refine(img, start, RefineSettings(budget=4, tree_seeds=4), species="bonsai", yaw=0.0)
+    assert tight.params["seed"] == 5
+    for bad in (0, 17, 2.5, True):
+        with pytest.raises(ValueError, match="tree_seeds"):
+            refine(img, start, RefineSettings(tree_seeds=bad))
+
+
 def test_bad_arguments() -> None:
     img, gt, _ = _case()
     with pytest.raises(ValueError, match="budget"):
@@ -128,10 +149,16 @@ def test_bad_arguments() -> None:
 def test_prior_weight_holds_the_start_and_reports_sketch_loss() -> None:
     img, _gt, start = _case(seed=8)
     free = refine(img, start, RefineSettings(budget=15), species="palm", yaw=0.0)
-    held = refine(img, start, RefineSettings(budget=15, prior_weight=1e6), species="palm", yaw=0.0)
+    cfg = RefineSettings(budget=15, prior_weight=1e6, tree_seeds=1)
+    held = refine(img, start, cfg, species="palm", yaw=0.0)
     assert held.loss_before == pytest.approx(free.loss_before)
     assert held.loss_after == pytest.approx(held.loss_before)  # no move pays for itself
     assert held.params["scaleV"] == pytest.approx(start["scaleV"])
+    # the prior holds the searched values, not the tree seed (no value of the start's)
+    reseeded = refine(img, start, cfg.replace(tree_seeds=4), species="palm", yaw=0.0)
+    assert reseeded.loss_after <= held.loss_after
+    a, b = reseeded.params.to_dict(), held.params.to_dict()
+    assert {k for k in a if a[k] != b[k]} <= {"seed"}
     some = refine(img, start, RefineSettings(budget=15, prior_weight=0.5), species="palm", yaw=0.0)
     assert some.loss_after <= some.loss_before
     with pytest.raises(ValueError, match="prior_weight"):

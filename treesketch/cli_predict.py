@@ -71,6 +71,12 @@ def predict_command(
     ),
     algorithm: str = typer.Option("bobyqa", "--algorithm", help="bobyqa, sbplx or cobyla."),
     seed: int = typer.Option(0, "--seed", help="Refinement seed (nlopt)."),
+    tree_seeds: int = typer.Option(
+        4,
+        "--tree-seeds",
+        help="Tree seeds the refinement tries (a tree's random details: lean, branch "
+        "placement); 1 keeps the estimate's.",
+    ),
     embedding: str = typer.Option(
         "shipped",
         "--embedding",
@@ -116,7 +122,11 @@ def predict_command(
         fail("--checkpoint is for --estimator tsn")
     try:
         settings = RefineSettings(
-            refine=not no_refine, algorithm=algorithm, seed=seed, embedding=embedding
+            refine=not no_refine,
+            algorithm=algorithm,
+            seed=seed,
+            embedding=embedding,
+            tree_seeds=tree_seeds,
         )
         if budget is not None:
             settings = settings.replace(budget=budget)
