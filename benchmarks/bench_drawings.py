@@ -16,9 +16,10 @@ and line distances and reports which are flagged at the current
 ``treesketch.pipeline.LOW_CONFIDENCE_LOSS`` (and ``LOW_CONFIDENCE_INK``), and the range of
 shape thresholds that flags <= 10 % of trees and >= 95 % of non-trees, if there is one.
 
-``refine``: 25 held-out-style drawings (5 per species, seeds 950+) through the pipeline at
-its default settings but ``--budget`` (40): the sketch distance before/after, the species
-after synthesis against the truth, and the mesh error before (TSN) and after (refined):
+``refine``: 25 held-out-style drawings (5 per species, seeds 950+ or ``--first-seed``+)
+through the pipeline at its default settings but ``--budget`` (40) and ``--tree-seeds``:
+the sketch distance before/after, the species after synthesis against the truth, and the
+mesh error before (TSN) and after (refined):
 the combined branch+leaf Hausdorff max distance normalised by the ground truth's diagonal
 (``eval.hausdorff``), each tree turned into the ground truth's frame by its own view (TSN,
 which has no view, as a front view), as ``benchmarks/bench_refine.py`` does, and the
@@ -430,7 +431,7 @@ def part_refine(args: argparse.Namespace) -> dict:
     # one of each species at a time, and each case saved as it ends: a run stopped early
     # still has a balanced, readable record
     drawings = sorted(
-        tree_drawings(950, args.per_species),
+        tree_drawings(args.first_seed, args.per_species),
         key=lambda d: (d["seed"], species.SPECIES.index(d["species"])),
     )
     for d in drawings:
@@ -615,6 +616,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--part", choices=("warning", "refine", "estimate"), default="warning")
     ap.add_argument("--budget", type=int, default=None, help="20 for warning, 40 for refine")
     ap.add_argument("--per-species", type=int, default=5)
+    ap.add_argument(
+        "--first-seed", type=int, default=950, help="refine: the drawings' first tree seed"
+    )
     ap.add_argument("--samples", type=int, default=10_000, help="Hausdorff samples per side")
     ap.add_argument("--align-step", type=float, default=15.0)
     ap.add_argument("--json", type=Path, default=None)

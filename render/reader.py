@@ -265,6 +265,49 @@ def _ink_of(flat: np.ndarray) -> np.ndarray:
     return remove_small_objects(ink, max_size=min_px - 1)
 
 
+SPECK_WIDTHS = 1.5  # a mark smaller than a square this many stroke widths wide ...
+SPECK_GAP = 3.0  # ... and further than this many stroke widths from the strokes is grain
+
+
+def stroke_width(ink: np.ndarray) -> float:
+    """The drawing's typical stroke width in pixels: twice the median distance from the
+    centre line of its strokes to their edge (at least 1)."""
+    from scipy import ndimage
+    from skimage.morphology import skeletonize
+
+    if not ink.any():
+        return 1.0
+    inside = ndimage.distance_transform_edt(ink)
+    return max(1.0, 2.0 * float(np.median(inside[skeletonize(ink)])))
+
+
+def drop_specks(ink: np.ndarray) -> np.ndarray:
+    """Ink without paper grain and pencil dust among the drawing's lines (which
+    :func:`_drop_strays` keeps, being near them): marks smaller than a square
+    ``SPECK_WIDTHS`` stroke widths wide that lie more than ``SPECK_GAP`` stroke widths
+    from every larger mark.  Both limits follow the drawing's own stroke width, so they
+    hold at any resolution; a dash of a broken line is longer than that, and the small
+    marks a drawing's own strokes leave (a leaf, a twig's end) touch or nearly touch
+    them."""
+    from scipy import ndimage
+
+    lab, n = ndimage.label(ink, structure=np.ones((3, 3), bool))
+    if n <= 1:
+        return ink
+    idx = np.arange(1, n + 1)
+    area = ndimage.sum_labels(ink, lab, index=idx)
+    width = stroke_width(ink)
+    small = area < (SPECK_WIDTHS * width) ** 2
+    small[int(np.argmax(area))] = False  # the drawing itself, however thin
+    if not small.any():
+        return ink
+    big = ink & ~np.concatenate([[False], small])[lab]
+    gap = ndimage.distance_transform_edt(~big)
+    near = ndimage.minimum(gap, lab, index=idx) <= SPECK_GAP * width
+    keep = np.concatenate([[False], ~small | near])
+    return keep[lab]
+
+
 STRAY_GAP = 0.08  # of the page's longer side: ink this far from the drawing is apart
 STRAY_SHARE = 0.02  # a part apart from the drawing with less of its ink than this is dust
 
@@ -371,7 +414,7 @@ def normalise_drawing(img: np.ndarray, size: int = DRAWING_SIDE) -> np.ndarray:
         shape = (max(MIN_SIDE, round(a.shape[1] * s)), max(MIN_SIDE, round(a.shape[0] * s)))
         a = np.asarray(Image.fromarray(a).resize(shape, Image.Resampling.BOX))
     flat = flatten_paper(a)
-    ink = _drop_strays(_drop_ruled_lines(_ink_of(flat)))
+    ink = _drop_strays(drop_specks(_drop_ruled_lines(_ink_of(flat))))
     frac = float(ink.mean())
     if frac < MIN_INK:
         raise SketchError("the sketch is blank: draw a tree (dark lines on a light page)")

@@ -112,6 +112,50 @@ def test_specks_away_from_the_drawing_do_not_shrink_it(sketches) -> None:
         assert np.mean(clean != with_dust) < 0.002
 
 
+def grainy(img: np.ndarray, seed: int = 0, specks: int = 400) -> np.ndarray:
+    """The drawing on coarse paper: ``specks`` dark grains of 1-3 px all over the page,
+    among the strokes too (what pencil on textured paper or a noisy photo gives)."""
+    rng = np.random.default_rng(seed)
+    out = img.copy()
+    h, w = img.shape
+    for y, x, s in zip(
+        rng.integers(0, h - 3, specks),
+        rng.integers(0, w - 3, specks),
+        rng.integers(1, 3, specks),
+        strict=True,
+    ):
+        out[y : y + s, x : x + s] = 70
+    return out
+
+
+def test_paper_grain_among_the_strokes_is_not_ink(sketches, pipeline) -> None:
+    """Grain near the drawing is not removed as strays; it goes as specks smaller than
+    the strokes and apart from them, and the tree reads as on clean paper."""
+    for name, img in sketches.items():
+        page = np.full((384, 384), 255, np.uint8)
+        page[64:320, 64:320] = img
+        clean, coarse = (
+            normalise_drawing(page, 256) < 128,
+            normalise_drawing(grainy(page), 256) < 128,
+        )
+        assert np.abs(np.subtract(_frame_box(clean), _frame_box(coarse))).max() <= 2
+        assert coarse.sum() < 1.1 * clean.sum()  # the grain is gone ...
+        assert (coarse & clean).sum() > 0.97 * clean.sum()  # ... the strokes are not
+        assert pipeline.estimate(grainy(page)).species == name
+
+
+def test_the_renderers_own_small_marks_are_kept(sketches) -> None:
+    """The grain rule leaves a renderer sketch as it is: its small marks (a leaf, a twig's
+    end) lie next to its strokes."""
+    from render.reader import drop_specks, stroke_width
+
+    for img in sketches.values():
+        for side in (256, 128):
+            ink = np.asarray(Image.fromarray(img).resize((side, side), Image.BOX)) < 128
+            assert 1.0 <= stroke_width(ink) <= 6.0
+            assert np.array_equal(drop_specks(ink), ink)
+
+
 def test_dark_page_is_a_clear_error() -> None:
     rng = np.random.default_rng(1)
     dark = np.clip(rng.normal(30, 8, (300, 300)), 0, 255).astype(np.uint8)
