@@ -400,7 +400,8 @@ def normalise_drawing(img: np.ndarray, size: int = DRAWING_SIDE) -> np.ndarray:
     on the centre line, the drawing as large as the frame allows.
 
     Pencil on grey or off-white paper and phone photos read as ink (:func:`flatten_paper`,
-    Otsu) and come out as black strokes on white, like the training sketches; a drawing in
+    Otsu) and come out as black strokes on white, like the training sketches, without the
+    paper's grain (:func:`drop_specks`) or stray marks apart from the drawing; a drawing in
     a corner is moved and scaled to the middle.  The refinement frames every candidate's
     sketch the same way, so drawing and candidates always compare at one framing (the
     renderer's own frame fits a tree's width over all sides, not the drawn one).  Refuses
