@@ -72,10 +72,10 @@ def predict_command(
     algorithm: str = typer.Option("bobyqa", "--algorithm", help="bobyqa, sbplx or cobyla."),
     seed: int = typer.Option(0, "--seed", help="Refinement seed (nlopt)."),
     tree_seeds: int = typer.Option(
-        4,
+        1,
         "--tree-seeds",
-        help="Tree seeds the refinement tries (a tree's random details: lean, branch "
-        "placement); 1 keeps the estimate's.",
+        help="Tree seeds the refinement tries at its start (a tree's random details: lean, "
+        "branch placement); 1 keeps the estimate's.",
     ),
     embedding: str = typer.Option(
         "shipped",
