@@ -289,6 +289,18 @@ def drop_specks(ink: np.ndarray) -> np.ndarray:
     hold at any resolution; a dash of a broken line is longer than that, and the small
     marks a drawing's own strokes leave (a leaf, a twig's end) touch or nearly touch
     them."""
+    if not ink.any():
+        return ink
+    # the work on the ink's bounding box (a margin of one pixel): every distance measured
+    # here runs between two of its pixels, and a drawing is often a small part of its page
+    ys, xs = np.flatnonzero(ink.any(axis=1)), np.flatnonzero(ink.any(axis=0))
+    box = (slice(max(ys[0] - 1, 0), ys[-1] + 2), slice(max(xs[0] - 1, 0), xs[-1] + 2))
+    out = np.zeros_like(ink)
+    out[box] = _kept_marks(ink[box])
+    return out
+
+
+def _kept_marks(ink: np.ndarray) -> np.ndarray:
     from scipy import ndimage
 
     lab, n = ndimage.label(ink, structure=np.ones((3, 3), bool))
