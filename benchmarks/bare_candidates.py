@@ -49,8 +49,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     print("|---|---|---|---:|---:|")
     for name in args.drawings.split(","):
-        img = framed(prepare_input(load_sketch(ROOT / "examples" / "hand" / f"{name}.png")), SIZE)
-        est = pipe.estimate(img)
+        prepared = prepare_input(load_sketch(ROOT / "examples" / "hand" / f"{name}.png"))
+        est = pipe.estimator.estimate(prepared)  # what the pipeline's network sees
+        img = framed(prepared, SIZE)
         with_emb = make_target(img, SIZE, "shape", embedder)
         alone = make_target(img, SIZE, "shape", None)
         for sp in species.SPECIES:

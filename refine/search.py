@@ -363,21 +363,28 @@ def refine(
     start_yaw = float(yaw or 0.0)
     yaws = START_YAWS if yaw is None else (float(yaw),)
     start_cap = max(1, budget // 3)
-    start_space, x_start = space, x0  # the start's own seed at its best view
+    # x0 stays the start (its own seed at its best view) in ``start_space``: what "before"
+    # is and what the result falls back to; later stages begin from ``obj.best_x``
+    start_space = space
+
+    def at_view(y: float) -> np.ndarray:
+        x = x0.copy()
+        if space.search_yaw:
+            x[-1] = (y % 360.0) / 360.0
+        return x
+
     try:
         seen: list[tuple[float, float]] = []  # (loss, yaw) of the start's own seed
         for i, y in enumerate(yaws):
             if i > 0 and (obj.evaluations >= start_cap or out_of_budget()):
                 break
-            x = x0.copy()
-            if space.search_yaw:
-                x[-1] = (y % 360.0) / 360.0
+            x = at_view(y)
             loss = evaluate(x)  # sketch distance + the view's penalty
             seen.append((loss, y))
             if loss < start_total:
-                start_total, start_yaw, x0 = loss, y, x
-                x_start = x
+                start_total, start_yaw = loss, y
                 loss_before = loss - obj.penalty(obj.key(x))  # the sketch distance
+        x0 = at_view(start_yaw)
         # 1b. other tree seeds at the best views, while the start keeps within half the
         # budget and something is searched at all; "before" stays the start's own seed
         best_views = [y for _, y in sorted(seen)[:2]]
@@ -387,23 +394,19 @@ def refine(
             for k in range(1, cfg.tree_seeds):
                 obj.rebase(space.with_base(space.base.replace(seed=seed0 + k)))
                 for y in best_views:
-                    x = x0.copy()
-                    if space.search_yaw:
-                        x[-1] = (y % 360.0) / 360.0
-                    evaluate(x)
+                    evaluate(at_view(y))
             space = obj.best_space or space
-            x0 = obj.best_x if obj.best_x is not None else x0
             obj.rebase(space)
         # 2. neighbouring discrete values
         if cfg.discrete_neighbours:
+            best = obj.best_x if obj.best_x is not None else x0
             for cand in _discrete_candidates(name, space.base):
                 alt = space.with_base(cand)
                 obj.rebase(alt)
-                if evaluate(x0) <= obj.best_loss and obj.best_space is alt:
+                if evaluate(best) <= obj.best_loss and obj.best_space is alt:
                     space = alt
             obj.rebase(obj.best_space or space)
             space = obj.space
-            x0 = obj.best_x if obj.best_x is not None else x0
         # 3. optional global stage, then 4. local search
         nlopt.srand(int(cfg.seed))
         stages: list[tuple[int, int]] = []
@@ -451,12 +454,12 @@ def refine(
 
     if obj.best_params is None:  # not even the start point fitted the budget/time
         loss_after = loss_before
-        best_params, best_yaw = space.to_params(x0), start_yaw
+        best_params, best_yaw = start_space.to_params(x0), start_yaw
     else:
         loss_after = obj.best_sketch_loss  # <= best objective <= objective at the start
         best_params, best_yaw = obj.best_params, obj.best_yaw
     if loss_after > loss_before:  # the view penalty traded sketch match for the front view
-        loss_after, best_params, best_yaw = loss_before, start_space.to_params(x_start), start_yaw
+        loss_after, best_params, best_yaw = loss_before, start_space.to_params(x0), start_yaw
     return RefineResult(
         params=best_params,
         yaw=float(best_yaw),
