@@ -43,6 +43,7 @@ import time
 from collections.abc import Callable
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
@@ -362,15 +363,21 @@ def calibrate(records: list[dict], embedding: str = "shipped") -> dict:
     }
 
 
+def settings(args: argparse.Namespace, **more: Any) -> RefineSettings:
+    """The pipeline's refinement settings, but the options the command line sets."""
+    return RefineSettings(
+        budget=args.budget,
+        embedding=args.embedding,
+        tree_seeds=args.tree_seeds,
+        depth_weight=args.depth_weight,
+        **more,
+    ).validate()
+
+
 def part_warning(args: argparse.Namespace) -> dict:
     pipe = Pipeline(
         "tsn",
-        RefineSettings(
-            budget=args.budget,
-            species_tries=1,
-            embedding=args.embedding,
-            tree_seeds=args.tree_seeds,
-        ),
+        settings(args, species_tries=1),
     )
     cases = [("non-tree", n, img, None) for n, img in non_trees(0)]
     cases += [("tree", d["name"], d["image"], d) for d in tree_drawings(900, 5)]
@@ -425,7 +432,7 @@ def part_refine(args: argparse.Namespace) -> dict:
 
     pipe = Pipeline(
         "tsn",
-        RefineSettings(budget=args.budget, embedding=args.embedding, tree_seeds=args.tree_seeds),
+        settings(args),
     )
     records: list[dict] = []
     # one of each species at a time, and each case saved as it ends: a run stopped early
@@ -642,6 +649,12 @@ def main(argv: list[str] | None = None) -> int:
         default=RefineSettings().tree_seeds,
         help="RefineSettings.tree_seeds (warning and refine; 1: the estimate's seed only)",
     )
+    ap.add_argument(
+        "--depth-weight",
+        type=float,
+        default=RefineSettings().depth_weight,
+        help="RefineSettings.depth_weight (warning and refine; 0: no depth term)",
+    )
     args = ap.parse_args(argv)
     if args.markdown is not None:
         print(markdown(json.loads(args.markdown.read_text())))
@@ -653,9 +666,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.budget is None:
         args.budget = 20 if args.part == "warning" else 40
     try:
-        RefineSettings(
-            budget=args.budget, embedding=args.embedding, tree_seeds=args.tree_seeds
-        ).validate()
+        settings(args)
     except ValueError as exc:
         ap.error(str(exc))
     run = {"warning": part_warning, "refine": part_refine, "estimate": part_estimate}[args.part]

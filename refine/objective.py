@@ -345,6 +345,21 @@ class SearchSpace:
 # --------------------------------------------------------------------------- objective
 
 
+def mass_offset(skeleton: Any) -> np.ndarray:
+    """``(2,)``: the mean horizontal position of a grown tree's stem points and leaves
+    relative to its trunk base (the origin), divided by its height."""
+    pts = np.concatenate(
+        [np.asarray(skeleton.points, float).reshape(-1, 3),
+         np.asarray(skeleton.leaf_positions, float).reshape(-1, 3)]
+    )  # fmt: skip
+    if len(pts) == 0:
+        return np.zeros(2)
+    height = float(np.ptp(pts[:, 2]))
+    if not height > 0:
+        return np.zeros(2)
+    return pts[:, :2].mean(axis=0) / height
+
+
 @dataclass
 class SketchObjective:
     """``objective(x)`` -> sketch distance of the tree at ``x`` to the target (plus the
@@ -369,6 +384,7 @@ class SketchObjective:
     prior_weight: float = 0.0
     yaw_prior: float = 0.0  # degrees: the view assumed unless the sketch says otherwise
     yaw_weight: float = 0.0
+    depth_weight: float = 0.0  # weight of the (depth offset / height)^2 term: :meth:`depth`
     evaluations: int = 0
     best_loss: float = math.inf  # objective: sketch distance + prior penalty
     best_sketch_loss: float = math.inf  # the sketch distance alone at the best point
@@ -380,6 +396,8 @@ class SketchObjective:
     fast: bool = True
     embedder: Any = None  # refine.embed.ShapeEmbedder: the one that made the target's embedding
     _cache: dict[tuple[float, ...], float] = field(default_factory=dict, repr=False)
+    _sketch_losses: dict[tuple[float, ...], float] = field(default_factory=dict, repr=False)
+    _mass: np.ndarray = field(default_factory=lambda: np.zeros(2), repr=False)
     _scene_key: tuple[float, ...] | None = field(default=None, repr=False)
     _renderer: Any = field(default=None, repr=False)
     render_seconds: float = 0.0
@@ -399,6 +417,7 @@ class SketchObjective:
         scene_key = k[: len(self.space.dims)]
         if self._scene_key != scene_key or self._renderer is None:
             skeleton = grow(self.space.to_params(x))
+            self._mass = mass_offset(skeleton)
             name = self.space.species
             if self.fast:
                 mesh = sketch_mesh(skeleton, self.target.size, name)
@@ -438,11 +457,30 @@ class SketchObjective:
         d = np.asarray(x[:n], dtype=np.float64) - np.asarray(self.prior[:n], dtype=np.float64)
         return out + float(self.prior_weight * np.dot(d, d))
 
+    def depth(self, yaw: float) -> float:
+        """How far the last grown tree's mass (:func:`mass_offset`) lies from its trunk
+        base along the line of sight at ``yaw``, as a fraction of its height.
+
+        A drawing shows where a tree's mass sits across the page, never how far towards
+        or away from the viewer: the same sketch is a tree leaning towards the viewer
+        seen from one side and leaning away seen from the other.  The expected depth of a
+        drawn tree's lean is zero, so among trees that match the sketch alike the search
+        should keep the one whose lean lies in the picture plane: a tree turned to a view
+        where its lean points at the camera is wrong by the whole lean on average."""
+        from render.camera import view_direction
+
+        return float(self._mass @ view_direction(yaw)[:2])
+
+    def sketch_loss(self, x: Sequence[float]) -> float:
+        """The sketch distance alone (no penalties) at a point evaluated in this space."""
+        return self._sketch_losses[self.key(x)]
+
     def rebase(self, space: SearchSpace) -> None:
         """Search another space (e.g. a different held discrete value): clears the cache,
         keeps the counters and the best point seen."""
         self.space = space
         self._cache.clear()
+        self._sketch_losses.clear()
         self._scene_key = None
         self._renderer = None
 
@@ -463,7 +501,10 @@ class SketchObjective:
         sketch_loss = self.loss_of_sketch(self.sketch_at(k))
         self.render_seconds += time.perf_counter() - t0
         loss = sketch_loss + self.penalty(k)
+        if self.depth_weight > 0:  # the tree just grown is the one at ``k``
+            loss += self.depth_weight * self.depth(self.space.yaw(k)) ** 2
         self._cache[k] = loss
+        self._sketch_losses[k] = sketch_loss
         self.evaluations += 1
         if loss < self.best_loss:
             self.best_loss = loss

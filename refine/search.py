@@ -53,6 +53,9 @@ ALGORITHMS = {"bobyqa": "LN_BOBYQA", "sbplx": "LN_SBPLX", "cobyla": "LN_COBYLA"}
 START_YAWS = (0.0, 90.0, 180.0, 270.0, 45.0, 135.0, 225.0, 315.0)
 # objective penalty for a view turned from the front: 0.015 at 90 degrees, 0.06 at 180
 YAW_WEIGHT = 0.06
+# objective penalty per (depth offset of the tree's mass / its height)^2 at the searched
+# view (``SketchObjective.depth``): a lean the drawing cannot show stays out of the depth
+DEPTH_WEIGHT = 0.0
 # held at the first estimate unless asked for: the tree's absolute size variation.  Every
 # sketch is framed to its own tree, so a size change shows only as slightly thinner lines
 # and smaller leaves; per unit of sketch distance it moves the mesh more than any other
@@ -141,6 +144,10 @@ class RefineSettings:
     adds ``prior_weight * |x - x_start|^2`` (unit cube, yaw excluded) to what is minimised;
     ``yaw_weight`` (when the yaw is searched) adds ``yaw_weight * (turn from the front
     view / 180)^2``, so the front view is kept unless another fits clearly better;
+    ``depth_weight`` (when the yaw is searched) adds ``depth_weight * (depth / height)^2``
+    for the depth at which the tree's mass lies off its trunk base along the line of
+    sight (``SketchObjective.depth``): of the views that match alike, the one that shows
+    a lean across the picture, not towards the viewer;
     ``size`` is the side in pixels the search renders and compares at; ``metric`` is the
     sketch distance: ``"shape"`` (style-blind, ``refine.shape``) or ``"ink"`` (line
     pixels, ``refine.objective.sketch_distance``); ``fast_sketch`` (default) draws the
@@ -186,6 +193,7 @@ class RefineSettings:
     xtol: float = 1e-3
     prior_weight: float = 0.0
     yaw_weight: float = YAW_WEIGHT
+    depth_weight: float = DEPTH_WEIGHT
     species_tries: int = 2
     species_ratio: float = 0.5
     species_margin: float = 0.2
@@ -224,7 +232,7 @@ class RefineSettings:
         unknown = [k for k in self.hold if str(k).split("[")[0] not in SPECS]
         if unknown:
             raise ValueError(f"hold: not parameter names: {', '.join(map(str, unknown))}")
-        for label in ("prior_weight", "yaw_weight", "initial_step", "xtol"):
+        for label in ("prior_weight", "yaw_weight", "depth_weight", "initial_step", "xtol"):
             w = getattr(self, label)
             if not (isinstance(w, int | float) and math.isfinite(w) and w >= 0):
                 raise ValueError(f"{label} must be a number >= 0, got {w!r}")
@@ -329,6 +337,7 @@ def refine(
         prior_weight=float(cfg.prior_weight),
         yaw_prior=0.0,
         yaw_weight=float(cfg.yaw_weight),
+        depth_weight=float(cfg.depth_weight) if space.search_yaw else 0.0,
         fast=cfg.fast_sketch,
         embedder=embedder,
     )
@@ -383,7 +392,7 @@ def refine(
             seen.append((loss, y))
             if loss < start_total:
                 start_total, start_yaw = loss, y
-                loss_before = loss - obj.penalty(obj.key(x))  # the sketch distance
+                loss_before = obj.sketch_loss(x)  # the sketch distance alone
         x0 = at_view(start_yaw)
         # 1b. other tree seeds at the best views, while the start keeps within half the
         # budget and something is searched at all; "before" stays the start's own seed

@@ -86,6 +86,12 @@ class Framing:
         return cls(z_bottom, float(max(z_hi)), float(np.sqrt(max(r2))), **margins)
 
 
+def view_direction(yaw: float) -> np.ndarray:
+    """The horizontal unit vector a camera at ``yaw`` (pitch 0) looks along (yaw 0: +Y)."""
+    a = np.radians(float(yaw))
+    return np.array([-np.sin(a), np.cos(a), 0.0])
+
+
 def resolve_yaw(view: str | float) -> float:
     """A view name (front/back/left/right) or a number of degrees -> degrees."""
     if isinstance(view, str):
@@ -120,10 +126,10 @@ class Camera:
 
     def basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(right, up, forward) unit vectors in world space."""
-        a, p = np.radians(self.yaw), np.radians(self.pitch)
-        ca, sa, cp, sp = np.cos(a), np.sin(a), np.cos(p), np.sin(p)
-        right = np.array([ca, sa, 0.0])
-        horiz = np.array([-sa, ca, 0.0])  # yaw 0 looks along +Y
+        p = np.radians(self.pitch)
+        cp, sp = np.cos(p), np.sin(p)
+        horiz = view_direction(self.yaw)
+        right = np.array([horiz[1], -horiz[0], 0.0])
         forward = cp * horiz - sp * np.array([0.0, 0.0, 1.0])
         up = sp * horiz + cp * np.array([0.0, 0.0, 1.0])
         return right, up, forward

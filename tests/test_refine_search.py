@@ -178,3 +178,27 @@ def test_view_prior_keeps_front_unless_another_view_fits_clearly() -> None:
     assert r0.start_yaw == 0.0 and r0.loss_after == pytest.approx(0.0, abs=0.01)
     with pytest.raises(ValueError, match="yaw_weight"):
         refine(front, gt, RefineSettings(budget=5, yaw_weight=float("nan")))
+
+
+def test_depth_weight_keeps_a_lean_out_of_the_line_of_sight() -> None:
+    from refine.objective import mass_offset
+    from refine.search import START_YAWS
+    from render.camera import view_direction
+
+    gt = species.sample("bonsai", 1)  # its crown leans off the trunk base by 0.2 heights
+    m = mass_offset(grow(gt))
+    depth = {y: float(m @ view_direction(y)[:2]) for y in START_YAWS}
+    towards = max(START_YAWS, key=lambda y: abs(depth[y]))  # the lean points at the camera
+    img, _, _ = _case(name="bonsai", seed=1, yaw=towards)
+    cfg = RefineSettings(budget=9, yaw_weight=0.0, species_tries=1)
+    plain = refine(img, gt, cfg, species="bonsai")
+    assert plain.yaw == pytest.approx(towards) and plain.loss_after < 0.05  # the fast sketch
+    held = refine(img, gt, cfg.replace(depth_weight=1e3), species="bonsai")
+    found = float(m @ view_direction(held.yaw)[:2])
+    assert abs(found) < 0.4 * abs(depth[towards])
+    # "before" is the start view's sketch distance alone, as at that view held fixed
+    fixed = refine(img, gt, cfg.replace(budget=1), species="bonsai", yaw=held.start_yaw)
+    assert held.loss_before == pytest.approx(fixed.loss_before)
+    assert held.loss_after <= held.loss_before
+    with pytest.raises(ValueError, match="depth_weight"):
+        RefineSettings(depth_weight=-1.0).validate()
