@@ -33,6 +33,7 @@ after one warm-up.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import os
@@ -369,9 +370,29 @@ def settings(args: argparse.Namespace, **more: Any) -> RefineSettings:
         budget=args.budget,
         embedding=args.embedding,
         tree_seeds=args.tree_seeds,
-        depth_weight=args.depth_weight,
-        **more,
+        **(dict(args.set) | more),
     ).validate()
+
+
+def setting(text: str) -> tuple[str, Any]:
+    """``--set KEY=VALUE``: one RefineSettings field, VALUE read as its default's type."""
+    key, sep, value = text.partition("=")
+    fields = {f.name: f for f in dataclasses.fields(RefineSettings)}
+    if not sep or key not in fields:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: expected KEY=VALUE with KEY one of {', '.join(fields)}"
+        )
+    kind = type(getattr(RefineSettings(), key))
+    if kind is bool:
+        if value.lower() not in ("true", "false"):
+            raise argparse.ArgumentTypeError(f"{key} takes true or false, got {value!r}")
+        return key, value.lower() == "true"
+    if kind not in (int, float, str):
+        raise argparse.ArgumentTypeError(f"{key} cannot be set from the command line")
+    try:
+        return key, kind(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{key} takes a {kind.__name__}, got {value!r}") from None
 
 
 def part_warning(args: argparse.Namespace) -> dict:
@@ -650,10 +671,12 @@ def main(argv: list[str] | None = None) -> int:
         help="RefineSettings.tree_seeds (warning and refine; 1: the estimate's seed only)",
     )
     ap.add_argument(
-        "--depth-weight",
-        type=float,
-        default=RefineSettings().depth_weight,
-        help="RefineSettings.depth_weight (warning and refine; 0: no depth term)",
+        "--set",
+        type=setting,
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="any other RefineSettings field (warning and refine), e.g. prior_weight=0.5",
     )
     args = ap.parse_args(argv)
     if args.markdown is not None:

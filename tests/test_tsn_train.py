@@ -244,7 +244,9 @@ def test_styles_filter_and_fine_tune_from_a_checkpoint(tmp_path: Path) -> None:
     assert "2 sketches of 2 held-out trees" in r.output
 
 
-def test_training_sketches_are_normalised_like_predicts_input(tiny: Path, tmp_path: Path) -> None:
+def test_training_sketches_are_normalised_like_predicts_input(
+    tiny: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     from render.reader import normalise_drawing
     from tsn.model import TSN
     from tsn.train import cache_key, frozen_digest, normalised
@@ -263,6 +265,14 @@ def test_training_sketches_are_normalised_like_predicts_input(tiny: Path, tmp_pa
     assert on.normalise and cache_key(on, 3, split, "train", None, "w") != cache_key(
         off, 3, split, "train", None, "w"
     )
+    # a change to the normaliser's code gives new features, never the stale ones
+    from tsn import train as tt
+
+    keys = [cache_key(c, 3, split, "train", None, "w") for c in (on, off)]
+    monkeypatch.setattr(tt, "normaliser_digest", lambda: "another normaliser")
+    now = [cache_key(c, 3, split, "train", None, "w") for c in (on, off)]
+    assert now[0] != keys[0] and now[1] == keys[1]  # raw sketches do not depend on it
+    monkeypatch.undo()
     # the key follows the frozen weights, not the init checkpoint's path
     assert cache_key(on, 3, split, "train", None, "w") != cache_key(
         on, 3, split, "train", None, "v"

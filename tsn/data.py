@@ -8,9 +8,8 @@ scale to ``[0, 1]`` (1 = white).  A blank or all-dark page is refused with
 
 ``augment(img, rng)`` imitates hand drawing on a ``uint8`` sketch: a small affine jitter
 (rotation, anisotropic scale, shear), thicker or thinner strokes (grey erosion or
-dilation), hollow strokes (a filled trunk or blob left as its outline), line breaks (small
-white gaps along the strokes) and, sometimes, a missing part of the crown (a larger white
-patch in the upper part of the drawing).
+dilation), line breaks (small white gaps along the strokes) and, sometimes, a missing part
+of the crown (a larger white patch in the upper part of the drawing).
 """
 
 from __future__ import annotations
@@ -80,15 +79,6 @@ def augment(img: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         a = ndimage.grey_erosion(a, size=(2, 2))  # thicker dark strokes
     elif r < 0.55:
         a = ndimage.grey_dilation(a, size=(2, 2))  # thinner strokes
-    if rng.random() < 0.3:
-        # hollow strokes: a filled trunk, frond or leaf blob drawn as its outline, as
-        # people draw a trunk with two lines (only marks wider than twice the outline)
-        # (outlines and branch lines, up to 6 px wide at 256, stay as they are)
-        rim = rng.uniform(1.0, 2.0) * h / 256
-        depth = ndimage.distance_transform_edt(a < INK_LEVEL)
-        inner, _ = ndimage.label(depth > rim)
-        wide = np.unique(inner[depth > 3.0 * h / 256])
-        a[np.isin(inner, wide[wide > 0])] = 255.0
     ink = np.argwhere(a < INK_LEVEL)
     if len(ink):
         # line breaks: small gaps along the strokes (one radius per image)

@@ -247,7 +247,7 @@ def cache_key(
     h.update(
         json.dumps(
             [tag, cfg.backbone, cfg.size, cut, cfg.copies, cfg.seed, cfg.pretrained]
-            + (["normalised"] if cfg.normalise else []),
+            + (["normalised", normaliser_digest()] if cfg.normalise else []),
             sort_keys=True,
         ).encode()
     )
@@ -255,6 +255,16 @@ def cache_key(
     h.update(("frozen:" + frozen).encode())
     h.update("|".join(split.tree_ids).encode())
     return h.hexdigest()[:16]
+
+
+def normaliser_digest() -> str:
+    """Fingerprint of the drawing normaliser's code (``render.reader``): features cached
+    from normalised sketches are recomputed when it changes, never silently reused."""
+    import inspect
+
+    from render import reader
+
+    return hashlib.sha1(inspect.getsource(reader).encode()).hexdigest()[:12]
 
 
 def normalised(img: np.ndarray) -> np.ndarray:
