@@ -251,6 +251,7 @@ def _ink_of(flat: np.ndarray) -> np.ndarray:
     """Ink pixels of a flattened page: darker than Otsu's split, than INK_CONTRAST and
     than the paper's grain reaches (``GRAIN_SIGMAS``), without isolated specks (paper
     grain, sensor noise)."""
+    from scipy import ndimage
     from skimage.filters import threshold_otsu
     from skimage.morphology import remove_small_objects
 
@@ -264,15 +265,25 @@ def _ink_of(flat: np.ndarray) -> np.ndarray:
         t = min(INK_CONTRAST, float(threshold_otsu(hist=(counts, np.arange(256) / 255.0))))
     else:
         t = INK_CONTRAST
-    # on grainy paper with few, light strokes Otsu splits the grain itself: ink must also
-    # be darker than the paper's own spread allows (its median less GRAIN_SIGMAS robust
-    # standard deviations; a clean page has none, so this changes nothing there)
-    cum = np.cumsum(counts)
-    paper = int(np.searchsorted(cum, cum[-1] / 2))
-    spread = np.bincount(np.abs(np.arange(256) - paper), weights=counts, minlength=256)
-    mad = int(np.searchsorted(np.cumsum(spread), cum[-1] / 2))
-    t = min(t, (paper - GRAIN_SIGMAS * 1.4826 * mad) / 255.0)
     ink = flat < max(t, 0.5)
+    # on grainy paper with few, light strokes Otsu splits the grain itself: a mark is ink
+    # only where some of it is darker than the paper's grain reaches (the paper's median
+    # less GRAIN_SIGMAS robust standard deviations), so grain on its own goes and the
+    # strokes keep their lighter edges (hysteresis); a clean page has no grain at all.
+    # The paper's statistics are the paper side's of the split (the ink may be most of it)
+    side = counts.copy()
+    side[: int(np.ceil(max(t, 0.5) * 255.0))] = 0
+    cum = np.cumsum(side)
+    paper = int(np.searchsorted(cum, cum[-1] / 2))
+    spread = np.bincount(np.abs(np.arange(256) - paper), weights=side, minlength=256)
+    mad = int(np.searchsorted(np.cumsum(spread), cum[-1] / 2))
+    sure = flat < (paper - GRAIN_SIGMAS * 1.4826 * mad) / 255.0
+    if cum[-1] > 0 and not (ink <= sure).all():
+        lab, n = ndimage.label(ink, structure=np.ones((3, 3), bool))
+        seeded = np.zeros(n + 1, bool)
+        seeded[np.unique(lab[sure & ink])] = True
+        seeded[0] = False
+        ink = seeded[lab]
     min_px = max(2, int(round(ink.size * 2e-5)))
     return remove_small_objects(ink, max_size=min_px - 1)
 
