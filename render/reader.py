@@ -245,6 +245,7 @@ def flatten_paper(img: np.ndarray) -> np.ndarray:
 
 
 GRAIN_SIGMAS = 4.0  # ink is darker than the paper by this many of its grain's deviations
+GRAIN_EDGE_SIGMAS = 2.0  # ... in places, and everywhere by this many (a stroke's edges)
 
 
 def _ink_of(flat: np.ndarray) -> np.ndarray:
@@ -277,8 +278,10 @@ def _ink_of(flat: np.ndarray) -> np.ndarray:
     paper = int(np.searchsorted(cum, cum[-1] / 2))
     spread = np.bincount(np.abs(np.arange(256) - paper), weights=side, minlength=256)
     mad = int(np.searchsorted(np.cumsum(spread), cum[-1] / 2))
-    sure = flat < (paper - GRAIN_SIGMAS * 1.4826 * mad) / 255.0
+    sigma = 1.4826 * mad
+    sure = flat < (paper - GRAIN_SIGMAS * sigma) / 255.0
     if cum[-1] > 0 and not (ink <= sure).all():
+        ink &= flat < (paper - GRAIN_EDGE_SIGMAS * sigma) / 255.0
         lab, n = ndimage.label(ink, structure=np.ones((3, 3), bool))
         seeded = np.zeros(n + 1, bool)
         seeded[np.unique(lab[sure & ink])] = True
