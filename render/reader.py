@@ -248,6 +248,21 @@ GRAIN_SIGMAS = 4.0  # ink is darker than the paper by this many of its grain's d
 GRAIN_EDGE_SIGMAS = 2.0  # ... in places, and everywhere by this many (a stroke's edges)
 
 
+def _paper_grain(counts: np.ndarray, split: float) -> tuple[float, float]:
+    """The paper's level and its grain's robust standard deviation (0..255 units) from a
+    page's 256-bin histogram, measured on the paper side of ``split`` (0..1) only, since
+    the ink may be most of a page; (255, 0) when nothing is on that side."""
+    side = counts.copy()
+    side[: int(np.ceil(split * 255.0))] = 0
+    cum = np.cumsum(side)
+    if cum[-1] == 0:
+        return 255.0, 0.0
+    paper = int(np.searchsorted(cum, cum[-1] / 2))
+    spread = np.bincount(np.abs(np.arange(256) - paper), weights=side, minlength=256)
+    mad = int(np.searchsorted(np.cumsum(spread), cum[-1] / 2))
+    return float(paper), 1.4826 * mad
+
+
 def _ink_of(flat: np.ndarray) -> np.ndarray:
     """Ink pixels of a flattened page: darker than Otsu's split, than INK_CONTRAST and
     than the paper's grain reaches (``GRAIN_SIGMAS``), without isolated specks (paper
@@ -268,19 +283,12 @@ def _ink_of(flat: np.ndarray) -> np.ndarray:
         t = INK_CONTRAST
     ink = flat < max(t, 0.5)
     # on grainy paper with few, light strokes Otsu splits the grain itself: a mark is ink
-    # only where some of it is darker than the paper's grain reaches (the paper's median
-    # less GRAIN_SIGMAS robust standard deviations), so grain on its own goes and the
-    # strokes keep their lighter edges (hysteresis); a clean page has no grain at all.
-    # The paper's statistics are the paper side's of the split (the ink may be most of it)
-    side = counts.copy()
-    side[: int(np.ceil(max(t, 0.5) * 255.0))] = 0
-    cum = np.cumsum(side)
-    paper = int(np.searchsorted(cum, cum[-1] / 2))
-    spread = np.bincount(np.abs(np.arange(256) - paper), weights=side, minlength=256)
-    mad = int(np.searchsorted(np.cumsum(spread), cum[-1] / 2))
-    sigma = 1.4826 * mad
+    # only where some of it is darker than the paper's grain reaches, and each of its
+    # pixels clears the grain's usual spread (hysteresis: grain on its own goes, strokes
+    # keep their lighter edges); a clean page has no grain, so nothing changes there
+    paper, sigma = _paper_grain(counts, max(t, 0.5))
     sure = flat < (paper - GRAIN_SIGMAS * sigma) / 255.0
-    if cum[-1] > 0 and not (ink <= sure).all():
+    if not (ink <= sure).all():
         ink &= flat < (paper - GRAIN_EDGE_SIGMAS * sigma) / 255.0
         lab, n = ndimage.label(ink, structure=np.ones((3, 3), bool))
         seeded = np.zeros(n + 1, bool)
