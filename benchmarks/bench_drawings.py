@@ -387,6 +387,8 @@ def setting(text: str) -> tuple[str, Any]:
         if value.lower() not in ("true", "false"):
             raise argparse.ArgumentTypeError(f"{key} takes true or false, got {value!r}")
         return key, value.lower() == "true"
+    if kind is tuple:  # e.g. hold=scaleV,rSplits2 (empty: none)
+        return key, tuple(v.strip() for v in value.split(",") if v.strip())
     if kind not in (int, float, str):
         raise argparse.ArgumentTypeError(f"{key} cannot be set from the command line")
     try:
