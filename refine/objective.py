@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
+from render.camera import view_direction
 from render.reader import SketchError, normalise_drawing
 from weberpenn import TreeParams, build_mesh, grow, species
 from weberpenn.params import SPECS
@@ -397,7 +398,8 @@ class SketchObjective:
     embedder: Any = None  # refine.embed.ShapeEmbedder: the one that made the target's embedding
     _cache: dict[tuple[float, ...], float] = field(default_factory=dict, repr=False)
     _sketch_losses: dict[tuple[float, ...], float] = field(default_factory=dict, repr=False)
-    _mass: np.ndarray = field(default_factory=lambda: np.zeros(2), repr=False)
+    _skeleton: Any = field(default=None, repr=False)  # the last tree grown
+    _mass: np.ndarray | None = field(default=None, repr=False)  # its mass_offset, when asked
     _scene_key: tuple[float, ...] | None = field(default=None, repr=False)
     _renderer: Any = field(default=None, repr=False)
     render_seconds: float = 0.0
@@ -417,7 +419,7 @@ class SketchObjective:
         scene_key = k[: len(self.space.dims)]
         if self._scene_key != scene_key or self._renderer is None:
             skeleton = grow(self.space.to_params(x))
-            self._mass = mass_offset(skeleton)
+            self._skeleton, self._mass = skeleton, None
             name = self.space.species
             if self.fast:
                 mesh = sketch_mesh(skeleton, self.target.size, name)
@@ -467,8 +469,8 @@ class SketchObjective:
         drawn tree's lean is zero, so among trees that match the sketch alike the search
         should keep the one whose lean lies in the picture plane: a tree turned to a view
         where its lean points at the camera is wrong by the whole lean on average."""
-        from render.camera import view_direction
-
+        if self._mass is None:
+            self._mass = mass_offset(self._skeleton)
         return float(self._mass @ view_direction(yaw)[:2])
 
     def sketch_loss(self, x: Sequence[float]) -> float:
