@@ -346,19 +346,34 @@ class SearchSpace:
 # --------------------------------------------------------------------------- objective
 
 
-def mass_offset(skeleton: Any) -> np.ndarray:
-    """``(2,)``: the mean horizontal position of a grown tree's stem points and leaves
-    relative to its trunk base (the origin), divided by its height."""
+def tree_points(skeleton: Any) -> np.ndarray:
+    """``(n, 3)``: a grown tree's stem points and leaves relative to its trunk base (the
+    origin), divided by its height (an empty array for a tree with no height)."""
     pts = np.concatenate(
         [np.asarray(skeleton.points, float).reshape(-1, 3),
          np.asarray(skeleton.leaf_positions, float).reshape(-1, 3)]
     )  # fmt: skip
-    if len(pts) == 0:
-        return np.zeros(2)
-    height = float(np.ptp(pts[:, 2]))
+    height = float(np.ptp(pts[:, 2])) if len(pts) else 0.0
     if not height > 0:
+        return np.zeros((0, 3))
+    return pts / height
+
+
+def depth_extent(points: np.ndarray, yaw: float) -> np.ndarray:
+    """``(2,)``: the nearest and the farthest of ``points`` (:func:`tree_points`) along
+    the line of sight at ``yaw``: how deep the tree reaches towards and away from the
+    viewer, as fractions of its height."""
+    if len(points) == 0:
         return np.zeros(2)
-    return pts[:, :2].mean(axis=0) / height
+    d = points[:, :2] @ view_direction(yaw)[:2]
+    return np.array([d.min(), d.max()])
+
+
+def mass_offset(skeleton: Any) -> np.ndarray:
+    """``(2,)``: the mean horizontal position of a grown tree's stem points and leaves
+    relative to its trunk base (the origin), divided by its height."""
+    pts = tree_points(skeleton)
+    return pts[:, :2].mean(axis=0) if len(pts) else np.zeros(2)
 
 
 @dataclass
@@ -386,6 +401,8 @@ class SketchObjective:
     yaw_prior: float = 0.0  # degrees: the view assumed unless the sketch says otherwise
     yaw_weight: float = 0.0
     depth_weight: float = 0.0  # weight of the (depth offset / height)^2 term: :meth:`depth`
+    extent_weight: float = 0.0  # weight of the depth-extent term: :meth:`extent_change`
+    extent_reference: np.ndarray | None = None  # tree_points of the tree it compares with
     evaluations: int = 0
     best_loss: float = math.inf  # objective: sketch distance + prior penalty
     best_sketch_loss: float = math.inf  # the sketch distance alone at the best point
@@ -400,6 +417,7 @@ class SketchObjective:
     _sketch_losses: dict[tuple[float, ...], float] = field(default_factory=dict, repr=False)
     _skeleton: Any = field(default=None, repr=False)  # the last tree grown
     _mass: np.ndarray | None = field(default=None, repr=False)  # its mass_offset, when asked
+    _points: np.ndarray | None = field(default=None, repr=False)  # its tree_points, when asked
     _scene_key: tuple[float, ...] | None = field(default=None, repr=False)
     _renderer: Any = field(default=None, repr=False)
     render_seconds: float = 0.0
@@ -419,7 +437,7 @@ class SketchObjective:
         scene_key = k[: len(self.space.dims)]
         if self._scene_key != scene_key or self._renderer is None:
             skeleton = grow(self.space.to_params(x))
-            self._skeleton, self._mass = skeleton, None
+            self._skeleton, self._mass, self._points = skeleton, None, None
             name = self.space.species
             if self.fast:
                 mesh = sketch_mesh(skeleton, self.target.size, name)
@@ -473,6 +491,24 @@ class SketchObjective:
             self._mass = mass_offset(self._skeleton)
         return float(self._mass @ view_direction(yaw)[:2])
 
+    def extent_change(self, yaw: float) -> float:
+        """How much the last grown tree's depth extent (:func:`depth_extent`) at ``yaw``
+        differs from ``extent_reference``'s at the same view: the sum of the squared
+        changes of its nearest and farthest depth, as fractions of height.
+
+        A drawing shows how far a tree reaches across the page, never how deep: a value
+        the search moves to fit the outline also moves branches towards or away from the
+        viewer, where nothing checks them.  The first estimate's depth is the best guess
+        the drawing leaves, so a change of depth must be paid for by the sketch.  The
+        reference is seen at the candidate's own view, so turning the tree costs nothing
+        here (the view has its own prior)."""
+        if self.extent_reference is None:
+            return 0.0
+        if self._points is None:
+            self._points = tree_points(self._skeleton)
+        d = depth_extent(self._points, yaw) - depth_extent(self.extent_reference, yaw)
+        return float(d @ d)
+
     def sketch_loss(self, x: Sequence[float]) -> float:
         """The sketch distance alone (no penalties) at a point evaluated in this space."""
         return self._sketch_losses[self.key(x)]
@@ -505,6 +541,8 @@ class SketchObjective:
         loss = sketch_loss + self.penalty(k)
         if self.depth_weight > 0:  # the tree just grown is the one at ``k``
             loss += self.depth_weight * self.depth(self.space.yaw(k)) ** 2
+        if self.extent_weight > 0:
+            loss += self.extent_weight * self.extent_change(self.space.yaw(k))
         self._cache[k] = loss
         self._sketch_losses[k] = sketch_loss
         self.evaluations += 1

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from weberpenn import TreeParams, species
+from weberpenn import TreeParams, grow, species
 from weberpenn.params import SPECS
 
 from .objective import (
@@ -34,6 +34,7 @@ from .objective import (
     SketchObjective,
     framed,
     make_target,
+    tree_points,
 )
 
 __all__ = [
@@ -56,6 +57,10 @@ YAW_WEIGHT = 0.06
 # objective penalty per (depth offset of the tree's mass / its height)^2 at the searched
 # view (``SketchObjective.depth``): a lean the drawing cannot show stays out of the depth
 DEPTH_WEIGHT = 0.0
+# objective penalty per squared change of the tree's depth extent (its nearest and
+# farthest reach along the line of sight, fractions of its height) from the first
+# estimate's at the same view (``SketchObjective.extent_change``)
+EXTENT_WEIGHT = 0.0
 # held at the first estimate unless asked for: the tree's absolute size variation.  Every
 # sketch is framed to its own tree, so a size change shows only as slightly thinner lines
 # and smaller leaves; per unit of sketch distance it moves the mesh more than any other
@@ -148,6 +153,11 @@ class RefineSettings:
     for the depth at which the tree's mass lies off its trunk base along the line of
     sight (``SketchObjective.depth``): of the views that match alike, the one that shows
     a lean across the picture, not towards the viewer;
+    ``extent_weight`` adds ``extent_weight`` times the squared change of the tree's depth
+    extent (its nearest and farthest reach along the line of sight, fractions of its
+    height) from the first estimate's seen at the same view
+    (``SketchObjective.extent_change``): the values the search moves to fit the outline
+    must not, unpaid, move branches in the depth that no drawing shows;
     ``size`` is the side in pixels the search renders and compares at; ``metric`` is the
     sketch distance: ``"shape"`` (style-blind, ``refine.shape``) or ``"ink"`` (line
     pixels, ``refine.objective.sketch_distance``); ``fast_sketch`` (default) draws the
@@ -194,6 +204,7 @@ class RefineSettings:
     prior_weight: float = 0.0
     yaw_weight: float = YAW_WEIGHT
     depth_weight: float = DEPTH_WEIGHT
+    extent_weight: float = EXTENT_WEIGHT
     species_tries: int = 2
     species_ratio: float = 0.5
     species_margin: float = 0.2
@@ -232,7 +243,14 @@ class RefineSettings:
         unknown = [k for k in self.hold if str(k).split("[")[0] not in SPECS]
         if unknown:
             raise ValueError(f"hold: not parameter names: {', '.join(map(str, unknown))}")
-        for label in ("prior_weight", "yaw_weight", "depth_weight", "initial_step", "xtol"):
+        for label in (
+            "prior_weight",
+            "yaw_weight",
+            "depth_weight",
+            "extent_weight",
+            "initial_step",
+            "xtol",
+        ):
             w = getattr(self, label)
             if not (isinstance(w, int | float) and math.isfinite(w) and w >= 0):
                 raise ValueError(f"{label} must be a number >= 0, got {w!r}")
@@ -338,6 +356,12 @@ def refine(
         yaw_prior=0.0,
         yaw_weight=float(cfg.yaw_weight),
         depth_weight=float(cfg.depth_weight) if space.search_yaw else 0.0,
+        extent_weight=float(cfg.extent_weight),
+        extent_reference=(
+            tree_points(grow(space.to_params(space.from_params(initial_params))))
+            if cfg.extent_weight > 0
+            else None
+        ),
         fast=cfg.fast_sketch,
         embedder=embedder,
     )

@@ -202,3 +202,24 @@ def test_depth_weight_keeps_a_lean_out_of_the_line_of_sight() -> None:
     assert held.loss_after <= held.loss_before
     with pytest.raises(ValueError, match="depth_weight"):
         RefineSettings(depth_weight=-1.0).validate()
+
+
+def test_extent_weight_keeps_the_start_trees_depth() -> None:
+    from refine.objective import depth_extent, tree_points
+
+    img, _gt, start = _case(name="bonsai", seed=1, shift=0.25)
+    ref = tree_points(grow(start))
+    cfg = RefineSettings(budget=16, species_tries=1)
+
+    def change(r) -> float:
+        d = depth_extent(tree_points(grow(r.params)), r.yaw) - depth_extent(ref, r.yaw)
+        return float(d @ d)
+
+    plain = refine(img, start, cfg, species="bonsai")
+    held = refine(img, start, cfg.replace(extent_weight=1e3), species="bonsai")
+    # the plain search fits the outline by moving branches a fifth of the height in depth
+    assert change(plain) > 0.01 and plain.loss_after < 0.8 * plain.loss_before
+    assert change(held) < 0.05 * change(plain)
+    assert held.loss_after <= held.loss_before
+    with pytest.raises(ValueError, match="extent_weight"):
+        RefineSettings(extent_weight=-1.0).validate()
