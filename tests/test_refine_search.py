@@ -187,8 +187,9 @@ def test_depth_weight_keeps_a_lean_out_of_the_line_of_sight() -> None:
 
     gt = species.sample("bonsai", 1)  # its crown leans off the trunk base by 0.2 heights
     m = mass_offset(grow(gt))
-    depth = {y: float(m @ view_direction(y)[:2]) for y in START_YAWS}
-    towards = max(START_YAWS, key=lambda y: abs(depth[y]))  # the lean points at the camera
+    seen = START_YAWS[:3]  # what a budget of 9 lets the start see
+    depth = {y: float(m @ view_direction(y)[:2]) for y in seen}
+    towards = max(seen, key=lambda y: abs(depth[y]))  # the lean points at the camera
     img, _, _ = _case(name="bonsai", seed=1, yaw=towards)
     cfg = RefineSettings(budget=9, yaw_weight=0.0, species_tries=1)
     plain = refine(img, gt, cfg, species="bonsai")
@@ -209,7 +210,7 @@ def test_extent_weight_keeps_the_start_trees_depth() -> None:
 
     img, _gt, start = _case(name="bonsai", seed=1, shift=0.25)
     ref = tree_points(grow(start))
-    cfg = RefineSettings(budget=16, species_tries=1)
+    cfg = RefineSettings(budget=16, species_tries=1, extent_weight=0.0)
 
     def change(r) -> float:
         d = depth_extent(tree_points(grow(r.params)), r.yaw) - depth_extent(ref, r.yaw)
@@ -223,3 +224,18 @@ def test_extent_weight_keeps_the_start_trees_depth() -> None:
     assert held.loss_after <= held.loss_before
     with pytest.raises(ValueError, match="extent_weight"):
         RefineSettings(extent_weight=-1.0).validate()
+
+
+def test_the_start_is_seen_from_every_15_degrees() -> None:
+    from refine.search import START_YAWS
+
+    assert sorted(START_YAWS) == [15.0 * i for i in range(24)]
+    assert sorted(START_YAWS[:8]) == [45.0 * i for i in range(8)]  # a small cap: coarse first
+    # a drawing made from between the diagonals: the start finds its very view
+    img, gt, _ = _case(name="bonsai", seed=1, yaw=105.0)
+    r = refine(img, gt, RefineSettings(budget=72, species_tries=1), species="bonsai")
+    assert r.start_yaw == pytest.approx(105.0)
+    assert r.loss_before < 0.05
+    # the start takes at most a third of the budget: with 20, the axes and two diagonals
+    small = refine(img, gt, RefineSettings(budget=20, species_tries=1), species="bonsai")
+    assert small.start_yaw in START_YAWS[:6] and small.evaluations <= 20
