@@ -69,7 +69,7 @@ DEPTH_WEIGHT = 0.0
 # objective penalty per squared change of the tree's depth extent (its nearest and
 # farthest reach along the line of sight, fractions of its height) from the first
 # estimate's at the same view (``SketchObjective.extent_change``)
-EXTENT_WEIGHT = 30.0
+EXTENT_WEIGHT = 0.0
 # held at the first estimate unless asked for: the tree's absolute size variation.  Every
 # sketch is framed to its own tree, so a size change shows only as slightly thinner lines
 # and smaller leaves; per unit of sketch distance it moves the mesh more than any other
