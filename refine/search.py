@@ -54,8 +54,8 @@ __all__ = [
 ALGORITHMS = {"bobyqa": "LN_BOBYQA", "sbplx": "LN_SBPLX", "cobyla": "LN_COBYLA"}
 # the views the start is seen from, every 15 degrees: the axes first, then the diagonals,
 # then the rest, so a start capped by a small budget still sees the whole circle coarsely.
-# A drawing of a generated tree matches the estimate best within one step of its true view
-# far more often at 15 degrees than at 45 (benchmarks/RESULTS.md, "The start's views")
+# The estimate turned to the best of 24 views is nearer the drawn tree in 3D than turned
+# to the best of 8 (benchmarks/RESULTS.md, "Where the mesh error comes from")
 START_YAWS = (
     (0.0, 90.0, 180.0, 270.0, 45.0, 135.0, 225.0, 315.0)
     + (15.0, 105.0, 195.0, 285.0, 60.0, 150.0, 240.0, 330.0)
