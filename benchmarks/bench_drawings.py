@@ -23,7 +23,9 @@ mesh error before (TSN) and after (refined):
 the combined branch+leaf Hausdorff max distance normalised by the ground truth's diagonal
 (``eval.hausdorff``), each tree turned into the ground truth's frame by its own view (TSN,
 which has no view, as a front view), as ``benchmarks/bench_refine.py`` does, and the
-"aligned" distance (each tree turned about its trunk to its best fit).
+"aligned" distance (each tree turned about its trunk to its best fit); the refined tree is
+also scored at the search's own size and scaled to the estimate's height
+(``RefineSettings.keep_height``), whichever of the two the pipeline returned.
 
 ``estimate``: milliseconds per ``Pipeline.estimate`` (normaliser + TSN) on 10 drawings and
 the hand drawings of examples/hand, and per stage, wall clock and CPU time, [median, max]
@@ -452,6 +454,7 @@ def part_warning(args: argparse.Namespace) -> dict:
 
 def part_refine(args: argparse.Namespace) -> dict:
     from eval.hausdorff import aligned_tree_hausdorff, bbox_diagonal, hausdorff, rotate_about_trunk
+    from treesketch.pipeline import mesh_height, rescale_height, tree_height
 
     pipe = Pipeline(
         "tsn",
@@ -480,14 +483,22 @@ def part_refine(args: argparse.Namespace) -> dict:
         )
         _, a0 = aligned_tree_hausdorff(m0, gt_mesh, args.samples, args.align_step)
         _, a1 = aligned_tree_hausdorff(m1, gt_mesh, args.samples, args.align_step)
-        # the search's own dictionary, before the pipeline gives it the estimate's height
-        # (``RefineSettings.keep_height``): the same run's reference for that rule
+        # the search's own dictionary and the same scaled to the estimate's height (what
+        # ``RefineSettings.keep_height`` does): the pipeline's output is one of them, the
+        # other is this run's reference for that rule
         rr = res.refinement
-        h_own = h1
-        if rr is not None and rr.params != res.params:
+        h_own = h_kept = h1
+        if rr is not None:
             m_own = build_mesh(grow(rr.params), species=res.species)
             h_own = hausdorff(
                 rotate_about_trunk(m_own, d["yaw"] - res.yaw).combined(), gt_c, args.samples, diag
+            )
+            same = res.species == est.species
+            height = mesh_height(m0) if same else tree_height(est.params_for(res.species))
+            kept = rescale_height(rr.params, height, current=mesh_height(m_own))
+            m_kept = build_mesh(grow(kept), species=res.species)
+            h_kept = hausdorff(
+                rotate_about_trunk(m_kept, d["yaw"] - res.yaw).combined(), gt_c, args.samples, diag
             )
         rec = {
             "name": d["name"],
@@ -500,6 +511,7 @@ def part_refine(args: argparse.Namespace) -> dict:
             "haus_before": h0.max_norm,
             "haus_after": h1.max_norm,
             "haus_after_own_size": h_own.max_norm,
+            "haus_after_height_kept": h_kept.max_norm,
             "aligned_before": a0.max_norm,
             "aligned_after": a1.max_norm,
             "yaw_view": d["yaw"],
@@ -528,6 +540,9 @@ def refine_summary(records: list[dict]) -> dict:
         "haus_improved": frac(lambda r: r["haus_after"] < r["haus_before"]),
         "haus_improved_own_size": frac(
             lambda r: r.get("haus_after_own_size", r["haus_after"]) < r["haus_before"]
+        ),
+        "haus_improved_height_kept": frac(
+            lambda r: r.get("haus_after_height_kept", r["haus_after"]) < r["haus_before"]
         ),
         "aligned_improved": frac(lambda r: r["aligned_after"] < r["aligned_before"]),
         "species_tsn_right": frac(lambda r: r["species_tsn"] == r["species_true"]),

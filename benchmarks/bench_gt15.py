@@ -110,7 +110,7 @@ def run_tree(
     ref_mesh = rotate_about_trunk(run.tree_mesh, -run.yaw)
     r = run.refinement
     # the search's own dictionary, before the pipeline gives it a height (the estimate's
-    # with ``keep_height``, the default; the ground truth's with --known-height)
+    # with ``keep_height``; the ground truth's with --known-height)
     searched = None
     if r is not None and r.params != run.params:
         free_mesh = build_mesh(grow(r.params), species=run.species)

@@ -181,9 +181,14 @@ class RefineSettings:
     value is held.  It finds the seed of a drawing made from a generated tree, but on 100
     held-out-style drawings it did not lower the mesh error against the truth
     (``benchmarks/RESULTS.md``, "Tree seeds at the start"), so it is off by default.
-    ``keep_height`` (``treesketch.Pipeline``, when no height is given): the refined tree is
-    scaled to the height of the estimator's tree of its species, since a sketch framed to
-    its tree shows shape but not size, so the search's size drift is noise.
+    ``keep_height`` (``treesketch.Pipeline``, when no height is given; off by default): the
+    refined tree is scaled to the height of the estimator's tree of its species.  Off, it
+    keeps the size values the search does not move (the species' ``scale``, the
+    estimator's ``scaleV``: :data:`DEFAULT_HOLD`) and the proportions it fitted, so its
+    height follows the proportions: a taller trunk found in the drawing makes a taller
+    tree, where the rule would shrink every branch to the estimate's height.  On the
+    held-out-style drawings and the 15 published trees the rule raised the mean mesh
+    error (``benchmarks/RESULTS.md``, "The search's own size").
 
     Species by synthesis (``treesketch.Pipeline``): up to ``species_tries`` species are
     refined, the estimator's best and any other whose score is at least ``species_ratio``
@@ -219,7 +224,7 @@ class RefineSettings:
     species_margin: float = 0.2
     metric: str = "shape"
     fast_sketch: bool = True
-    keep_height: bool = True
+    keep_height: bool = False
     embedding: str = "shipped"
     tree_seeds: int = 1
 

@@ -95,7 +95,7 @@ def test_no_refine_and_height() -> None:
         rescale_height(species.sample("palm", 1), -2.0)
 
 
-def test_refined_tree_keeps_the_estimates_height() -> None:
+def test_keep_height_gives_the_refined_tree_the_estimates_height() -> None:
     # the estimate is a bonsai of another seed: the search changes the trunk's length and
     # bend, which a sketch framed to its tree cannot tell from the tree's size (the
     # hand-made distance alone: with the embedding's term these 25 evaluations find no
@@ -103,9 +103,12 @@ def test_refined_tree_keeps_the_estimates_height() -> None:
     img = _gt_sketch("bonsai", 3)
     start = tree_height(Fixed("bonsai", 9).tree)
     cfg = RefineSettings(budget=25, embedding="none")
-    kept = Pipeline(Fixed("bonsai", 9), cfg).run(img)
-    free = Pipeline(Fixed("bonsai", 9), cfg.replace(keep_height=False)).run(img)
+    assert not cfg.keep_height  # the search's own size by default
+    kept = Pipeline(Fixed("bonsai", 9), cfg.replace(keep_height=True)).run(img)
+    free = Pipeline(Fixed("bonsai", 9), cfg).run(img)
     assert abs(tree_height(free.params) - start) > 0.01 * start
+    # by default the size values are the estimate's; the height follows the proportions
+    assert all(free.params[k] == Fixed("bonsai", 9).tree[k] for k in ("scale", "scaleV"))
     lo, hi = kept.tree_mesh.bounds()
     assert hi[2] - lo[2] == pytest.approx(start, rel=0.01)
     # the same shape: only scale and scaleV differ, and the sketch is the refined one

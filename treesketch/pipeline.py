@@ -333,9 +333,8 @@ class Pipeline:
         timings["render"] = time.perf_counter() - t
 
         if height is None and cfg.keep_height and params1 is not est.params:
-            # the drawing is framed to its tree: it shows shape, not size, so the size the
-            # search drifted to is noise; the estimator's size for this species is the
-            # best guess there is
+            # asked for: the estimator's height for this species instead of the one the
+            # searched proportions give its size values
             same = name == est.species
             height = mesh_height(mesh0) if same else tree_height(est.params_for(name))
         current = mesh_height(mesh1)
