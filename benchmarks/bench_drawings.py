@@ -454,7 +454,7 @@ def part_warning(args: argparse.Namespace) -> dict:
 
 def part_refine(args: argparse.Namespace) -> dict:
     from eval.hausdorff import aligned_tree_hausdorff, bbox_diagonal, hausdorff, rotate_about_trunk
-    from treesketch.pipeline import mesh_height, rescale_height, tree_height
+    from treesketch.pipeline import estimate_height, mesh_height, rescale_height
 
     pipe = Pipeline(
         "tsn",
@@ -477,10 +477,10 @@ def part_refine(args: argparse.Namespace) -> dict:
         m0 = build_mesh(grow(est.params), species=est.species)
         m1 = res.tree_mesh
         yaw0 = 0.0 if est.yaw is None else float(est.yaw)
-        h0 = hausdorff(rotate_about_trunk(m0, d["yaw"] - yaw0).combined(), gt_c, args.samples, diag)
-        h1 = hausdorff(
-            rotate_about_trunk(m1, d["yaw"] - res.yaw).combined(), gt_c, args.samples, diag
-        )
+        # each tree turned from its own view into the drawing's, the ground truth's frame
+        truth = (gt_c, args.samples, diag)
+        h0 = hausdorff(rotate_about_trunk(m0, d["yaw"] - yaw0).combined(), *truth)
+        h1 = hausdorff(rotate_about_trunk(m1, d["yaw"] - res.yaw).combined(), *truth)
         _, a0 = aligned_tree_hausdorff(m0, gt_mesh, args.samples, args.align_step)
         _, a1 = aligned_tree_hausdorff(m1, gt_mesh, args.samples, args.align_step)
         # the search's own dictionary and the same scaled to the estimate's height (what
@@ -489,17 +489,17 @@ def part_refine(args: argparse.Namespace) -> dict:
         rr = res.refinement
         h_own = h_kept = h1
         if rr is not None:
-            m_own = build_mesh(grow(rr.params), species=res.species)
-            h_own = hausdorff(
-                rotate_about_trunk(m_own, d["yaw"] - res.yaw).combined(), gt_c, args.samples, diag
-            )
-            same = res.species == est.species
-            height = mesh_height(m0) if same else tree_height(est.params_for(res.species))
+            m_own = m1
+            if rr.params != res.params:
+                m_own = build_mesh(grow(rr.params), species=res.species)
+                h_own = hausdorff(rotate_about_trunk(m_own, d["yaw"] - res.yaw).combined(), *truth)
+            height = estimate_height(est, res.species, m0)
             kept = rescale_height(rr.params, height, current=mesh_height(m_own))
-            m_kept = build_mesh(grow(kept), species=res.species)
-            h_kept = hausdorff(
-                rotate_about_trunk(m_kept, d["yaw"] - res.yaw).combined(), gt_c, args.samples, diag
-            )
+            if kept != res.params:
+                m_kept = build_mesh(grow(kept), species=res.species)
+                h_kept = hausdorff(
+                    rotate_about_trunk(m_kept, d["yaw"] - res.yaw).combined(), *truth
+                )
         rec = {
             "name": d["name"],
             "style": d["style"],
