@@ -41,7 +41,7 @@ def sketch() -> bytes:
 def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
     data = tmp_path_factory.mktemp("service")
     config = ServiceConfig(data=data, workers=1, estimator=ESTIMATOR, default_budget=5)
-    with TestClient(create_app(config)) as c:
+    with TestClient(create_app(config), base_url="http://127.0.0.1") as c:
         yield c
 
 
@@ -222,17 +222,19 @@ def test_token_and_cors(tmp_path: Path) -> None:
     config = ServiceConfig(
         data=tmp_path, workers=1, estimator=ESTIMATOR, token="s3cret", cors=("http://a.example",)
     )
-    c = TestClient(create_app(config))  # no lifespan: no workers needed to check headers
+    # no lifespan: no workers needed to check headers
+    c = TestClient(create_app(config), base_url="http://127.0.0.1")
     assert c.get("/health").status_code == 200
     assert c.get("/status").status_code == 401
     assert c.get("/status", headers={"Authorization": "Bearer s3cret"}).status_code == 200
-    assert c.get("/status?token=s3cret").status_code == 200
-    assert c.get("/status?token=wrong").status_code == 401
+    assert c.get("/status?token=s3cret").status_code == 401  # never from the URL
     r = c.get("/health", headers={"Origin": "http://a.example"})
     assert r.headers["access-control-allow-origin"] == "http://a.example"
     preflight = {"Origin": "http://a.example", "Access-Control-Request-Method": "POST"}
     assert c.options("/jobs", headers=preflight).status_code == 200  # no token needed
-    plain = TestClient(create_app(ServiceConfig(data=tmp_path / "b", workers=1)))
+    plain = TestClient(
+        create_app(ServiceConfig(data=tmp_path / "b", workers=1)), base_url="http://127.0.0.1"
+    )
     r = plain.get("/health", headers={"Origin": "http://a.example"})
     assert "access-control-allow-origin" not in r.headers
 
@@ -266,7 +268,7 @@ def test_estimator_that_cannot_load_is_reported(tmp_path: Path, sketch: bytes) -
     config = ServiceConfig(data=tmp_path, workers=1, estimator="service_helpers:missing")
     app = create_app(config)
     app.state.pool.respawn_backoff = 0.1
-    with TestClient(app) as c:
+    with TestClient(app, base_url="http://127.0.0.1") as c:
         deadline = time.monotonic() + 120
         while c.get("/health").json()["status"] == "ok":
             assert time.monotonic() < deadline, "the broken estimator was never reported"

@@ -57,7 +57,7 @@ def client(ray_session: None, tmp_path_factory: pytest.TempPathFactory) -> Itera
         # outlast the default 3 s grace, and the kill would hide whether the flag worked
         cancel_grace=30.0,
     )
-    with TestClient(create_app(config)) as c:
+    with TestClient(create_app(config), base_url="http://127.0.0.1") as c:
         yield c
     assert ray.is_initialized()  # not the pool's Ray: left to its owner
 
@@ -139,7 +139,7 @@ def test_same_result_as_the_local_pool_with_progress_events(
     assert worker["pid"] in {w["pid"] for w in client.get("/status").json()["workers"]}
 
     local = ServiceConfig(data=tmp_path / "local", workers=1, estimator=ESTIMATOR)
-    with TestClient(create_app(local)) as lc:
+    with TestClient(create_app(local), base_url="http://127.0.0.1") as lc:
         local_id = submit(lc, sketch, budget="3")
         body = wait_for(lc, local_id, finished)
         assert body["state"] == "done", body["error"]
@@ -222,7 +222,7 @@ def test_estimator_that_cannot_load_is_reported(
     app = create_app(config)
     app.state.pool.respawn_backoff = 0.1
     app.state.pool.cpus_per_worker = 0  # beside the module's pool, which holds both CPUs
-    with TestClient(app) as c:
+    with TestClient(app, base_url="http://127.0.0.1") as c:
         deadline = time.monotonic() + 120
         while c.get("/health").json()["status"] == "ok":
             assert time.monotonic() < deadline, app.state.pool.status()

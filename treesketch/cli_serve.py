@@ -4,10 +4,22 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 import typer
 
 LOCAL_HOSTS = ("127.0.0.1", "localhost", "::1")
+ANY_ADDRESS = ("0.0.0.0", "::", "")
+
+
+def served_names(host: str, allow: list[str]) -> tuple[str, ...]:
+    """The names the server answers to (its Host check): the loopback names, the address
+    it is bound to and ``--allow-host`` names; ``("*",)`` (no check) when it listens on
+    every address and no name is given."""
+    if host in ANY_ADDRESS and not allow:
+        return ("*",)
+    named = () if host in ANY_ADDRESS else (host,)
+    return tuple(dict.fromkeys((*LOCAL_HOSTS, *named, *allow)))
 
 
 def default_data_dir() -> Path:
@@ -45,7 +57,12 @@ def serve_command(
         None,
         "--token",
         envvar="TREESKETCH_TOKEN",
-        help="Require 'Authorization: Bearer TOKEN' (or ?token=) on the API.",
+        help="Require 'Authorization: Bearer TOKEN' on the API (the page: open /#token=TOKEN).",
+    ),
+    allow_host: list[str] = typer.Option(
+        None,
+        "--allow-host",
+        help="Also answer to this name (repeatable): the public name behind a reverse proxy.",
     ),
     cors: list[str] = typer.Option(
         None, "--cors", help="Allow browser calls from this origin (repeatable); off by default."
@@ -68,7 +85,9 @@ def serve_command(
     import uvicorn
 
     from .service import ServiceConfig, create_app
+    from .service.owner import DataOwner
     from .service.pool import default_workers
+    from .service.store import StoreError
 
     executor = executor.strip().lower()
     if executor not in ("local", "ray"):
@@ -84,6 +103,12 @@ def serve_command(
             + ("" if token else "; set --token (or TREESKETCH_TOKEN) to require a token"),
             err=True,
         )
+    hosts = served_names(host, allow_host or [])
+    if hosts == ("*",):
+        typer.echo(
+            "warning: the Host check is off (every address); name this server with --allow-host",
+            err=True,
+        )
     config = ServiceConfig(
         data=data or default_data_dir(),
         # on Ray, default to every CPU of the cluster (the pool counts them)
@@ -95,13 +120,28 @@ def serve_command(
         retention_bytes=int(retention_gb * 1024**3),
         token=token or None,
         cors=tuple(cors or ()),
+        hosts=hosts,
         executor=executor,
         address=address,
     )
+
+    def make_app() -> Any:
+        """The app, or a plain error (exit 2) when the data folder cannot be used: another
+        server owns it (refused before any job is touched), it is no folder, or its
+        database cannot be read."""
+        try:
+            DataOwner(config.data).probe()
+            return create_app(config)
+        except StoreError as exc:
+            typer.echo(f"error: {exc}", err=True)
+            raise typer.Exit(2) from None
+
     if executor == "local":
+        app = make_app()
         typer.echo(f"data: {config.data}; workers: {config.workers}; estimator: {estimator}")
-        uvicorn.run(create_app(config), host=host, port=port, log_level="info")
+        uvicorn.run(app, host=host, port=port, log_level="info")
         return
+    app = make_app()  # before Ray starts
     from .executor import ExecutorError, start_ray
 
     # connect before serving, so a cluster nobody answers at is a plain error, not a
@@ -120,7 +160,7 @@ def serve_command(
         f"data: {config.data}; workers: {count} Ray actors on {where}; estimator: {estimator}"
     )
     try:
-        uvicorn.run(create_app(config), host=host, port=port, log_level="info")
+        uvicorn.run(app, host=host, port=port, log_level="info")
     finally:
         if owns:
             ray.shutdown()

@@ -8,8 +8,9 @@ and run in the thread pool, refinements run in the worker processes (or Ray acto
 from __future__ import annotations
 
 import asyncio
-import hmac
 import json
+import logging
+import shutil
 import time
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
@@ -20,13 +21,14 @@ from typing import Any
 from fastapi import FastAPI, HTTPException, Request
 from fastapi.responses import FileResponse, JSONResponse, Response, StreamingResponse
 from starlette.concurrency import run_in_threadpool
-from starlette.types import ASGIApp, Receive, Scope, Send
 
+from .guards import LOOPBACK_HOSTS, AccessGuard, RedactTokens
 from .limits import LimitError, Limits, check_image, parse_options, read_form
+from .owner import DataOwner
 from .pool import WorkerPool, default_workers
 from .ray_pool import RayWorkerPool
 from .runner import ARTEFACTS
-from .store import Job, JobStore
+from .store import Job, JobStore, StorageFull
 
 __all__ = ["ServiceConfig", "create_app"]
 
@@ -50,6 +52,9 @@ class ServiceConfig:
     retention_bytes: int | None = 2 * 1024**3
     token: str | None = None
     cors: tuple[str, ...] = ()
+    # the names the server answers to (Host header); "*": any (see guards.AccessGuard)
+    hosts: tuple[str, ...] = LOOPBACK_HOSTS
+    min_free_bytes: int = 64 * 1024**2  # below this free space, new jobs are refused (507)
     cancel_grace: float = 3.0
     retry_after: int = 10
     vendor: Path | None = None  # node_modules holding three (default: beside the page)
@@ -59,36 +64,6 @@ class ServiceConfig:
     @property
     def allowed_estimators(self) -> tuple[str, ...]:
         return tuple(dict.fromkeys((self.estimator, *self.estimators)))
-
-
-class TokenGuard:
-    """Plain ASGI middleware: every path but the page, its files and ``/health`` needs the
-    token (``Authorization: Bearer`` or ``?token=``).  Not Starlette's ``BaseHTTPMiddleware``,
-    which hides a client's disconnect from the route (``/predict`` must see it)."""
-
-    def __init__(self, app: ASGIApp, token: str, open_paths: tuple[str, ...]) -> None:
-        self.app, self.token, self.open_paths = app, token.encode(), open_paths
-
-    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        path = scope.get("path", "")
-        if (
-            scope["type"] != "http"
-            or path in self.open_paths
-            or path.startswith(("/static/", "/vendor/"))
-        ):
-            await self.app(scope, receive, send)
-            return
-        request = Request(scope)
-        given = request.headers.get("authorization", "").removeprefix("Bearer ").strip()
-        given = given or request.query_params.get("token", "")
-        if hmac.compare_digest(given.encode(), self.token):
-            await self.app(scope, receive, send)
-            return
-        response = JSONResponse(
-            {"detail": "a token is needed: 'Authorization: Bearer TOKEN' or ?token="},
-            status_code=401,
-        )
-        await response(scope, receive, send)
 
 
 def _links(job_id: str) -> dict[str, str]:
@@ -157,18 +132,45 @@ def make_pool(config: ServiceConfig, store: JobStore) -> WorkerPool | RayWorkerP
     )
 
 
+def storage_problem(store: JobStore, min_free_bytes: int) -> str | None:
+    """Why the data folder cannot take a new job (no space, or its database gone), or
+    None."""
+    gone = store.check()
+    if gone:
+        return gone
+    free = shutil.disk_usage(store.root).free
+    if store.full or free < min_free_bytes:
+        return (
+            f"storage full: {free / 2**20:.0f} MB free in the data folder {store.root}; "
+            f"new jobs need {min_free_bytes / 2**20:.0f} MB (free some space, or lower the "
+            "retention limits)"
+        )
+    return None
+
+
 def create_app(config: ServiceConfig) -> FastAPI:
-    """The app; its worker pool starts and stops with the app's lifespan."""
+    """The app; its worker pool starts and stops with the app's lifespan, which first takes
+    the data folder (``owner.DataOwner``: a second server on it is refused before it
+    touches any job).  Raises ``store.StoreError`` for a data folder or database that
+    cannot be used."""
     store = JobStore(config.data)
     pool = make_pool(config, store)
+    owner = DataOwner(config.data)
+    redact = RedactTokens()
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        await run_in_threadpool(pool.start)
+        owner.acquire()  # before the pool's recovery touches a job
+        logging.getLogger("uvicorn.access").addFilter(redact)
         try:
-            yield
+            await run_in_threadpool(pool.start)
+            try:
+                yield
+            finally:
+                await run_in_threadpool(pool.stop)
         finally:
-            await run_in_threadpool(pool.stop)
+            logging.getLogger("uvicorn.access").removeFilter(redact)
+            owner.release()
 
     app = FastAPI(
         title="TreeSketch",
@@ -183,8 +185,14 @@ def create_app(config: ServiceConfig) -> FastAPI:
     async def favicon() -> Response:
         return Response(status_code=204)
 
-    if config.token:
-        app.add_middleware(TokenGuard, token=config.token, open_paths=open_paths)
+    app.add_middleware(
+        AccessGuard,
+        hosts=config.hosts,
+        cors=config.cors,
+        token=config.token,
+        open_paths=open_paths,
+        open_prefixes=("/static/", "/vendor/"),
+    )
 
     if config.cors:  # added last: outermost, so a preflight needs no token
         from fastapi.middleware.cors import CORSMiddleware
@@ -211,6 +219,9 @@ def create_app(config: ServiceConfig) -> FastAPI:
     async def submit(request: Request) -> Job:
         if pool.broken:
             raise HTTPException(503, f"no worker can start: {pool.error}")
+        problem = storage_problem(store, config.min_free_bytes)
+        if problem:  # before the body is read
+            raise HTTPException(507 if store.check() is None else 503, problem)
         try:
             fields, data = await read_form(
                 request.headers.get("content-type", ""),
@@ -232,7 +243,10 @@ def create_app(config: ServiceConfig) -> FastAPI:
         except LimitError as exc:
             headers = {"Connection": "close"} if exc.status == 413 else None
             raise HTTPException(exc.status, str(exc), headers=headers) from exc
-        job = await run_in_threadpool(store.create, data, options.to_dict(), config.max_queue)
+        try:
+            job = await run_in_threadpool(store.create, data, options.to_dict(), config.max_queue)
+        except StorageFull as exc:
+            raise HTTPException(507, str(exc)) from exc
         if job is None:
             raise HTTPException(
                 503,
@@ -252,12 +266,20 @@ def create_app(config: ServiceConfig) -> FastAPI:
     @app.get("/health")
     async def health() -> dict[str, Any]:
         workers = pool.status()
+        problems = [f"no worker can start: {pool.error}"] if pool.broken else []
+        storage = storage_problem(store, config.min_free_bytes)
+        problems += [storage] if storage else []
         return {
-            "status": "error" if pool.broken else "ok",
-            "error": pool.error if pool.broken else None,
+            "status": "error" if problems else "ok",
+            "error": "; ".join(problems) or None,
             "estimator": config.estimator,
             "workers": sum(w["alive"] for w in workers),
             "busy": sum(w["job"] is not None for w in workers),
+            "storage": {
+                "free_bytes": shutil.disk_usage(store.root).free,
+                "full": bool(storage) and store.check() is None,
+                "database": store.check() or "ok",
+            },
         }
 
     @app.get("/status")

@@ -3,7 +3,10 @@
 ``read_form(request, ...)`` parses a multipart body as it streams in, counting bytes: a
 body over the cap is refused (413) as soon as the count passes it, and nothing is written
 to disk (Starlette's own form parser would spool the whole file to a temporary folder
-first).  ``check_image(data)`` reads only the image header: pixel count, aspect ratio and
+first).  It also counts parts (a form has a handful: MAX_PARTS) and part-header bytes,
+parses in the thread pool (a body of many tiny parts must not hold the event loop),
+takes the ``sketch`` part with or without a ``filename=`` (RFC 7578 makes it optional)
+and refuses a body cut off before its closing boundary.  ``check_image(data)`` reads only the image header: pixel count, aspect ratio and
 decompression bombs are refused before anything is decoded.  ``parse_options`` turns the
 form fields into ``JobOptions`` or a 422 naming the bad field.
 """
@@ -16,6 +19,7 @@ from collections.abc import AsyncIterator, Collection, Mapping
 from dataclasses import dataclass
 
 from python_multipart.multipart import MultipartParser, parse_options_header
+from starlette.concurrency import run_in_threadpool
 
 from render import reader
 from treesketch.pipeline import MAX_HEIGHT
@@ -32,6 +36,9 @@ __all__ = [
 
 FIELD_BYTES = 1024  # a form field (a number, a flag) is never longer
 FORM_OVERHEAD = 64 * 1024  # boundaries, part headers and fields on top of the file
+MAX_PARTS = 16  # the sketch and the options (six known), with room to spare
+PARSE_BATCH = 256 * 1024  # bytes handed to the parser's thread at a time
+HEADER_BYTES = 4096  # one part's headers (a Content-Disposition and a Content-Type)
 
 
 @dataclass(frozen=True)
@@ -59,6 +66,7 @@ class LimitError(ValueError):
 class _Part:
     headers: dict[str, str]
     data: bytearray
+    name: str = ""
 
 
 async def read_form(
@@ -85,27 +93,49 @@ async def read_form(
 
     parts: list[_Part] = []
     header: list[bytes] = [b"", b""]
+    ended = [False]
 
     def on_part_begin() -> None:
+        if len(parts) >= MAX_PARTS:
+            raise LimitError(413, f"the form has more than {MAX_PARTS} parts")
         parts.append(_Part({}, bytearray()))
 
     def on_header_field(data: bytes, start: int, end: int) -> None:
         header[0] += data[start:end]
+        _header_bytes()
 
     def on_header_value(data: bytes, start: int, end: int) -> None:
         header[1] += data[start:end]
+        _header_bytes()
+
+    def _header_bytes() -> None:
+        size = (
+            len(header[0])
+            + len(header[1])
+            + sum(len(k) + len(v) for k, v in parts[-1].headers.items())
+        )
+        if size > HEADER_BYTES:
+            raise LimitError(413, f"a part's headers are over {HEADER_BYTES} bytes")
 
     def on_header_end() -> None:
         parts[-1].headers[header[0].decode("latin-1").lower()] = header[1].decode("latin-1")
         header[0], header[1] = b"", b""
 
+    def on_headers_finished() -> None:
+        part = parts[-1]
+        _, disp = parse_options_header(part.headers.get("content-disposition", ""))
+        part.name = disp.get(b"name", b"").decode("utf-8", "replace")
+
     def on_part_data(data: bytes, start: int, end: int) -> None:
         part = parts[-1]
         part.data += data[start:end]
-        is_file = 'filename="' in part.headers.get("content-disposition", "")
+        is_file = part.name == file_field
         if len(part.data) > (cap if is_file else FIELD_BYTES):
-            what = "the sketch" if is_file else "a form field"
+            what = "the sketch" if is_file else f"the form field {part.name[:40]!r}"
             raise LimitError(413, f"{what} is over {cap if is_file else FIELD_BYTES} bytes")
+
+    def on_end() -> None:
+        ended[0] = True
 
     parser = MultipartParser(
         params[b"boundary"],
@@ -114,31 +144,45 @@ async def read_form(
             "on_header_field": on_header_field,
             "on_header_value": on_header_value,
             "on_header_end": on_header_end,
+            "on_headers_finished": on_headers_finished,
             "on_part_data": on_part_data,
+            "on_end": on_end,
         },
     )
-    total = 0
-    async for chunk in stream:
-        total += len(chunk)
-        if total > cap + FORM_OVERHEAD:
-            raise LimitError(413, f"the upload is over {cap} bytes")
+
+    def feed(chunk: bytes) -> None:
         try:
             parser.write(chunk)
         except LimitError:
             raise
         except Exception as exc:  # noqa: BLE001 - python-multipart's parse errors
             raise LimitError(400, f"malformed multipart body: {exc}") from exc
+
+    total = 0
+    pending = bytearray()
+    async for chunk in stream:
+        total += len(chunk)
+        if total > cap + FORM_OVERHEAD:
+            raise LimitError(413, f"the upload is over {cap} bytes")
+        # parse in the thread pool, a batch at a time (a hop per 64 KB chunk costs more
+        # than the parsing of a plain file part)
+        pending += chunk
+        if len(pending) >= PARSE_BATCH:
+            await run_in_threadpool(feed, bytes(pending))
+            pending.clear()
+    if pending:
+        await run_in_threadpool(feed, bytes(pending))
     parser.finalize()
+    if not ended[0]:
+        raise LimitError(400, "the upload was cut off: its closing multipart boundary is missing")
 
     fields: dict[str, str] = {}
     file: bytes | None = None
     for part in parts:
-        _, disp = parse_options_header(part.headers.get("content-disposition", ""))
-        name = disp.get(b"name", b"").decode("utf-8", "replace")
-        if name == file_field:
+        if part.name == file_field:
             file = bytes(part.data)
-        elif name:
-            fields[name] = part.data.decode("utf-8", "replace").strip()
+        elif part.name:
+            fields[part.name] = part.data.decode("utf-8", "replace").strip()
     return fields, file
 
 

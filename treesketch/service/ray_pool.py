@@ -24,6 +24,7 @@ seconds (and at once after a loss) so that a job is not sent to a dead one.
 from __future__ import annotations
 
 import contextlib
+import shutil
 import threading
 import time
 import traceback
@@ -32,7 +33,7 @@ from typing import Any
 
 from .pool import LOAD_ATTEMPTS, RESPAWN_BACKOFF
 from .progress import LiveProgress
-from .store import JobStore
+from .store import JobStore, is_full
 
 __all__ = ["MAX_ATTEMPTS", "RayWorkerPool"]
 
@@ -308,7 +309,9 @@ class RayWorkerPool:
                 try:
                     write_together({folder / name: data for name, data in out["files"].items()})
                 except OSError as exc:  # a full disk: the job fails, the pool goes on
-                    self.store.fail(job_id, f"the results could not be saved: {exc}")
+                    shutil.rmtree(folder, ignore_errors=True)  # no empty folder left
+                    what = "storage full: " if is_full(exc) else ""
+                    self.store.fail(job_id, f"{what}the results could not be saved: {exc}")
                 else:
                     self.store.finish(job_id, summary)
             elif out["state"] == "cancelled":

@@ -10,14 +10,22 @@ job whose artefacts were removed by the retention limits becomes ``expired`` (th
 answers 410 for its artefacts).  A running job whose Ray actor was lost goes back to
 ``queued`` once (``requeue``).
 
+Faults are said plainly, as :class:`StoreError`: a data folder that cannot be one, a job
+database that is not one (corrupt), a database deleted or replaced while the server runs
+(``check()``), and a full disk (:class:`StorageFull`; the upload is removed again).  The
+retention sweep also removes what no job refers to (results and uploads left by a deleted
+database, empty result folders), once it is ``ORPHAN_GRACE_S`` old.
+
 Each thread keeps its own connection, so the store may be used from any thread and from
 several processes; WAL lets readers (status pages) go on while a writer commits.
 """
 
 from __future__ import annotations
 
+import errno
 import json
 import os
+import re
 import shutil
 import sqlite3
 import threading
@@ -31,10 +39,40 @@ from typing import Any
 
 from weberpenn.fileio import atomic_write
 
-__all__ = ["FINISHED", "STATES", "Job", "JobStore"]
+__all__ = [
+    "FINISHED",
+    "ORPHAN_GRACE_S",
+    "STATES",
+    "Job",
+    "JobStore",
+    "StorageFull",
+    "StoreError",
+    "is_full",
+]
 
 STATES = ("queued", "running", "done", "failed", "cancelled", "expired")
 FINISHED = ("done", "failed", "cancelled", "expired")
+# an upload is written before its row: anything younger than this may be a job being made
+ORPHAN_GRACE_S = 600.0
+_FULL_ERRNOS = (errno.ENOSPC, errno.EDQUOT)
+_JOB_ID = re.compile(r"[0-9a-f]{32}")  # uuid4().hex
+
+
+class StoreError(RuntimeError):
+    """The data folder or its job database cannot be used; the message says why and what
+    to do."""
+
+
+class StorageFull(StoreError):
+    """The disk (or quota) holding the data folder is full."""
+
+
+def is_full(exc: BaseException) -> bool:
+    """True for an error that means "no space left" (an OSError or SQLite's own)."""
+    if isinstance(exc, OSError):
+        return exc.errno in _FULL_ERRNOS
+    return isinstance(exc, sqlite3.OperationalError) and "full" in str(exc).lower()
+
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS jobs (
@@ -101,12 +139,49 @@ class JobStore:
         self.uploads = self.root / "uploads"
         self.results = self.root / "results"
         for d in (self.root, self.uploads, self.results):
-            d.mkdir(parents=True, exist_ok=True)
+            try:
+                d.mkdir(parents=True, exist_ok=True)
+            except FileExistsError:
+                raise StoreError(f"cannot use {d} as a data folder: it is a file") from None
+            except OSError as exc:
+                raise StoreError(f"cannot use {d} as a data folder: {exc.strerror}") from None
+        if not os.access(self.root, os.W_OK | os.X_OK):
+            raise StoreError(f"cannot use {self.root} as a data folder: it is not writable")
         self.path = self.root / "jobs.sqlite"
         self._local = threading.local()
-        with self._db() as db:
-            db.execute("PRAGMA journal_mode=WAL")
-            db.executescript(_SCHEMA)
+        self.full = False  # the last write found the disk full (cleared by the next success)
+        try:
+            with self._db() as db:
+                db.execute("PRAGMA journal_mode=WAL")
+                db.executescript(_SCHEMA)
+                db.execute("SELECT id, seq, state, options, bytes FROM jobs LIMIT 1").fetchall()
+        except sqlite3.DatabaseError as exc:
+            raise StoreError(
+                f"the job database {self.path} cannot be read ({exc}); move it aside to start "
+                "with an empty one (the results no job refers to are then removed by the "
+                "retention sweep)"
+            ) from None
+        self._identity = self._stat()
+
+    def _stat(self) -> tuple[int, int] | None:
+        try:
+            st = self.path.stat()
+        except OSError:
+            return None
+        return st.st_dev, st.st_ino
+
+    def check(self) -> str | None:
+        """None while the database this store opened is still at its path; otherwise what
+        happened (deleted or replaced under the running server: what is written now would
+        be lost at the next start)."""
+        now = self._stat()
+        if now == self._identity:
+            return None
+        what = "deleted" if now is None else "replaced"
+        return (
+            f"the job database {self.path} was {what} while the server ran; new jobs are "
+            "refused (they would be lost): restart the server"
+        )
 
     @contextmanager
     def _db(self) -> Iterator[sqlite3.Connection]:
@@ -134,23 +209,35 @@ class JobStore:
 
     # -- writing -----------------------------------------------------------------------
     def create(self, sketch_png: bytes, options: dict[str, Any], max_queued: int) -> Job | None:
-        """Queue a job (its sketch saved first); None when ``max_queued`` jobs already wait."""
+        """Queue a job (its sketch saved first); None when ``max_queued`` jobs already wait.
+        Raises StorageFull (leaving nothing behind) when the disk is full."""
         job_id = uuid.uuid4().hex
-        atomic_write(self.upload_path(job_id), sketch_png)
-        now = time.time()
-        with self._db() as db:
-            db.execute("BEGIN IMMEDIATE")
-            (queued,) = db.execute("SELECT COUNT(*) FROM jobs WHERE state='queued'").fetchone()
-            if queued >= max_queued:
-                db.execute("ROLLBACK")
-                self.upload_path(job_id).unlink(missing_ok=True)
-                return None
-            (seq,) = db.execute("SELECT COALESCE(MAX(seq), 0) + 1 FROM jobs").fetchone()
-            db.execute(
-                "INSERT INTO jobs (id, seq, state, created, options, bytes) VALUES (?,?,?,?,?,?)",
-                (job_id, seq, "queued", now, json.dumps(options), len(sketch_png)),
-            )
-            db.execute("COMMIT")
+        try:
+            atomic_write(self.upload_path(job_id), sketch_png)
+            now = time.time()
+            with self._db() as db:
+                db.execute("BEGIN IMMEDIATE")
+                (queued,) = db.execute("SELECT COUNT(*) FROM jobs WHERE state='queued'").fetchone()
+                if queued >= max_queued:
+                    db.execute("ROLLBACK")
+                    self.upload_path(job_id).unlink(missing_ok=True)
+                    return None
+                (seq,) = db.execute("SELECT COALESCE(MAX(seq), 0) + 1 FROM jobs").fetchone()
+                db.execute(
+                    "INSERT INTO jobs (id, seq, state, created, options, bytes) "
+                    "VALUES (?,?,?,?,?,?)",
+                    (job_id, seq, "queued", now, json.dumps(options), len(sketch_png)),
+                )
+                db.execute("COMMIT")
+        except (OSError, sqlite3.OperationalError) as exc:
+            if not is_full(exc):
+                raise
+            self.upload_path(job_id).unlink(missing_ok=True)
+            self.full = True
+            raise StorageFull(
+                f"storage full: the data folder {self.root} has no space left"
+            ) from exc
+        self.full = False
         job = self.get(job_id)
         assert job is not None
         return job
@@ -254,6 +341,41 @@ class JobStore:
             self.upload_path(job_id).unlink(missing_ok=True)
             with self._db() as db:
                 db.execute("UPDATE jobs SET state='expired', bytes=0 WHERE id=?", (job_id,))
+        self.remove_orphans()
+        return gone
+
+    def remove_orphans(self, grace_s: float = ORPHAN_GRACE_S) -> list[str]:
+        """Remove the result folders and uploads that no job refers to (left by a deleted
+        database, or by a server stopped while it saved a job), and the empty result
+        folders of jobs that are not done; only those older than ``grace_s``.  Returns
+        the ids removed."""
+        cutoff = time.time() - grace_s
+        found: dict[str, list[Path]] = {}
+        for path in [*self.results.iterdir(), *self.uploads.glob("*.img")]:
+            try:
+                if path.stat().st_mtime > cutoff:
+                    continue
+            except OSError:
+                continue
+            job_id = path.name.removesuffix(".img")
+            if _JOB_ID.fullmatch(job_id):  # never anything the store did not make
+                found.setdefault(job_id, []).append(path)
+        gone: list[str] = []
+        for job_id, paths in found.items():
+            job = self.get(job_id)
+            if job is None:
+                doomed = paths
+            else:  # a known job: only an empty result folder of a job that is not done
+                doomed = [
+                    p for p in paths if job.state != "done" and p.is_dir() and not any(p.iterdir())
+                ]
+            for p in doomed:
+                if p.is_dir():
+                    shutil.rmtree(p, ignore_errors=True)
+                else:
+                    p.unlink(missing_ok=True)
+            if doomed:
+                gone.append(job_id)
         return gone
 
     # -- reading -----------------------------------------------------------------------

@@ -16,6 +16,7 @@ from __future__ import annotations
 import gc
 import json
 import math
+import shutil
 import time
 import traceback
 from multiprocessing.connection import Connection
@@ -57,6 +58,7 @@ def worker_main(spec: str, conn: Connection, cancel: Any, root: str) -> None:
     from weberpenn.fileio import write_together
 
     from .runner import JobOptions, Runner
+    from .store import is_full
 
     # below the HTTP front: a status poll must not wait behind a refinement for a core
     os.nice(WORKER_NICE)
@@ -78,22 +80,29 @@ def worker_main(spec: str, conn: Connection, cancel: Any, root: str) -> None:
         job_id, options = msg
         t0 = time.perf_counter()
         progress = _Reporter(conn, job_id, t0)
+        out = results / job_id
+        reply: tuple[str, str, Any]
         try:
             opts = JobOptions.from_dict(options)
             sketch = (uploads / f"{job_id}.img").read_bytes()
             files, summary = runner.run(sketch, opts, progress, lambda: bool(cancel.value))
             summary = json.loads(json.dumps(summary, default=float))  # plain JSON types
-            out = results / job_id
             write_together({out / name: data for name, data in files.items()})
             summary["timings"]["job"] = time.perf_counter() - t0
-            conn.send(("done", job_id, summary))
+            reply = ("done", job_id, summary)
         except Cancelled:
-            conn.send(("cancelled", job_id, ""))
+            reply = ("cancelled", job_id, "")
         except ValueError as exc:  # SketchError and option errors: the input's fault
-            conn.send(("failed", job_id, {"message": str(exc), "input": True}))
+            reply = ("failed", job_id, {"message": str(exc), "input": True})
         except Exception as exc:  # noqa: BLE001 - one bad job must not end the worker
-            traceback.print_exc()
-            conn.send(
-                ("failed", job_id, {"message": f"{type(exc).__name__}: {exc}", "input": False})
-            )
+            if is_full(exc):
+                message = f"storage full: the results could not be saved ({exc})"
+            else:
+                traceback.print_exc()
+                message = f"{type(exc).__name__}: {exc}"
+            reply = ("failed", job_id, {"message": message, "input": False})
+        if reply[0] != "done":
+            # a job that did not finish leaves no folder (write_together made it, empty)
+            shutil.rmtree(out, ignore_errors=True)
+        conn.send(reply)
         gc.collect()

@@ -10,9 +10,17 @@ const ctx = pad.getContext("2d");
 // Training sketches have lines about 3-5 px wide at 256 px; the pad is 512 px.
 const PEN_WIDTH = 8;
 const ERASER_WIDTH = 28;
-const token = new URLSearchParams(location.hash.slice(1)).get("token");
-const withToken = (url) => (token ? `${url}${url.includes("?") ? "&" : "?"}token=${encodeURIComponent(token)}` : url);
-const authHeaders = token ? { Authorization: `Bearer ${token}` } : {};
+// A token given as /#token=TOKEN (the fragment never reaches the server) is traded once
+// for an HttpOnly, same-site session cookie (POST /session) and taken out of the address
+// bar: it never goes into a URL (logs, history, shared links); the cookie goes with every
+// request of the page (fetch, the event stream, images, downloads, the 3D view).
+const session = (async () => {
+  const token = new URLSearchParams(location.hash.slice(1)).get("token");
+  if (!token) return;
+  history.replaceState(null, "", location.pathname + location.search);
+  const r = await fetch("/session", { method: "POST", headers: { Authorization: `Bearer ${token}` } });
+  if (!r.ok) say(`The token was refused (${r.status}).`);
+})();
 
 // ---- drawing -------------------------------------------------------------------------
 let strokes = []; // {erase, width, points: [[x, y], ...]} or {image}
@@ -139,7 +147,8 @@ async function submit(ev) {
   $("progress").removeAttribute("value");
   let r;
   try {
-    r = await fetch("/jobs", { method: "POST", body: form, headers: authHeaders });
+    await session;
+    r = await fetch("/jobs", { method: "POST", body: form });
   } catch (err) {
     setState("failed");
     say(`The server cannot be reached: ${err}`);
@@ -162,7 +171,7 @@ $("options").addEventListener("submit", submit);
 
 function follow(id) {
   if (events) events.close();
-  events = new EventSource(withToken(`/jobs/${id}/events`));
+  events = new EventSource(`/jobs/${id}/events`);
   const onEvent = (e) => {
     const body = JSON.parse(e.data);
     if (body.id !== jobId) return;
@@ -210,7 +219,7 @@ function show(job) {
 $("cancel").onclick = async () => {
   if (!jobId) return;
   say("Cancelling...");
-  await fetch(`/jobs/${jobId}`, { method: "DELETE", headers: authHeaders });
+  await fetch(`/jobs/${jobId}`, { method: "DELETE" });
 };
 
 function showResult(job) {
@@ -221,13 +230,13 @@ function showResult(job) {
   $("distance").textContent = `${r.losses.before.toFixed(3)} → ${r.losses.after.toFixed(3)}`;
   $("warning").hidden = !r.warning;
   $("warning").textContent = r.warning || "";
-  $("before").src = withToken(links["sketch_before.png"]);
-  $("after").src = withToken(links["sketch_after.png"]);
+  $("before").src = links["sketch_before.png"];
+  $("after").src = links["sketch_after.png"];
   for (const [id, name] of [["dl-glb", "tree.glb"], ["dl-json", "tree.json"], ["dl-preset", "tree_sapling.py"]]) {
-    $(id).href = withToken(links[name]);
+    $(id).href = links[name];
     $(id).classList.remove("disabled");
   }
-  loadModel(withToken(links["tree.glb"]));
+  loadModel(links["tree.glb"]);
 }
 
 // ---- the 3D view ---------------------------------------------------------------------
