@@ -42,7 +42,7 @@ def palm_sketch_png(seed: int = 3) -> bytes:
 
 
 @contextlib.contextmanager
-def serve(app: Any) -> Iterator[str]:
+def serve(app: Any, log_level: str = "warning") -> Iterator[str]:
     """Run ``app`` under uvicorn in a thread on a free localhost port; yields its base URL.
     (A real server, unlike TestClient: streamed bodies, disconnects, sockets.)"""
     import socket
@@ -54,7 +54,7 @@ def serve(app: Any) -> Iterator[str]:
     sock = socket.socket()
     sock.bind(("127.0.0.1", 0))
     port = sock.getsockname()[1]
-    server = uvicorn.Server(uvicorn.Config(app, log_level="warning", lifespan="on"))
+    server = uvicorn.Server(uvicorn.Config(app, log_level=log_level, lifespan="on"))
     thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, daemon=True)
     thread.start()
     deadline = time.monotonic() + 60

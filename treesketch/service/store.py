@@ -149,7 +149,7 @@ class JobStore:
             raise StoreError(f"cannot use {self.root} as a data folder: it is not writable")
         self.path = self.root / "jobs.sqlite"
         self._local = threading.local()
-        self.full = False  # the last write found the disk full (cleared by the next success)
+        self._full_at: int | None = None  # free bytes when a write last found the disk full
         try:
             with self._db() as db:
                 db.execute("PRAGMA journal_mode=WAL")
@@ -162,6 +162,11 @@ class JobStore:
                 "retention sweep)"
             ) from None
         self._identity = self._stat()
+
+    @property
+    def full(self) -> bool:
+        """A write found the disk full, and no space was freed since."""
+        return self._full_at is not None and shutil.disk_usage(self.root).free <= self._full_at
 
     def _stat(self) -> tuple[int, int] | None:
         try:
@@ -233,11 +238,11 @@ class JobStore:
             if not is_full(exc):
                 raise
             self.upload_path(job_id).unlink(missing_ok=True)
-            self.full = True
+            self._full_at = shutil.disk_usage(self.root).free
             raise StorageFull(
                 f"storage full: the data folder {self.root} has no space left"
             ) from exc
-        self.full = False
+        self._full_at = None
         job = self.get(job_id)
         assert job is not None
         return job
