@@ -164,7 +164,7 @@ def test_predict_stops_when_the_client_leaves(
     body, ctype = _multipart(sketch, LONG)
     s = _connect(server)
     s.sendall(
-        f"POST /predict HTTP/1.1\r\nHost: x\r\nContent-Type: {ctype}\r\n"
+        f"POST /predict HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: {ctype}\r\n"
         f"Content-Length: {len(body)}\r\n\r\n".encode()
         + body
     )
@@ -185,7 +185,7 @@ def test_huge_upload_is_refused_early(server: str, http: httpx.Client) -> None:
     # declared size: refused from the headers alone
     s = _connect(server)
     s.sendall(
-        b"POST /jobs HTTP/1.1\r\nHost: x\r\nContent-Type: multipart/form-data; boundary=B\r\n"
+        b"POST /jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: multipart/form-data; boundary=B\r\n"
         b"Content-Length: 1610612736\r\n\r\n"
     )
     assert b" 413 " in s.recv(4096).split(b"\r\n")[0]
@@ -193,7 +193,7 @@ def test_huge_upload_is_refused_early(server: str, http: httpx.Client) -> None:
     # chunked, no declared size: refused once the count passes the cap
     s = _connect(server)
     s.sendall(
-        b"POST /jobs HTTP/1.1\r\nHost: x\r\nContent-Type: multipart/form-data; boundary=B\r\n"
+        b"POST /jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: multipart/form-data; boundary=B\r\n"
         b"Transfer-Encoding: chunked\r\n\r\n"
     )
     head = b'--B\r\nContent-Disposition: form-data; name="sketch"; filename="a.png"\r\n\r\n'
