@@ -465,3 +465,28 @@ def test_sketch_part_without_filename_and_body_cut_off(tmp_path: Path, sketch: b
             status, answer = raw_post(url, "/jobs", body)
             assert status == 400 and b"cut off" in answer, answer
         assert http.get("/status").json()["jobs"]["queued"] <= 1
+
+
+def test_serve_names_the_hosts_it_answers_to(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    import uvicorn
+    from typer.testing import CliRunner
+
+    from treesketch.cli import app
+
+    seen: dict = {}
+    monkeypatch.setattr(uvicorn, "run", lambda a, **kw: seen.update(kw, app=a))
+    base = ["serve", "--data", str(tmp_path), "--workers", "1", "--estimator", "template"]
+    r = CliRunner().invoke(app, base)
+    assert r.exit_code == 0, r.output
+    assert seen["app"].state.config.hosts == ("127.0.0.1", "localhost", "::1")
+    r = CliRunner().invoke(app, [*base, "--host", "0.0.0.0", "--token", "t"])
+    assert seen["app"].state.config.hosts == ("*",) and "--allow-host" in r.output
+    r = CliRunner().invoke(
+        app, [*base, "--host", "0.0.0.0", "--token", "t", "--allow-host", "trees.example.org"]
+    )
+    hosts = seen["app"].state.config.hosts
+    assert "trees.example.org" in hosts and "*" not in hosts and "--allow-host" not in r.output
+    r = CliRunner().invoke(app, [*base, "--host", "192.168.1.5", "--token", "t"])
+    assert "192.168.1.5" in seen["app"].state.config.hosts

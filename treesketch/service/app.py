@@ -222,6 +222,8 @@ def create_app(config: ServiceConfig) -> FastAPI:
         problem = storage_problem(store, config.min_free_bytes)
         if problem:  # before the body is read
             raise HTTPException(507 if store.check() is None else 503, problem)
+        refused: LimitError | None = None
+        data: bytes | None = None
         try:
             fields, data = await read_form(
                 request.headers.get("content-type", ""),
@@ -241,8 +243,14 @@ def create_app(config: ServiceConfig) -> FastAPI:
                 raise LimitError(422, "no sketch: send the image as a file field named 'sketch'")
             await run_in_threadpool(check_image, data, config.limits)
         except LimitError as exc:
-            headers = {"Connection": "close"} if exc.status == 413 else None
-            raise HTTPException(exc.status, str(exc), headers=headers) from exc
+            # a fresh error, raised out here: the caught one's traceback holds the upload's
+            # bytes (and a reference cycle may keep it until a full garbage collection)
+            refused = LimitError(exc.status, str(exc))
+        if refused is not None:
+            if isinstance(data, bytearray):  # read_form's own buffer: free it, whoever holds it
+                data.clear()
+            headers = {"Connection": "close"} if refused.status == 413 else None
+            raise HTTPException(refused.status, str(refused), headers=headers)
         try:
             job = await run_in_threadpool(store.create, data, options.to_dict(), config.max_queue)
         except StorageFull as exc:

@@ -193,7 +193,7 @@ async def read_form(
     file: bytes | None = None
     for part in parts:
         if part.name == file_field:
-            file = bytes(part.data)
+            file = part.data  # no copy of up to 10 MB: a bytearray reads as bytes do
         elif part.name:
             fields[part.name] = part.data.decode("utf-8", "replace").strip()
     return fields, file
@@ -206,8 +206,11 @@ def check_image(data: bytes, limits: Limits) -> tuple[int, int]:
 
     if not data:
         raise LimitError(400, "the uploaded sketch is empty")
+    # closed at the end: a refused image's traceback may live on (until a full garbage
+    # collection) and must not keep a copy of the upload
+    buffer = io.BytesIO(data)
     try:
-        with Image.open(io.BytesIO(data)) as im:  # lazy: reads the header, decodes nothing
+        with Image.open(buffer) as im:  # lazy: reads the header, decodes nothing
             w, h = im.size
     except Image.DecompressionBombError as exc:
         raise LimitError(413, f"the image is a decompression bomb: {exc}") from exc
@@ -217,6 +220,8 @@ def check_image(data: bytes, limits: Limits) -> tuple[int, int]:
         ) from exc
     except (OSError, SyntaxError, ValueError) as exc:
         raise LimitError(400, f"cannot read the sketch as an image: {exc}") from exc
+    finally:
+        buffer.close()
     if min(w, h) < limits.min_side:
         raise LimitError(422, f"the sketch is {w}x{h} px; it must be at least {limits.min_side} px")
     if w * h > limits.max_pixels:
