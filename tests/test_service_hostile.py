@@ -189,7 +189,16 @@ def test_token_from_header_or_cookie_never_from_the_url_and_never_logged(tmp_pat
                 assert r.status_code == 204
                 cookie = r.headers["set-cookie"]
                 assert "HttpOnly" in cookie and "SameSite=strict" in cookie and secret not in cookie
+                assert "Secure" not in cookie  # plain http: a Secure cookie would not come back
                 assert http.get("/status").status_code == 200  # the cookie alone
+                # behind a TLS proxy on 127.0.0.1 (uvicorn trusts its X-Forwarded-Proto)
+                r = http.post(
+                    "/session",
+                    headers={"Authorization": f"Bearer {secret}", "X-Forwarded-Proto": "https"},
+                )
+                assert r.status_code == 204 and "Secure" in r.headers["set-cookie"]
+                http.cookies.clear()
+                http.cookies.set("treesketch_session", cookie.split(";")[0].split("=", 1)[1])
                 http.cookies.set("treesketch_session", "forged")
                 assert http.get("/status").status_code == 401
                 http.get(f"/health?token={secret}&x=1")
