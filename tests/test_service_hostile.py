@@ -380,27 +380,44 @@ def test_a_really_full_disk(tmp_path: Path, sketch: bytes) -> None:
         assert http.get("/health").json()["status"] == "ok"
 
 
-def test_retention_removes_empty_and_orphaned_result_folders(tmp_path: Path) -> None:
+def test_retention_removes_empty_folders_and_counts_orphaned_results(tmp_path: Path) -> None:
     store = JobStore(tmp_path)
     job = store.create(b"x", {"budget": 1}, max_queued=4)
     assert job is not None and store.claim_next() is not None
     store.fail(job.id, "storage full")
     (store.result_dir(job.id)).mkdir()  # left empty by a failed write
-    orphan = "0123456789abcdef0123456789abcdef"
-    (store.result_dir(orphan)).mkdir()
-    (store.result_dir(orphan) / "tree.glb").write_bytes(b"g" * 100)
-    store.upload_path(orphan).write_bytes(b"x")
+    orphans = ["0123456789abcdef0123456789abcdef", "fedcba9876543210fedcba9876543210"]
+    for i, orphan in enumerate(orphans):  # results no job refers to (a deleted database)
+        (store.result_dir(orphan)).mkdir()
+        (store.result_dir(orphan) / "tree.glb").write_bytes(b"g" * 1000 * (i + 1))
+        store.upload_path(orphan).write_bytes(b"x" * 10)
     keep = store.results / "notes.txt"  # not the store's: never touched
     keep.write_text("mine")
-    store.expire(max_age_s=None, max_bytes=None)
+
+    def age(paths: list[Path], days: float) -> None:
+        t = time.time() - days * 86400
+        for p in paths:
+            for f in [p, *(p.rglob("*") if p.is_dir() else [])]:
+                os.utime(f, (t, t))
+
+    assert store.expire(max_age_s=None, max_bytes=None) == []
     assert store.result_dir(job.id).is_dir()  # too young: may be a job being saved
-    old = time.time() - 3600
-    for p in [store.result_dir(job.id), store.result_dir(orphan), store.upload_path(orphan)]:
-        os.utime(p, (old, old))
-    store.expire(max_age_s=None, max_bytes=None)
-    assert not store.result_dir(job.id).exists()
-    assert not store.result_dir(orphan).exists() and not store.upload_path(orphan).exists()
+    age([store.result_dir(job.id)], 1)
+    for i, orphan in enumerate(orphans):
+        age([store.result_dir(orphan), store.upload_path(orphan)], 20 - i)
+    young = "00000000000000000000000000000000"  # may be a job being made: never touched
+    store.result_dir(young).mkdir()
+    (store.result_dir(young) / "tree.glb").write_bytes(b"g" * 5000)
+    assert store.expire(max_age_s=30 * 86400, max_bytes=None) == []
+    assert not store.result_dir(job.id).exists()  # the empty folder went at once
+    # orphans count towards the size limit, and go oldest first
+    assert store.expire(max_age_s=30 * 86400, max_bytes=2500) == [orphans[0]]
+    assert not store.result_dir(orphans[0]).exists() and not store.upload_path(orphans[0]).exists()
+    assert store.result_dir(orphans[1]).is_dir()
+    # and by their age
+    assert store.expire(max_age_s=10 * 86400, max_bytes=None) == [orphans[1]]
     assert keep.read_text() == "mine" and store.upload_path(job.id).exists()
+    assert (store.result_dir(young) / "tree.glb").exists()
 
 
 # -- 11. the job database: deleted while running, corrupt at start, a bad --data -----------------
@@ -427,9 +444,11 @@ def test_database_deleted_while_running_is_detected_and_its_results_are_swept(
     ):
         assert http.get("/health").json()["status"] == "ok"
         assert http.get(f"/jobs/{done}").status_code == 404
-        old = time.time() - 3600
+        # made 40 days ago, its record gone: the 30-day retention finds the files
+        old = time.time() - 40 * 86400
         for p in [tmp_path / "results" / done, tmp_path / "uploads" / f"{done}.img"]:
-            os.utime(p, (old, old))
+            for f in [p, *(p.rglob("*") if p.is_dir() else [])]:
+                os.utime(f, (old, old))
         JobStore(tmp_path).expire(max_age_s=30 * 86400, max_bytes=2**31)
         assert not (tmp_path / "results" / done).exists()
         assert not (tmp_path / "uploads" / f"{done}.img").exists()

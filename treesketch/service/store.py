@@ -13,8 +13,9 @@ answers 410 for its artefacts).  A running job whose Ray actor was lost goes bac
 Faults are said plainly, as :class:`StoreError`: a data folder that cannot be one, a job
 database that is not one (corrupt), a database deleted or replaced while the server runs
 (``check()``), and a full disk (:class:`StorageFull`; the upload is removed again).  The
-retention sweep also removes what no job refers to (results and uploads left by a deleted
-database, empty result folders), once it is ``ORPHAN_GRACE_S`` old.
+retention sweep also counts and removes, by the same limits, what no job refers to
+(results and uploads left by a deleted database), and removes empty result folders;
+only once they are ``ORPHAN_GRACE_S`` old.
 
 Each thread keeps its own connection, so the store may be used from any thread and from
 several processes; WAL lets readers (status pages) go on while a writer commits.
@@ -22,6 +23,7 @@ several processes; WAL lets readers (status pages) go on while a writer commits.
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import json
 import os
@@ -65,6 +67,14 @@ class StoreError(RuntimeError):
 
 class StorageFull(StoreError):
     """The disk (or quota) holding the data folder is full."""
+
+
+def _remove(paths: list[Path]) -> None:
+    for p in paths:
+        if p.is_dir():
+            shutil.rmtree(p, ignore_errors=True)
+        else:
+            p.unlink(missing_ok=True)
 
 
 def is_full(exc: BaseException) -> bool:
@@ -325,7 +335,10 @@ class JobStore:
 
     def expire(self, max_age_s: float | None, max_bytes: int | None) -> list[str]:
         """Remove the artefacts of finished jobs older than ``max_age_s`` and, oldest
-        first, of as many more as needed to keep the total under ``max_bytes``."""
+        first, of as many more as needed to keep the total under ``max_bytes``.  Files no
+        job refers to (left by a deleted database) count too, and go first: by their age
+        (last change), and before any job's when the total is over.  Empty result folders
+        of jobs that are not done are removed.  Returns the ids whose files were removed."""
         now = time.time()
         with self._db() as db:
             rows = db.execute(
@@ -333,55 +346,86 @@ class JobStore:
                 "WHERE state IN ('done', 'failed', 'cancelled') ORDER BY seq"
             ).fetchall()
             (total,) = db.execute("SELECT COALESCE(SUM(bytes), 0) FROM jobs").fetchone()
+        orphans = self._orphans(now)
+        total += sum(size for _, size, _ in orphans.values())
         gone: list[str] = []
+        for job_id, (changed, size, paths) in sorted(orphans.items(), key=lambda o: o[1][0]):
+            too_old = max_age_s is not None and now - changed > max_age_s
+            too_big = max_bytes is not None and total > max_bytes
+            if too_old or too_big:
+                _remove(paths)
+                total -= size
+                gone.append(job_id)
+        expired: list[str] = []
         for row in rows:
             too_old = max_age_s is not None and now - row["created"] > max_age_s
             too_big = max_bytes is not None and total > max_bytes
             if not (too_old or too_big):
                 continue
             total -= row["bytes"]
-            gone.append(row["id"])
-        for job_id in gone:
+            expired.append(row["id"])
+        for job_id in expired:
             shutil.rmtree(self.result_dir(job_id), ignore_errors=True)
             self.upload_path(job_id).unlink(missing_ok=True)
             with self._db() as db:
                 db.execute("UPDATE jobs SET state='expired', bytes=0 WHERE id=?", (job_id,))
-        self.remove_orphans()
-        return gone
+        self._remove_empty_results(now)
+        return expired + gone
 
-    def remove_orphans(self, grace_s: float = ORPHAN_GRACE_S) -> list[str]:
-        """Remove the result folders and uploads that no job refers to (left by a deleted
-        database, or by a server stopped while it saved a job), and the empty result
-        folders of jobs that are not done; only those older than ``grace_s``.  Returns
-        the ids removed."""
-        cutoff = time.time() - grace_s
+    def _entries(self, now: float) -> dict[str, list[Path]]:
+        """The store's files (result folders, uploads) by job id, those older than
+        ORPHAN_GRACE_S only: a younger one may be a job being made or saved."""
         found: dict[str, list[Path]] = {}
         for path in [*self.results.iterdir(), *self.uploads.glob("*.img")]:
+            job_id = path.name.removesuffix(".img")
+            if not _JOB_ID.fullmatch(job_id):  # never anything the store did not make
+                continue
             try:
-                if path.stat().st_mtime > cutoff:
+                if now - path.stat().st_mtime < ORPHAN_GRACE_S:
                     continue
             except OSError:
                 continue
-            job_id = path.name.removesuffix(".img")
-            if _JOB_ID.fullmatch(job_id):  # never anything the store did not make
-                found.setdefault(job_id, []).append(path)
-        gone: list[str] = []
+            found.setdefault(job_id, []).append(path)
+        return found
+
+    def _known(self, ids: list[str]) -> dict[str, str]:
+        """State by id, of those of ``ids`` the database knows."""
+        out: dict[str, str] = {}
+        for i in range(0, len(ids), 500):
+            batch = ids[i : i + 500]
+            with self._db() as db:
+                rows = db.execute(
+                    f"SELECT id, state FROM jobs WHERE id IN ({','.join('?' * len(batch))})",
+                    batch,
+                ).fetchall()
+            out.update({r["id"]: r["state"] for r in rows})
+        return out
+
+    def _orphans(self, now: float) -> dict[str, tuple[float, int, list[Path]]]:
+        """Files no job refers to: id -> (last change, bytes, paths)."""
+        found = self._entries(now)
+        known = self._known(list(found))
+        out: dict[str, tuple[float, int, list[Path]]] = {}
         for job_id, paths in found.items():
-            job = self.get(job_id)
-            if job is None:
-                doomed = paths
-            else:  # a known job: only an empty result folder of a job that is not done
-                doomed = [
-                    p for p in paths if job.state != "done" and p.is_dir() and not any(p.iterdir())
-                ]
-            for p in doomed:
-                if p.is_dir():
-                    shutil.rmtree(p, ignore_errors=True)
-                else:
-                    p.unlink(missing_ok=True)
-            if doomed:
-                gone.append(job_id)
-        return gone
+            if job_id in known:
+                continue
+            files = [f for p in paths for f in ([p] if p.is_file() else p.rglob("*"))]
+            stats = [f.stat() for f in files if f.is_file()]
+            changed = max([p.stat().st_mtime for p in paths] + [st.st_mtime for st in stats])
+            out[job_id] = (changed, sum(st.st_size for st in stats), paths)
+        return out
+
+    def _remove_empty_results(self, now: float) -> None:
+        """Result folders left empty (a write that failed) by jobs that are not done."""
+        found = {
+            job_id: [p for p in paths if p.is_dir()] for job_id, paths in self._entries(now).items()
+        }
+        known = self._known([j for j, dirs in found.items() if dirs])
+        for job_id, state in known.items():
+            for folder in found[job_id]:
+                if state != "done" and not any(folder.iterdir()):
+                    with contextlib.suppress(OSError):  # a file came in meanwhile
+                        folder.rmdir()
 
     # -- reading -----------------------------------------------------------------------
     def get(self, job_id: str) -> Job | None:
