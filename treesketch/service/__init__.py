@@ -15,7 +15,8 @@ Jobs live in SQLite (WAL) under the data folder with their artefacts; on restart
 that were running are marked failed and queued ones run.  Modules: ``store`` (the
 database), ``pool`` and ``worker`` (local processes), ``ray_pool`` and ``actor`` (the same
 workers as Ray actors, ``ServiceConfig(executor="ray", address=...)``), ``runner`` (the
-pipeline run), ``limits`` (checks before work), ``app`` (routes).
+pipeline run), ``limits`` (checks before work), ``guards`` (the Host, Origin and token
+checks), ``owner`` (one server per data folder), ``app`` (routes).
 """
 
 from .app import ServiceConfig, create_app
