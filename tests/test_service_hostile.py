@@ -380,6 +380,33 @@ def test_a_really_full_disk(tmp_path: Path, sketch: bytes) -> None:
         assert http.get("/health").json()["status"] == "ok"
 
 
+def test_the_dispatcher_outlives_a_database_that_cannot_be_written(
+    tmp_path: Path, sketch: bytes
+) -> None:
+    """SQLite's own "disk full" while a job's result is saved: the result waits and is
+    saved once the database takes writes again (the dispatcher thread used to die, and
+    every later job waited for ever)."""
+    import sqlite3
+
+    app = create_app(config(tmp_path))
+    store = app.state.store
+    real_finish, failures = store.finish, [0]
+
+    def finish(job_id: str, summary: dict) -> None:
+        if failures[0] < 2:
+            failures[0] += 1
+            raise sqlite3.OperationalError("database or disk is full")
+        real_finish(job_id, summary)
+
+    store.finish = finish
+    with serve(app) as url, httpx.Client(base_url=url, timeout=30) as http:
+        first = submit(http, sketch, refine="false")
+        assert wait_for(http, first, finished, timeout=60)["state"] == "done"
+        assert failures[0] == 2
+        second = submit(http, sketch, refine="false")
+        assert wait_for(http, second, finished, timeout=60)["state"] == "done"
+
+
 def test_retention_removes_empty_folders_and_counts_orphaned_results(tmp_path: Path) -> None:
     store = JobStore(tmp_path)
     job = store.create(b"x", {"budget": 1}, max_queued=4)

@@ -13,14 +13,17 @@ from __future__ import annotations
 import contextlib
 import multiprocessing as mp
 import os
+import sqlite3
+import sys
 import threading
 import time
+from collections import deque
 from dataclasses import dataclass
 from multiprocessing.connection import Connection, wait
 from typing import Any
 
 from .progress import LiveProgress
-from .store import JobStore
+from .store import JobStore, is_full
 
 __all__ = ["WorkerPool"]
 
@@ -64,6 +67,7 @@ class WorkerPool:
         self._workers: list[_Worker] = []
         self._lock = threading.Lock()
         self._live = LiveProgress(store)
+        self._inbox: deque[tuple[_Worker, tuple[str, Any, Any]]] = deque()
         self._wake_r, self._wake_w = self._ctx.Pipe(duplex=False)
         self._stopping = threading.Event()
         self._thread: threading.Thread | None = None
@@ -156,24 +160,40 @@ class WorkerPool:
     def _loop(self) -> None:
         last_sweep = 0.0
         while not self._stopping.is_set():
-            self._assign()
-            waitables: list[Any] = [self._wake_r]
-            with self._lock:
-                for w in self._workers:
-                    if w.process.is_alive():  # a dead one's sentinel would never block
-                        waitables += [w.conn, w.process.sentinel]
-            ready = wait(waitables, timeout=0.2)
-            if self._wake_r in ready:
-                while self._wake_r.poll():
-                    self._wake_r.recv_bytes()
-            for i in range(len(self._workers)):
-                self._drain(self._workers[i])
-                if not self._workers[i].process.is_alive() and not self.broken:
-                    self._replace(i)
-            self._enforce_cancels()
-            if time.monotonic() - last_sweep > self.sweep_every:
-                last_sweep = time.monotonic()
-                self.store.expire(*self.retention)
+            try:
+                last_sweep = self._tick(last_sweep)
+            except sqlite3.Error as exc:
+                # the job database could not be written (a full disk): the thread must
+                # live on; what was not saved waits in the inbox and is tried again
+                if is_full(exc):
+                    self.store.mark_full()
+                print(f"treesketch: the job database cannot be written: {exc}", file=sys.stderr)
+                self._stopping.wait(1.0)
+
+    def _tick(self, last_sweep: float) -> float:
+        """One round of the dispatcher; returns when it last swept."""
+        if self._inbox:  # left from a round whose database write failed
+            self._deliver()
+        self._assign()
+        waitables: list[Any] = [self._wake_r]
+        with self._lock:
+            for w in self._workers:
+                if w.process.is_alive():  # a dead one's sentinel would never block
+                    waitables += [w.conn, w.process.sentinel]
+        ready = wait(waitables, timeout=0.2)
+        if self._wake_r in ready:
+            while self._wake_r.poll():
+                self._wake_r.recv_bytes()
+        for i in range(len(self._workers)):
+            self._drain(self._workers[i])
+            self._deliver()  # a worker's last answer before its death is seen
+            if not self._workers[i].process.is_alive() and not self.broken:
+                self._replace(i)
+        self._enforce_cancels()
+        if time.monotonic() - last_sweep > self.sweep_every:
+            last_sweep = time.monotonic()
+            self.store.expire(*self.retention)
+        return last_sweep
 
     def _assign(self) -> None:
         for w in self._workers:
@@ -190,12 +210,19 @@ class WorkerPool:
                     w.conn.send((job.id, job.options))
 
     def _drain(self, w: _Worker) -> None:
+        """Move what the worker sent into the inbox."""
         try:
             while w.conn.poll():
-                kind, job_id, payload = w.conn.recv()
-                self._handle(w, kind, job_id, payload)
+                self._inbox.append((w, w.conn.recv()))
         except (EOFError, OSError):
             pass
+
+    def _deliver(self) -> None:
+        """Handle the inbox in order; a message leaves it only once handled (saved)."""
+        while self._inbox:
+            w, (kind, job_id, payload) = self._inbox[0]
+            self._handle(w, kind, job_id, payload)
+            self._inbox.popleft()
 
     def _handle(self, w: _Worker, kind: str, job_id: Any, payload: Any) -> None:
         if kind == "ready":

@@ -173,6 +173,11 @@ class JobStore:
             ) from None
         self._identity = self._stat()
 
+    def mark_full(self) -> None:
+        """A write found the disk full: ``full`` holds until space is freed or a job is
+        saved."""
+        self._full_at = shutil.disk_usage(self.root).free
+
     @property
     def full(self) -> bool:
         """A write found the disk full, and no space was freed since."""
@@ -248,7 +253,7 @@ class JobStore:
             if not is_full(exc):
                 raise
             self.upload_path(job_id).unlink(missing_ok=True)
-            self._full_at = shutil.disk_usage(self.root).free
+            self.mark_full()
             raise StorageFull(
                 f"storage full: the data folder {self.root} has no space left"
             ) from exc
@@ -288,6 +293,7 @@ class JobStore:
                 "WHERE id=? AND state='running'",
                 (time.time(), json.dumps(summary), size, job_id),
             )
+        self._full_at = None  # a result was saved: there is room again
 
     def fail(
         self, job_id: str, message: str, state: str = "failed", input_error: bool = False
