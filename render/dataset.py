@@ -377,10 +377,13 @@ def _draw_view(
     styles = view_styles(settings, tree_seed_, view_no)
     if styles == ["sg"]:
         return [("sg", renderer.sketch(view, size))]
+    from weberpenn.species import doodle_foliage
+
     from .styles import STYLES, Silhouettes, draw
 
     parts = renderer.parts(view, size)
-    sil = Silhouettes.from_parts(parts)
+    species = getattr(renderer, "species", None)
+    sil = Silhouettes.from_parts(parts, species is not None and doodle_foliage(species))
     out = []
     for style in styles:
         if style == "sg":
