@@ -193,12 +193,9 @@ class RefineSettings:
     Species by synthesis (``treesketch.Pipeline``): up to ``species_tries`` species are
     refined, the estimator's best and any other whose score is at least ``species_ratio``
     times the best's (the others with half the budget; 60% of the time limit for the
-    estimator's species and the rest shared by the others); the tree
-    whose sketch matches best wins, but another species replaces the estimator's only when
-    its distance is lower by more than ``species_margin`` (a fraction of the estimator's
-    species' distance): the network names the species far more reliably than a sketch
-    distance between two close species does.  ``species_tries`` 1 refines the estimator's
-    species only.
+    estimator's species and the rest shared by the others); the estimator's scores and the
+    refined trees' distances decide together (``treesketch.species_choice``).
+    ``species_tries`` 1 refines the estimator's species only.
     """
 
     refine: bool = True
@@ -221,7 +218,6 @@ class RefineSettings:
     extent_weight: float = EXTENT_WEIGHT
     species_tries: int = 2
     species_ratio: float = 0.5
-    species_margin: float = 0.2
     metric: str = "shape"
     fast_sketch: bool = True
     keep_height: bool = False
@@ -274,9 +270,6 @@ class RefineSettings:
             )
         if not (isinstance(self.species_ratio, int | float) and 0 <= self.species_ratio <= 1):
             raise ValueError(f"species_ratio must be in [0, 1], got {self.species_ratio!r}")
-        m = self.species_margin
-        if isinstance(m, bool) or not (isinstance(m, int | float) and 0 <= m < 1):
-            raise ValueError(f"species_margin must be in [0, 1), got {m!r}")
         if self.metric not in METRICS:
             raise ValueError(f"metric must be one of {', '.join(METRICS)}, got {self.metric!r}")
         for flag in ("fast_sketch", "keep_height"):

@@ -321,7 +321,9 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
         styled = "styles" in settings
         rows = []
         for view_no, view in enumerate(settings["views"]):
-            for style, img in _draw_view(renderer, view, view_no, job.tree_seed, settings):
+            for style, img in _draw_view(
+                renderer, view, view_no, job.tree_seed, settings, job.species
+            ):
                 p = paths_for(job, view, style)
                 atomic_write(root / p["sketch"], png_bytes(img))
                 row = {
@@ -369,7 +371,12 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
 
 
 def _draw_view(
-    renderer: Any, view: str, view_no: int, tree_seed_: int, settings: dict[str, Any]
+    renderer: Any,
+    view: str,
+    view_no: int,
+    tree_seed_: int,
+    settings: dict[str, Any],
+    species: str | None = None,
 ) -> list[tuple[str, np.ndarray]]:
     """One view in each of its styles, as (style, uint8 sketch); the SG one is exactly
     ``renderer.sketch(view, size)``."""
@@ -382,7 +389,6 @@ def _draw_view(
     from .styles import STYLES, Silhouettes, draw
 
     parts = renderer.parts(view, size)
-    species = getattr(renderer, "species", None)
     sil = Silhouettes.from_parts(parts, species is not None and doodle_foliage(species))
     out = []
     for style in styles:
@@ -660,8 +666,13 @@ def build_dataset(
     progress: bool | None = None,
     on_tree: Callable[[dict[str, Any]], None] | None = None,
     executor: PieceRunner | None = None,
+    only_split: str | None = None,
 ) -> BuildSummary:
     """Build (or resume) the dataset described by ``cfg``; see the module docstring.
+
+    ``only_split`` ("train", "val" or "test") builds only that split's trees, the same
+    trees and files as the full build (a test split to score a network on, in a tenth of
+    the time); the manifest then lists that split alone.
 
     ``executor`` spreads the trees (``treesketch.executor``: a local process pool, Ray);
     None builds them in this process.  Whichever runs them, the files are the same bytes.
@@ -673,6 +684,8 @@ def build_dataset(
         )
     if executor is not None and int(cfg.workers) > 1:
         raise DatasetError("give either workers or an executor, not both")
+    if only_split not in (None, "train", "val", "test"):
+        raise DatasetError(f"only_split must be train, val or test, got {only_split!r}")
     root = cfg.out_dir
     if root.exists() and not root.is_dir():
         raise DatasetError(f"--out {root} exists and is not a folder")
@@ -687,7 +700,7 @@ def build_dataset(
         removed = _clean_temp_files(root)
         if removed:
             log.info("removed %d temporary files left by an interrupted run", removed)
-        jobs = plan(cfg)
+        jobs = [j for j in plan(cfg) if only_split is None or j.split == only_split]
         todo = [j for j in jobs if not _is_finished(root, j, settings)]
         skipped = len(jobs) - len(todo)
         if todo:

@@ -29,6 +29,13 @@ def predict_command(
     time_limit: float = typer.Option(
         None, "--time-limit", help="Refinement: most seconds (default 50)."
     ),
+    species_name: str | None = typer.Option(
+        None,
+        "--species",
+        help="The species you mean (maple, pine, bonsai, palm, cherry, fir, willow, oak, "
+        "birch, poplar, winter; or a name people use: 'christmas tree', spruce, bare): "
+        "only it is refined.",
+    ),
     height: float = typer.Option(
         None,
         "--height",
@@ -91,6 +98,8 @@ def predict_command(
 
     Example: `treesketch predict examples/sketch_maple.png --out tree.glb --compare cmp.png`.
     """
+    from weberpenn import species as wp_species
+
     from .estimators import ESTIMATORS, load_estimator
     from .outputs import ExportOptions, write_outputs
     from .pipeline import Pipeline, RefineSettings, SketchError, check_height, load_sketch
@@ -134,6 +143,8 @@ def predict_command(
             settings = settings.replace(time_limit=time_limit)
         settings.validate()
         check_height(height)
+        if species_name is not None:
+            species_name = wp_species.canonical(species_name)
         export = ExportOptions(face_view, max_faces, textures).validate()
         image = load_sketch(sketch)
         pipeline = Pipeline(load_estimator(estimator, checkpoint=checkpoint, data=data), settings)
@@ -160,7 +171,7 @@ def predict_command(
 
     try:
         with bar:
-            result = pipeline.run(image, height=height, progress=on_progress)
+            result = pipeline.run(image, height=height, progress=on_progress, species=species_name)
         written = write_outputs(result, outputs, export)
     except (SketchError, ValueError) as exc:
         fail(str(exc))
@@ -175,12 +186,11 @@ def predict_command(
     if r is not None:
         line += f" ({r.evaluations} trees, {r.seconds:.1f} s, stopped by {r.stopped_by})"
     typer.echo(line)
-    tried = result.extras.get("tried", {})
-    if len(tried) > 1:
-        typer.echo(
-            "species tried: "
-            + ", ".join(f"{k} {v:.3f}" for k, v in sorted(tried.items(), key=lambda kv: kv[1]))
-        )
+    if result.candidates:
+        typer.echo(f"it is {result.species_text}")
+        for c in result.candidates:
+            dist = "not refined" if c.distance is None else f"distance {c.distance:.3f}"
+            typer.echo(f"  candidate {c.species:<7} {c.probability:6.1%}  {dist}")
     lo, hi = result.tree_mesh.bounds()
     typer.echo(
         f"tree: {hi[2] - lo[2]:.2f} m tall, {len(result.tree_mesh.branches.faces)} branch faces"

@@ -30,9 +30,11 @@ from refine.search import refine as refine_search
 from refine.shape import ShapeTarget, line_distance
 from render.reader import DRAWING_SIDE, SketchError, normalise_drawing, read_sketch
 from weberpenn import TreeParams, build_mesh, grow
+from weberpenn import species as wp_species
 
 from .estimate import Estimate, Estimator
 from .estimators import load_estimator
+from .species_choice import Candidate, describe, posterior
 
 __all__ = [
     "LOW_CONFIDENCE_INK",
@@ -53,6 +55,8 @@ __all__ = [
     "tree_line_distance",
 ]
 
+CANDIDATES = 3  # species a result lists (the page shows them to switch to)
+THUMB_SIZE = 128  # pixels of a candidate's sketch
 SKETCH_SIZE = DRAWING_SIDE  # the size sketches are prepared at (TSN crops and resizes from it)
 # the result is flagged when the best tree's sketch is this far from the input, by the
 # style-blind shape distance the refinement minimises (with the learned embedding's term
@@ -96,6 +100,12 @@ class Result:
     confidence: float = 1.0
     warning: str | None = None
     extras: dict[str, Any] = field(default_factory=dict)
+    candidates: tuple[Candidate, ...] = ()  # best first: the species it could be
+
+    @property
+    def species_text(self) -> str:
+        """The species in words, with the others it could be ("a palm; could also be...")."""
+        return describe(list(self.candidates))
 
     @property
     def low_confidence(self) -> bool:
@@ -116,6 +126,8 @@ class Result:
             "losses": dict(self.losses),
             "yaw": float(self.yaw),
             "confidence": float(self.confidence),
+            "species_text": self.species_text,
+            "candidates": [c.summary() for c in self.candidates],
             "warning": self.warning,
             "timings": dict(self.timings),
             "evaluations": 0 if r is None else int(r.evaluations),
@@ -252,13 +264,17 @@ class Pipeline:
         height: float | None = None,
         progress: Callable[[Progress], None] | None = None,
         cancel: Callable[[], bool] | None = None,
+        species: str | None = None,
     ) -> Result:
         """Sketch (path, bytes, image or array) -> :class:`Result` (see the module text).
 
         ``height`` (metres) rescales the tree; ``progress`` is told of each stage and each
         refinement evaluation; ``cancel()`` returning True stops the run with
-        :class:`Cancelled` within one tree evaluation."""
+        :class:`Cancelled` within one tree evaluation; ``species`` (a name of
+        ``weberpenn.species.SPECIES`` or one people use, "christmas tree") is the species
+        the user means: only it is refined, and the result is of it."""
         height = check_height(height)
+        chosen = None if species is None else wp_species.canonical(species)
         cfg = self.settings
         t_start = time.perf_counter()
 
@@ -286,8 +302,11 @@ class Pipeline:
         tried: dict[str, float] = {}
         name = est.species
         done = 0  # evaluations of all candidates so far, so progress only grows
+        refined: dict[str, RefineResult] = {}
+        if chosen is not None:
+            name = chosen
         if cfg.refine:
-            names = self.candidates(est)
+            names = [chosen] if chosen is not None else self.candidates(est)
             for i, candidate in enumerate(names):
                 run_cfg = _share(cfg, i, len(names))
                 tell("refine", done)
@@ -303,29 +322,29 @@ class Pipeline:
                 )
                 done += rr.evaluations
                 tried[candidate] = rr.loss_after
+                refined[candidate] = rr
                 if i == 0:
                     yaw0, loss0 = rr.start_yaw, rr.loss_before
-                if result_refine is None:
-                    result_refine, name = rr, candidate
-                else:
-                    # the estimator's species (refined first) keeps its place unless another
-                    # fits clearly better (RefineSettings.species_margin)
-                    keep = 1.0 - cfg.species_margin if name == est.species else 1.0
-                    if rr.loss_after < keep * result_refine.loss_after:
-                        result_refine, name = rr, candidate
-            assert result_refine is not None
+            # the network's scores and the synthesis distances decide together
+            post = posterior(est.species_scores or {est.species: 1.0}, tried)
+            if chosen is None:
+                name = max(tried, key=lambda s: post.get(s, 0.0))
+            result_refine = refined[name]
             params1, yaw1 = result_refine.params, result_refine.yaw
         else:
-            params1, yaw1 = est.params, yaw0
+            post = posterior(est.species_scores or {est.species: 1.0}, {})
+            params1 = est.params if chosen is None else est.params_for(chosen)
+            yaw1 = yaw0
         timings["refine"] = time.perf_counter() - t
 
         t = time.perf_counter()
         tell("render", done)
         from render.sketch import SketchRenderer
 
-        mesh0 = build_mesh(grow(est.params), species=est.species)
+        start = est.params if chosen is None else est.params_for(chosen)
+        mesh0 = build_mesh(grow(start), species=est.species if chosen is None else chosen)
         before = SketchRenderer(mesh0).sketch(yaw0, SKETCH_SIZE)
-        if params1 is est.params:
+        if params1 is start:
             mesh1, after = mesh0, before
         else:
             mesh1 = build_mesh(grow(params1), species=name)
@@ -351,7 +370,15 @@ class Pipeline:
 
         ink_after = tree_line_distance(img, after, cfg.size)
         limit = LOW_CONFIDENCE_LOSS if self.embedder is not None else LOW_CONFIDENCE_LOSS_SHAPE
-        confidence, warning = _confidence(loss_after, ink_after, limit)
+        tree_like, warning = _confidence(loss_after, ink_after, limit)
+        t = time.perf_counter()
+        candidates = self._candidates(est, name, params1, after, refined, post, chosen)
+        timings["candidates"] = time.perf_counter() - t
+        # how sure the result is the kind of tree drawn (the species' probability); a
+        # drawing that is not a tree cannot be sure of its kind either
+        confidence = candidates[0].probability if candidates else tree_like
+        if warning is not None:
+            confidence = min(confidence, tree_like)
         timings["total"] = sum(timings.values())
         return Result(
             params=params1,
@@ -373,7 +400,49 @@ class Pipeline:
             confidence=confidence,
             warning=warning,
             extras={"tried": tried} if tried else {},
+            candidates=tuple(candidates),
         )
+
+    def _candidates(
+        self,
+        est: Estimate,
+        name: str,
+        params: TreeParams,
+        sketch: np.ndarray,
+        refined: dict[str, RefineResult],
+        post: dict[str, float],
+        chosen: str | None,
+    ) -> list[Candidate]:
+        """The result's species and the next most probable, at least ``CANDIDATES`` in
+        all: each with its tree (refined, else the estimate for it), its distance (refined
+        ones), its probability and a small sketch to pick it by."""
+        from render.sketch import SketchRenderer
+
+        ranked = sorted(post, key=lambda s: -post[s])
+        names = [name, *[s for s in ranked if s != name]][: max(CANDIDATES, len(refined))]
+        scores = est.species_scores or {est.species: 1.0}
+        out = []
+        for s in names:
+            if s == name:
+                p, img = params, sketch
+            else:
+                rr = refined.get(s)
+                p = rr.params if rr is not None else est.params_for(s)
+                mesh = build_mesh(grow(p), species=s)
+                img = SketchRenderer(mesh).sketch(rr.yaw if rr is not None else 0.0, THUMB_SIZE)
+            rr = refined.get(s)
+            prob = 1.0 if chosen is not None and s == chosen else post.get(s, 0.0)
+            out.append(
+                Candidate(
+                    s,
+                    p,
+                    float(scores.get(s, 0.0)),
+                    None if rr is None else float(rr.loss_after),
+                    0.0 if chosen is not None and s != chosen else float(prob),
+                    img,
+                )
+            )
+        return out
 
     def candidates(self, est: Estimate) -> list[str]:
         """The species to refine: the estimator's, then up to ``species_tries - 1`` others
@@ -393,6 +462,7 @@ def predict_then_refine(
     height: float | None = None,
     progress: Callable[[Progress], None] | None = None,
     cancel: Callable[[], bool] | None = None,
+    species: str | None = None,
     **settings: Any,
 ) -> Result:
     """``Pipeline(estimator, RefineSettings(**settings)).run(sketch, height, ...)``.
@@ -400,4 +470,6 @@ def predict_then_refine(
     Example: ``predict_then_refine("sketch.png", budget=40).params``.
     """
     cfg = RefineSettings(**settings)
-    return Pipeline(estimator, cfg).run(sketch, height=height, progress=progress, cancel=cancel)
+    return Pipeline(estimator, cfg).run(
+        sketch, height=height, progress=progress, cancel=cancel, species=species
+    )
