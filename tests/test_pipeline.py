@@ -252,3 +252,64 @@ def test_species_by_synthesis_keeps_the_better_match() -> None:
     assert evals == sorted(evals)  # progress never runs backwards across candidates
     one = Pipeline(Unsure(), RefineSettings(budget=12, species_tries=1)).run(_gt_sketch("palm", 3))
     assert one.species == "maple" and set(one.extras["tried"]) == {"maple"}
+
+
+def test_candidates_list_three_species_with_trees_distances_and_probabilities() -> None:
+    r = Pipeline(Unsure(), RefineSettings(budget=12)).run(_gt_sketch("palm", 3))
+    names = [c.species for c in r.candidates]
+    assert len(names) >= 3 and names[0] == r.species and len(set(names)) == len(names)
+    assert abs(sum(c.probability for c in r.candidates) - 1.0) < 0.05
+    assert r.candidates[0].probability == max(c.probability for c in r.candidates)
+    refined = {c.species for c in r.candidates if c.distance is not None}
+    assert refined == {"maple", "palm"}
+    for c in r.candidates:
+        assert c.sketch is not None and c.sketch.dtype == np.uint8
+        assert c.params.seed >= 0 and species.canonical(c.species) == c.species
+    summary = r.summary()
+    assert [c["species"] for c in summary["candidates"]] == names
+    assert summary["candidates"][0]["params"] == r.params.to_dict()
+    assert summary["species_text"].startswith("a palm")
+    # the species' probability, lowered when the drawing may not be a tree at all
+    assert r.confidence <= r.candidates[0].probability + 1e-12
+    if r.warning is None:
+        assert r.confidence == pytest.approx(r.candidates[0].probability)
+
+
+def test_the_species_the_user_means_is_the_one_refined() -> None:
+    est = Unsure()  # it would say maple or palm; the user says pine
+    r = Pipeline(est, RefineSettings(budget=10)).run(_gt_sketch("palm", 3), species="Pine")
+    assert r.species == "pine" and set(r.extras["tried"]) == {"pine"}
+    assert r.params["levels"] == species.base("pine")["levels"]
+    assert r.candidates[0].species == "pine" and r.candidates[0].probability == 1.0
+    christmas = Pipeline(est, RefineSettings(refine=False)).run(
+        _gt_sketch("palm", 3), species="christmas tree"
+    )
+    assert (
+        christmas.species == "fir" and christmas.params["leaves"] == species.base("fir")["leaves"]
+    )
+    with pytest.raises(ValueError, match="unknown species 'baobab'"):
+        Pipeline(est, RefineSettings(budget=10)).run(_gt_sketch("palm", 3), species="baobab")
+
+
+def test_posterior_lets_a_confident_network_stand_against_a_small_distance_gap() -> None:
+    from treesketch.species_choice import posterior
+
+    # the network is sure of palm; the cherry's filled crown fits a little better
+    p = posterior({"palm": 0.95, "cherry": 0.05}, {"palm": 1.00, "cherry": 0.98})
+    assert max(p, key=p.get) == "palm"
+    # ...but a clearly better fit wins over a mild preference
+    p = posterior({"palm": 0.6, "cherry": 0.4}, {"palm": 1.5, "cherry": 0.5})
+    assert max(p, key=p.get) == "cherry"
+    assert abs(sum(p.values()) - 1) < 1e-9
+
+
+def test_describe_puts_the_species_in_words() -> None:
+    from treesketch.species_choice import Candidate, describe
+
+    t = species.sample("palm", 0)
+    text = describe(
+        [Candidate("palm", t, 0.7, 1.0, 0.7), Candidate("cherry", t, 0.2, 1.1, 0.25),
+         Candidate("oak", t, 0.1, None, 0.05)]
+    )  # fmt: skip
+    assert text == "a palm (70%); could also be a cherry"
+    assert describe([Candidate("oak", t, 1.0, 1.0, 1.0)]).startswith("an oak")
