@@ -79,9 +79,11 @@ def test_classifier_is_accurate_calibrated_and_plain_data(identifier: SpeciesIde
     p = clf.probabilities_many(noisy(x, 0.05))
     assert p.shape == (len(y), len(names)) and np.allclose(p.sum(axis=1), 1.0)
     assert np.mean([clf.species[i] == s for i, s in zip(p.argmax(1), y, strict=True)]) > 0.9
-    # very noisy outputs: calibrated, so not sure of everything
-    noisy_p = clf.probabilities_many(noisy(x, 0.3)).max(axis=1)
-    assert noisy_p.mean() < p.max(axis=1).mean()
+    # calibrated on outputs as noisy as these: its confidence matches its accuracy
+    fresh = clf.probabilities_many(noisy(x, 0.3))
+    conf = fresh.max(axis=1)
+    right = np.array([clf.species[i] == s for i, s in zip(fresh.argmax(1), y, strict=True)])
+    assert abs(conf.mean() - right.mean()) < 0.1
     with_clf = identifier.with_classifier(clf)
     back = SpeciesIdentifier.from_dict(json.loads(json.dumps(with_clf.to_dict())))
     assert back.classifier is not None and back.classifier.species == clf.species
