@@ -18,6 +18,7 @@ import hashlib
 import json
 import math
 import os
+import re
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -496,17 +497,39 @@ MAX_PARAM_FILE_BYTES = 1_000_000
 MAX_NESTING = 8  # {"key": [v, ...]} nests 2 deep; anything far deeper is not parameters
 
 
+# A string is a quote, then characters that are not that quote nor a backslash or a
+# backslash and any character but a newline; the closing quote follows (as a preset or
+# JSON writes it).  Matched from a given position only: see _max_nesting.
+_STRING_BODY = {q: re.compile(q + r"(?:[^" + q + r"\\]|\\.)*") for q in "\"'"}
+_TOKEN = re.compile(r"[\"'\[\]{}()]")
+
+
 def _max_nesting(text: str) -> int:
     """Deepest bracket nesting in ``text`` (strings ignored), without recursion: parsers
-    recurse per level and a file of 100000 '[' would blow the interpreter's stack."""
-    import re
+    recurse per level and a file of 100000 '[' would blow the interpreter's stack.
 
-    depth = best = 0
-    for tok in re.findall(r'"(?:[^"\\]|\\.)*"|\'(?:[^\'\\]|\\.)*\'|[\[\]{}()]', text):
-        if tok in "[{(":
+    Linear in the text's length: a quote that opens no string (it is never closed) is
+    skipped, and so is every later quote of its kind up to where its string stopped,
+    since each of those would be read as the same unclosed string (``findall`` over one
+    pattern of strings and brackets tried again from every such quote: quadratic, 50
+    minutes for 1 MB of ``"\\"``)."""
+    depth = best = pos = 0
+    dead = {'"': 0, "'": 0}  # a quote of this kind before this position opens no string
+    while (m := _TOKEN.search(text, pos)) is not None:
+        ch, at = m.group(), m.start()
+        pos = at + 1
+        if ch in dead:
+            if at < dead[ch]:
+                continue
+            end = _STRING_BODY[ch].match(text, at).end()  # type: ignore[union-attr]
+            if end < len(text) and text[end] == ch:
+                pos = end + 1  # a whole string: its brackets do not count
+            else:
+                dead[ch] = end
+        elif ch in "[{(":
             depth += 1
             best = max(best, depth)
-        elif tok in "]})":
+        else:
             depth -= 1
     return best
 
