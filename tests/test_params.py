@@ -316,3 +316,20 @@ def test_a_1mb_hostile_preset_is_read_in_linear_time(tmp_path) -> None:
     assert load_params(preset) == tree
     for line in lines:
         assert float(line.split()[0]) < 3.0, line
+
+
+@pytest.mark.parametrize(
+    "key", ["seed", "levels", "scale", "shape", "useParentAngle", "choiceNegPos2", "attractUp"]
+)
+def test_huge_integers_are_refused_plainly(key, tmp_path) -> None:
+    """Issue 30, item 9: an int of 309+ digits raised OverflowError (math.isfinite/float)
+    instead of naming the key."""
+    huge = 10**400
+    value = [huge] * 4 if SPECS[key].is_vector else huge
+    with pytest.raises(ParamError, match=f"'{key}") as info:
+        default_params().replace(**{key: value})
+    assert len(str(info.value)) < 300 and "characters" in str(info.value)
+    f = tmp_path / "huge.json"
+    f.write_text(json.dumps({**default_params().to_dict(), key: value}))
+    with pytest.raises(ParamError, match=key):
+        load_params(f)

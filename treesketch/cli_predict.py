@@ -198,6 +198,8 @@ def _option_message(text: str) -> str:
         ("budget", "--budget"),
         ("height", "--height"),
         ("embedding", "--embedding"),
+        ("seed", "--seed"),
+        ("tree_seeds", "--tree-seeds"),
     ):
         if text.startswith(name + " "):
             return opt + text[len(name) :]

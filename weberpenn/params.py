@@ -224,7 +224,10 @@ class ParamError(ValueError):
 def _bad(key: str, value: Any, why: str) -> ParamError:
     spec = SPECS.get(key.split("[", 1)[0])  # per-level values are named like 'taper[2]'
     allowed = f" (allowed: {spec.range_text()})" if spec else ""
-    return ParamError(f"parameter {key!r}: {why}, got {value!r}{allowed}", key.split("[", 1)[0])
+    shown = repr(value)
+    if len(shown) > 60:  # a number of 400 digits or a long string: its start says enough
+        shown = f"{shown[:40]}... ({len(shown)} characters)"
+    return ParamError(f"parameter {key!r}: {why}, got {shown}{allowed}", key.split("[", 1)[0])
 
 
 def _coerce_scalar(spec: ParamSpec, value: Any, key: str) -> Any:
@@ -232,7 +235,8 @@ def _coerce_scalar(spec: ParamSpec, value: Any, key: str) -> Any:
         if isinstance(value, bool):
             raise _bad(key, value, "expected one of the allowed names")
         if isinstance(value, int | float) and not isinstance(value, bool):
-            if not math.isfinite(value) or not float(value).is_integer():
+            # an int is exact however large; math.isfinite and float() overflow on it
+            if isinstance(value, float) and not (math.isfinite(value) and value.is_integer()):
                 raise _bad(key, value, "not an allowed value")
             value = str(int(value))
         if not isinstance(value, str) or value not in spec.choices:
@@ -246,19 +250,23 @@ def _coerce_scalar(spec: ParamSpec, value: Any, key: str) -> Any:
         raise _bad(key, value, "expected a boolean")
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise _bad(key, value, f"expected a number ({spec.kind})")
-    if not math.isfinite(value):
+    # an int is compared as it is, however large (math.isfinite and float() overflow on
+    # one of 309 digits or more); a float must be finite
+    if isinstance(value, float) and not math.isfinite(value):
         raise _bad(key, value, "not a finite number")
     if spec.kind == "sign":
         if value not in (-1, 1):
             raise _bad(key, value, "expected -1 or 1")
         return int(value)
+    if not spec.lo <= value <= spec.hi:
+        raise _bad(key, value, "out of range")
     if spec.kind == "int":
-        if not float(value).is_integer():
+        if isinstance(value, float) and not value.is_integer():
             raise _bad(key, value, "expected an integer")
         value = int(value)
     else:
         value = float(value)
-    if not spec.lo <= value <= spec.hi:
+    if not spec.lo <= value <= spec.hi:  # again: a float rounded onto a bound's far side
         raise _bad(key, value, "out of range")
     return value
 
