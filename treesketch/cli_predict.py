@@ -91,6 +91,9 @@ def predict_command(
 
     Example: `treesketch predict examples/sketch_maple.png --out tree.glb --compare cmp.png`.
     """
+    from weberpenn.export import mesh_paths
+    from weberpenn.fileio import OutputError, check_targets
+
     from .estimators import ESTIMATORS, load_estimator
     from .outputs import ExportOptions, write_outputs
     from .pipeline import Pipeline, RefineSettings, SketchError, check_height, load_sketch
@@ -103,19 +106,29 @@ def predict_command(
         "compare": compare_path,
         "summary": summary_path,
     }
-    for opt, p, exts in (
+    named = [
         ("--out", out, (".glb", ".obj")),
         ("--params", params_path, (".json",)),
         ("--preset", preset_path, (".py",)),
         ("--compare", compare_path, (".png",)),
         ("--summary", summary_path, (".json",)),
-    ):
+    ]
+    for opt, p, exts in named:
         if p is None:
             continue
-        if p.is_dir():
-            fail(f"{opt} {p} is a folder; give a file name")
         if p.suffix.lower() not in exts:
             fail(f"{opt} {p}: expected a {' or '.join(exts)} file")
+    # a folder, two outputs on one file, a folder that takes no file: now, not after
+    # minutes of refinement
+    try:
+        check_targets(
+            {
+                "--out": mesh_paths(out, textures=textures),
+                **{opt: [p] for opt, p, _ in named[1:] if p is not None},
+            }
+        )
+    except OutputError as exc:
+        fail(str(exc))
     if estimator not in ESTIMATORS:
         fail(f"--estimator {estimator!r}: choose one of {', '.join(ESTIMATORS)}")
     if checkpoint is not None and estimator != "tsn":
@@ -199,7 +212,6 @@ def _option_message(text: str) -> str:
         ("height", "--height"),
         ("embedding", "--embedding"),
         ("seed", "--seed"),
-        ("tree_seeds", "--tree-seeds"),
     ):
         if text.startswith(name + " "):
             return opt + text[len(name) :]

@@ -589,11 +589,15 @@ def load_params(path: str | os.PathLike[str]) -> TreeParams:
         raise ParamError(f"{path}: {exc}") from None
 
 
+def params_text(params: TreeParams | Mapping[str, Any]) -> str:
+    """The JSON text of a parameter file (validated), as :func:`save_params` writes it."""
+    return json.dumps(validate(params).to_dict(), indent=1) + "\n"
+
+
 def save_params(params: TreeParams | Mapping[str, Any], path: str | os.PathLike[str]) -> Path:
     """Save as JSON (atomically).  Use ``weberpenn.export.save_sapling_preset`` for Sapling."""
-    params = validate(params)
     path = Path(path)
-    atomic_write(path, json.dumps(params.to_dict(), indent=1) + "\n")
+    atomic_write(path, params_text(params))
     return path
 
 
