@@ -123,7 +123,7 @@ def image_format(data: bytes, what: str = "the image") -> str:
             f"{what} is {other}, not a raster picture; send a {_NAMES} image "
             "(export or save it as PNG or JPEG)"
         )
-    raise SketchError(f"{what} is not a {_NAMES} image")
+    raise SketchError(f"{what} is not an image in a format read here ({_NAMES})")
 
 
 def _check_size(width: int, height: int) -> None:
