@@ -155,11 +155,14 @@ def _open(data: bytes, what: str) -> Any:
         raise SketchError(f"{what} is empty")
     fmt = image_format(data, what)
     try:
-        # only the one reader the first bytes name (lazy: reads the header only)
-        with Image.open(io.BytesIO(data), formats=[fmt]) as im:
-            _check_size(*im.size)
-            im.load()
-            return _upright(_flatten(im), _orientation(im))
+        # only the one reader the first bytes name (lazy: reads the header only); Pillow's
+        # warnings about the file (a damaged EXIF block) would only be noise on stderr
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            with Image.open(io.BytesIO(data), formats=[fmt]) as im:
+                _check_size(*im.size)
+                im.load()
+                return _upright(_flatten(im), _orientation(im))
     except SketchError:
         raise
     except Image.DecompressionBombError:

@@ -138,6 +138,7 @@ def test_a_sideways_phone_photo_reads_upright() -> None:
     assert np.mean(np.abs(got.astype(int) - page)) < 8  # upright again, JPEG noise only
 
 
+@pytest.mark.filterwarnings("error")  # and quietly: no warning on stderr either
 def test_a_damaged_exif_block_is_read_as_stored() -> None:
     a = np.full((16, 16), 255, np.uint8)
     a[4:8, 4:8] = 0
