@@ -42,6 +42,7 @@ __all__ = [
     "ALGORITHMS",
     "DEFAULT_HOLD",
     "MAX_BUDGET",
+    "MAX_SEED",
     "MAX_TIME_LIMIT",
     "START_YAWS",
     "Cancelled",
@@ -78,6 +79,7 @@ EXTENT_WEIGHT = 0.0
 DEFAULT_HOLD = ("scaleV",)
 MAX_BUDGET = 10_000
 MAX_TREE_SEEDS = 16
+MAX_SEED = 2**32 - 1  # nlopt.srand takes an unsigned long: 32 bits are the same everywhere
 MAX_TIME_LIMIT = 3600.0
 EMBEDDINGS = ("shipped", "none")  # RefineSettings.embedding's names (else a checkpoint path)
 
@@ -142,6 +144,28 @@ def _discrete_candidates(name: str, params: TreeParams) -> list[TreeParams]:
             if u.lo <= w <= u.hi:
                 out.append(params.replace(**{u.key: w}))
     return out
+
+
+def _shown(value: Any) -> str:
+    """A value for a message: its repr, cut short (a number may have 400 digits)."""
+    text = repr(value)
+    return text if len(text) <= 60 else f"{text[:40]}... ({len(text)} characters)"
+
+
+def _finite(value: Any) -> bool:
+    """A real number (not a bool) that is a finite float (an int of 309 digits is not:
+    ``math.isfinite`` and ``float()`` raise OverflowError on it)."""
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+        return False
+    try:
+        return math.isfinite(float(value))
+    except OverflowError:
+        return False
+
+
+def _int_in(name: str, value: Any, lo: int, hi: int, unit: str = "") -> None:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or not lo <= value <= hi:
+        raise ValueError(f"{name} must be an integer in {lo}..{hi}{unit}, got {_shown(value)}")
 
 
 @dataclass(frozen=True)
@@ -229,27 +253,21 @@ class RefineSettings:
 
     def validate(self) -> RefineSettings:
         """Check every option (before any work); returns self.  Raises ValueError naming
-        the option and the value."""
-        b = self.budget
-        if isinstance(b, bool) or not isinstance(b, int | np.integer) or not 1 <= b <= MAX_BUDGET:
-            raise ValueError(f"budget must be an integer in 1..{MAX_BUDGET}, got {b!r}")
+        the option and the value.  Every integer has bounds (a seed of 400 digits would
+        overflow nlopt's ``srand`` once the model is loaded and the search starts) and a
+        number of any size is refused plainly (``math.isfinite`` overflows on a huge int)."""
+        _int_in("budget", self.budget, 1, MAX_BUDGET)
         t = self.time_limit
-        if t is not None and not (
-            isinstance(t, int | float) and math.isfinite(t) and 0 < t <= MAX_TIME_LIMIT
-        ):
-            raise ValueError(f"time_limit must be seconds in (0, {MAX_TIME_LIMIT:g}], got {t!r}")
+        if t is not None and not (_finite(t) and 0 < t <= MAX_TIME_LIMIT):
+            raise ValueError(
+                f"time_limit must be seconds in (0, {MAX_TIME_LIMIT:g}], got {_shown(t)}"
+            )
         if str(self.algorithm).lower() not in ALGORITHMS:
             raise ValueError(
-                f"unknown algorithm {self.algorithm!r}; choose one of {', '.join(ALGORITHMS)}"
+                f"unknown algorithm {_shown(self.algorithm)}; choose one of {', '.join(ALGORITHMS)}"
             )
-        if (
-            isinstance(self.size, bool)
-            or not isinstance(self.size, int)
-            or not 32 <= self.size <= 512
-        ):
-            raise ValueError(f"size must be an integer in 32..512 pixels, got {self.size!r}")
-        if not isinstance(self.seed, int) or isinstance(self.seed, bool):
-            raise ValueError(f"seed must be an integer, got {self.seed!r}")
+        _int_in("size", self.size, 32, 512, " pixels")
+        _int_in("seed", self.seed, 0, MAX_SEED)
         unknown = [k for k in self.hold if str(k).split("[")[0] not in SPECS]
         if unknown:
             raise ValueError(f"hold: not parameter names: {', '.join(map(str, unknown))}")
@@ -262,24 +280,21 @@ class RefineSettings:
             "xtol",
         ):
             w = getattr(self, label)
-            if not (isinstance(w, int | float) and math.isfinite(w) and w >= 0):
-                raise ValueError(f"{label} must be a number >= 0, got {w!r}")
-        if not isinstance(self.species_tries, int) or not 1 <= self.species_tries <= 5:
-            raise ValueError(
-                f"species_tries must be an integer in 1..5, got {self.species_tries!r}"
-            )
-        if not (isinstance(self.species_ratio, int | float) and 0 <= self.species_ratio <= 1):
-            raise ValueError(f"species_ratio must be in [0, 1], got {self.species_ratio!r}")
+            if not (_finite(w) and w >= 0):
+                raise ValueError(f"{label} must be a number >= 0, got {_shown(w)}")
+        _int_in("species_tries", self.species_tries, 1, 5)
+        r = self.species_ratio
+        if not (_finite(r) and 0 <= r <= 1):
+            raise ValueError(f"species_ratio must be in [0, 1], got {_shown(r)}")
         if self.metric not in METRICS:
-            raise ValueError(f"metric must be one of {', '.join(METRICS)}, got {self.metric!r}")
+            raise ValueError(
+                f"metric must be one of {', '.join(METRICS)}, got {_shown(self.metric)}"
+            )
         for flag in ("fast_sketch", "keep_height"):
             if not isinstance(getattr(self, flag), bool):
                 raise ValueError(f"{flag} must be True or False, got {getattr(self, flag)!r}")
-        n = self.tree_seeds
-        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_TREE_SEEDS:
-            raise ValueError(f"tree_seeds must be an integer in 1..{MAX_TREE_SEEDS}, got {n!r}")
-        if not isinstance(self.global_evals, int) or self.global_evals < 0:
-            raise ValueError(f"global_evals must be an integer >= 0, got {self.global_evals!r}")
+        _int_in("tree_seeds", self.tree_seeds, 1, MAX_TREE_SEEDS)
+        _int_in("global_evals", self.global_evals, 0, MAX_BUDGET)
         e = self.embedding
         if not isinstance(e, str) or not (e in EMBEDDINGS or Path(e).is_file()):
             raise ValueError(

@@ -8,11 +8,13 @@
 2. The add-on installs from its zip, registers its panel, and the panel draws.
 3. It adds a tree from the bundled drawing through the project's CLI, as a native
    Sapling tree (every level and the leaves: no Limit Import), and from a Grease Pencil
-   drawing as the imported GLB, standing upright.
+   drawing as the imported GLB, standing upright; a broken preset is reported by the
+   operator in plain words.
 """
 
 import sys
 import time
+from pathlib import Path
 
 import numpy as _np
 
@@ -155,6 +157,29 @@ else:
     except RuntimeError as exc:
         assert "Sapling Tree Gen is not installed" in str(exc), exc
     step("asking for a Sapling tree without Sapling: refused up front with a plain message")
+
+# 3c. the prediction leaves a preset that is not a literal (cut short): the operator
+# reports it plainly, no Python error escapes it (issue 30, item 7)
+if SAPLING:
+    broken_cli = Path(GLB).with_name("broken_treesketch")
+    broken_cli.write_text(
+        "#!/bin/sh\n"
+        'while [ $# -gt 0 ]; do case "$1" in --out) out=$2;; --preset) preset=$2;; esac; '
+        "shift; done\n"
+        'printf glTF > "$out"; printf "{\'levels\': 3,\\n" > "$preset"\n'
+    )
+    broken_cli.chmod(0o755)
+    prefs.cli_path = str(broken_cli)
+    clear()
+    try:  # an operator that reports an error raises it when called from Python
+        bpy.ops.treesketch.predict(wait=True)
+        raise AssertionError("a broken preset was not refused")
+    except RuntimeError as exc:
+        assert "not a Sapling preset TreeSketch can read" in str(exc), exc
+        assert "Traceback" not in str(exc), exc
+    assert not bpy.data.objects, "a broken preset added objects"
+    prefs.cli_path = CLI
+    step("a broken preset: the operator reports it plainly")
 
 # 3b. a Grease Pencil drawing -> the GLB
 clear()

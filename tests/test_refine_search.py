@@ -239,3 +239,32 @@ def test_the_start_is_seen_from_every_15_degrees() -> None:
     # the start takes at most a third of the budget: with 20, the axes and two diagonals
     small = refine(img, gt, RefineSettings(budget=20, species_tries=1), species="bonsai")
     assert small.start_yaw in START_YAWS[:6] and small.evaluations <= 20
+
+
+HUGE = 10**400  # 401 digits: math.isfinite and float() overflow on it
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("seed", -1),
+        ("seed", 2**64),
+        ("seed", HUGE),
+        ("budget", HUGE),
+        ("time_limit", HUGE),
+        ("prior_weight", HUGE),
+        ("size", HUGE),
+        ("global_evals", HUGE),
+        ("global_evals", True),
+        ("species_tries", True),
+        ("tree_seeds", -HUGE),
+    ],
+    ids=lambda v: "huge" if isinstance(v, int) and abs(v) > 2**64 else repr(v),
+)
+def test_settings_bound_every_integer(field: str, value: int) -> None:
+    """Issue 30, item 9: a huge or negative seed passed validate() and crashed in
+    nlopt.srand once the search started; huge ints raised OverflowError."""
+    with pytest.raises(ValueError, match=field) as info:
+        RefineSettings(**{field: value}).validate()
+    assert type(info.value) is ValueError and len(str(info.value)) < 120
+    assert RefineSettings(seed=2**32 - 1, global_evals=5).validate().seed == 2**32 - 1

@@ -86,9 +86,10 @@ def grow_command(
     `treesketch grow --params tree.json --out tree.obj --max-faces 20000`.
     """
     from weberpenn import build_mesh, grow, load_params, species
-    from weberpenn.export import export_mesh, save_sapling_preset
+    from weberpenn.export import mesh_files, mesh_paths, preset_text
+    from weberpenn.fileio import OutputError, check_targets, write_together
     from weberpenn.lod import MIN_FACES, lod
-    from weberpenn.params import ParamError, save_params
+    from weberpenn.params import ParamError, params_text
 
     if (species_name is None) == (params_path is None):
         _fail("give exactly one of --species NAME or --params FILE")
@@ -103,6 +104,23 @@ def grow_command(
             _fail(f"--lods {lods!r}: give triangle counts separated by commas, e.g. 50000,10000")
         if not budgets or min(budgets) < MIN_FACES:
             _fail(f"--lods {lods!r}: every triangle count must be at least {MIN_FACES}")
+    # every output before any work: a folder, a clash or a folder that takes no file
+    # fails now, not after the tree is grown and half the files are written
+    lod_outs = [out.with_name(f"{out.stem}_lod{i}{out.suffix}") for i in range(1, len(budgets) + 1)]
+    try:
+        check_targets(
+            {
+                "--out": mesh_paths(out, textures=textures),
+                **{
+                    f"--lods ({b})": mesh_paths(p, textures=textures)
+                    for b, p in zip(budgets, lod_outs, strict=True)
+                },
+                "--save-params": [] if save_params_path is None else [save_params_path],
+                "--preset": [] if preset_path is None else [preset_path],
+            }
+        )
+    except OutputError as exc:
+        _fail(str(exc))
     name: str | None = None
     try:
         if species_name is not None:
@@ -123,14 +141,15 @@ def grow_command(
         if full.is_empty:
             _fail("these parameters grow an empty tree (no branches and no leaves)")
         tree = full if max_faces is None else lod(full, max_faces)
-        export_mesh(tree, out, yaw=yaw, textures=textures)
-        for i, budget in enumerate(budgets, start=1):
-            lod_out = out.with_name(f"{out.stem}_lod{i}{out.suffix}")
-            export_mesh(full, lod_out, yaw=yaw, max_faces=budget, textures=textures)
+        # all the files or none (staged, then renamed together)
+        files = dict(mesh_files(tree, out, yaw=yaw, textures=textures))
+        for budget, lod_out in zip(budgets, lod_outs, strict=True):
+            files.update(mesh_files(full, lod_out, yaw=yaw, max_faces=budget, textures=textures))
         if save_params_path is not None:
-            save_params(params, save_params_path)
+            files[save_params_path] = params_text(params)
         if preset_path is not None:
-            save_sapling_preset(params, preset_path, yaw=yaw)
+            files[preset_path] = preset_text(params, yaw=yaw)
+        write_together(files)
     except (ParamError, ValueError) as exc:
         _fail(str(exc))
     except OSError as exc:

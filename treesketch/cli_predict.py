@@ -99,6 +99,8 @@ def predict_command(
     Example: `treesketch predict examples/sketch_maple.png --out tree.glb --compare cmp.png`.
     """
     from weberpenn import species as wp_species
+    from weberpenn.export import mesh_paths
+    from weberpenn.fileio import OutputError, check_targets
 
     from .estimators import ESTIMATORS, load_estimator
     from .outputs import ExportOptions, write_outputs
@@ -112,19 +114,29 @@ def predict_command(
         "compare": compare_path,
         "summary": summary_path,
     }
-    for opt, p, exts in (
+    named = [
         ("--out", out, (".glb", ".obj")),
         ("--params", params_path, (".json",)),
         ("--preset", preset_path, (".py",)),
         ("--compare", compare_path, (".png",)),
         ("--summary", summary_path, (".json",)),
-    ):
+    ]
+    for opt, p, exts in named:
         if p is None:
             continue
-        if p.is_dir():
-            fail(f"{opt} {p} is a folder; give a file name")
         if p.suffix.lower() not in exts:
             fail(f"{opt} {p}: expected a {' or '.join(exts)} file")
+    # a folder, two outputs on one file, a folder that takes no file: now, not after
+    # minutes of refinement
+    try:
+        check_targets(
+            {
+                "--out": mesh_paths(out, textures=textures),
+                **{opt: [p] for opt, p, _ in named[1:] if p is not None},
+            }
+        )
+    except OutputError as exc:
+        fail(str(exc))
     if estimator not in ESTIMATORS:
         fail(f"--estimator {estimator!r}: choose one of {', '.join(ESTIMATORS)}")
     if checkpoint is not None and estimator != "tsn":
@@ -208,6 +220,7 @@ def _option_message(text: str) -> str:
         ("budget", "--budget"),
         ("height", "--height"),
         ("embedding", "--embedding"),
+        ("seed", "--seed"),
     ):
         if text.startswith(name + " "):
             return opt + text[len(name) :]

@@ -56,7 +56,17 @@ class TREESKETCH_Preferences(bpy.types.AddonPreferences):
         default=os.environ.get("TREESKETCH_CLI", ""),
     )
     service_url: StringProperty(
-        name="Service URL", default=os.environ.get("TREESKETCH_URL", "http://127.0.0.1:8000")
+        name="Service URL",
+        description="http:// or https:// address of a running 'treesketch serve'; the add-on "
+        "fetches nothing from any other address",
+        default=os.environ.get("TREESKETCH_URL", "http://127.0.0.1:8000"),
+    )
+    service_token: StringProperty(
+        name="Service token",
+        description="The service's --token, sent as an Authorization header (never in a URL); "
+        "kept in Blender's preferences: set TREESKETCH_TOKEN instead to keep it out of them",
+        subtype="PASSWORD",
+        default="",
     )
     copy_presets: BoolProperty(
         name="Add presets to Sapling's menu",
@@ -69,6 +79,7 @@ class TREESKETCH_Preferences(bpy.types.AddonPreferences):
         col.prop(self, "backend")
         col.prop(self, "cli_path")
         col.prop(self, "service_url")
+        col.prop(self, "service_token")
         col.prop(self, "copy_presets")
 
 
@@ -154,8 +165,9 @@ def prediction_job(context, image: Path, out: backend.Outputs):
         )
         return lambda on_line=None, cancel=None: backend.run_cli(cmd, on_line, cancel)
     url = str(prefs.service_url)
+    token = str(prefs.service_token) or os.environ.get("TREESKETCH_TOKEN") or None
     return lambda on_line=None, cancel=None: backend.post_predict(
-        url, image, out.glb, refine=refine, budget=budget
+        url, image, out.glb, refine=refine, budget=budget, token=token
     )
 
 

@@ -5,7 +5,10 @@ both), so the project's test suite checks it without Blender.
 - :func:`cli_command` / :func:`run_cli`: ``treesketch predict IMAGE --out X.glb --params
   X.json --preset X.py`` in the project's venv, its output lines handed to a callback.
 - :func:`post_predict`: the service's ``POST /predict`` (multipart ``sketch``), then the
-  GLB it names is downloaded.
+  GLB it names is downloaded.  Only from the configured service: plain http(s), the same
+  origin (scheme, host, port) for the GLB and any redirect, never ``file://`` or another
+  host; the reply and the GLB have size caps; a token goes in an ``Authorization:
+  Bearer`` header, never in a URL.
 - :func:`read_preset`: the Sapling dict and the view yaw from a TreeSketch preset.
 - :func:`strokes_png`: pen strokes (lists of 2-D points) drawn black on white as a PNG,
   framed the way the project's reader expects (tree filling the canvas, base at the
@@ -21,6 +24,7 @@ import re
 import struct
 import subprocess
 import time
+import urllib.error
 import urllib.parse
 import urllib.request
 import uuid
@@ -32,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = [
+    "MAX_GLB_BYTES",
     "Outputs",
     "PredictError",
     "cli_command",
@@ -158,6 +163,86 @@ def multipart_body(
     return b"".join(parts), f"multipart/form-data; boundary={boundary}"
 
 
+MAX_REPLY_BYTES = 1024 * 1024  # the service's JSON answer
+MAX_GLB_BYTES = 512 * 1024 * 1024  # the biggest tree (6 M triangles, textured) is far less
+MAX_PRESET_BYTES = 1_000_000  # as the project's own parameter reader
+_CHUNK = 1024 * 1024
+
+
+def _origin(url: str) -> tuple[str, str, int]:
+    """(scheme, host, port) of an http(s) URL; PredictError for any other URL."""
+    parts = urllib.parse.urlsplit(url)
+    scheme = parts.scheme.lower()
+    if scheme not in ("http", "https") or not parts.hostname:
+        raise PredictError(f"the service URL must be http:// or https:// and a host, got {url!r}")
+    try:
+        port = parts.port or (443 if scheme == "https" else 80)
+    except ValueError:
+        raise PredictError(f"the service URL has a bad port: {url!r}") from None
+    return scheme, parts.hostname.lower(), port
+
+
+def _opener(origin: tuple[str, str, int]) -> urllib.request.OpenerDirector:
+    """An opener that speaks http(s) only (no ``file:``, ``ftp:`` or ``data:`` handler,
+    unlike ``urlopen``'s) and follows a redirect only within ``origin``."""
+
+    class SameOrigin(urllib.request.HTTPRedirectHandler):
+        def redirect_request(self, req, fp, code, msg, headers, newurl):  # noqa: ANN001
+            target = urllib.parse.urljoin(req.full_url, newurl)
+            if _safe_origin(target) != origin:
+                raise PredictError(
+                    f"the service redirected to {target!r}, away from the configured service"
+                )
+            return super().redirect_request(req, fp, code, msg, headers, newurl)
+
+    opener = urllib.request.OpenerDirector()
+    for handler in (
+        urllib.request.ProxyHandler(),
+        urllib.request.HTTPHandler(),
+        urllib.request.HTTPSHandler(),
+        urllib.request.HTTPDefaultErrorHandler(),
+        SameOrigin(),
+        urllib.request.HTTPErrorProcessor(),
+    ):
+        opener.add_handler(handler)
+    return opener
+
+
+def _safe_origin(url: str) -> tuple[str, str, int] | None:
+    try:
+        return _origin(url)
+    except PredictError:
+        return None
+
+
+def _read_capped(resp, limit: int, what: str, sink=None) -> bytes:  # noqa: ANN001
+    """The body of ``resp``, refused past ``limit`` bytes (by its Content-Length at once,
+    else while it streams); written to ``sink`` chunk by chunk when one is given."""
+    declared = resp.headers.get("Content-Length")
+    if declared is not None and declared.strip().isdigit() and int(declared) > limit:
+        raise PredictError(f"{what} is {int(declared):,} bytes, over the limit of {limit:,}")
+    chunks, total = [], 0
+    while chunk := resp.read(_CHUNK):
+        total += len(chunk)
+        if total > limit:
+            raise PredictError(f"{what} is over the limit of {limit:,} bytes")
+        if sink is None:
+            chunks.append(chunk)
+        else:
+            sink.write(chunk)
+    return b"".join(chunks)
+
+
+def _http_error(exc: urllib.error.HTTPError) -> str:
+    """``STATUS detail`` from the service's JSON error body (read capped)."""
+    try:
+        body = json.loads(exc.read(64 * 1024) or b"{}")
+        detail = body.get("detail") if isinstance(body, dict) else None
+    except (OSError, ValueError):
+        detail = None
+    return f"{exc.code} {detail or exc.reason}"
+
+
 def post_predict(
     url: str,
     image: str | os.PathLike[str],
@@ -166,40 +251,77 @@ def post_predict(
     refine: bool = True,
     budget: int | None = None,
     timeout: float = 600.0,
+    token: str | None = None,
+    max_glb_bytes: int = MAX_GLB_BYTES,
 ) -> dict:
     """``POST {url}/predict`` with the drawing; writes the returned GLB to ``glb_path``
-    and returns the service's JSON."""
+    (whole or not at all) and returns the service's JSON.  ``token``: the service's
+    token, sent as ``Authorization: Bearer``."""
+    origin = _origin(url)
+    headers = {}
+    if token:
+        if any(c in token for c in "\r\n") or token != token.strip():
+            raise PredictError("the service token must be one line without spaces around it")
+        headers["Authorization"] = f"Bearer {token}"
     fields = {"refine": "true" if refine else "false"}
     if budget is not None:
         fields["budget"] = str(int(budget))
     body, ctype = multipart_body("sketch", Path(image).name, Path(image).read_bytes(), fields)
     base = url.rstrip("/") + "/"
+    opener = _opener(origin)
     req = urllib.request.Request(
-        urllib.parse.urljoin(base, "predict"), data=body, headers={"Content-Type": ctype}
+        urllib.parse.urljoin(base, "predict"),
+        data=body,
+        headers={"Content-Type": ctype, **headers},
     )
+    glb_path = Path(glb_path)
+    part = glb_path.with_name(glb_path.name + ".part")
     try:
-        with urllib.request.urlopen(req, timeout=timeout) as resp:
-            reply = json.loads(resp.read())
-        glb_url = urllib.parse.urljoin(base, str(reply["glb"]))
-        with urllib.request.urlopen(glb_url, timeout=timeout) as resp:
-            Path(glb_path).write_bytes(resp.read())
-    except (OSError, ValueError, KeyError) as exc:
+        with opener.open(req, timeout=timeout) as resp:
+            reply = json.loads(_read_capped(resp, MAX_REPLY_BYTES, "the service's answer"))
+        if not isinstance(reply, dict) or not isinstance(reply.get("glb"), str):
+            raise PredictError(f"TreeSketch service at {url}: its answer names no GLB")
+        glb_url = urllib.parse.urljoin(base, reply["glb"])
+        if _safe_origin(glb_url) != origin:
+            raise PredictError(
+                f"TreeSketch service at {url}: the GLB's address {glb_url!r} is not on the "
+                "configured service; not followed"
+            )
+        glb_req = urllib.request.Request(glb_url, headers=headers)
+        with opener.open(glb_req, timeout=timeout) as resp, open(part, "wb") as sink:
+            _read_capped(resp, max_glb_bytes, "the GLB", sink)
+        os.replace(part, glb_path)
+    except urllib.error.HTTPError as exc:
+        raise PredictError(f"TreeSketch service at {url}: {_http_error(exc)}") from None
+    except (OSError, ValueError) as exc:
         raise PredictError(f"TreeSketch service at {url}: {exc}") from None
+    finally:
+        part.unlink(missing_ok=True)
     return reply
 
 
 def read_preset(path: str | os.PathLike[str]) -> tuple[dict, float]:
     """(Sapling's keyword arguments, view yaw in degrees) from a TreeSketch preset: the
-    first line not starting with '#', read as Sapling reads it."""
+    first line not starting with '#', read as Sapling reads it (a literal, never run).
+    Any fault (too large, not text, not a literal, not a dict) is a PredictError, which
+    the operator reports; nothing else escapes."""
     yaw = 0.0
     settings = None
-    with open(path, encoding="utf-8") as fh:
-        for line in fh:
-            m = _YAW.match(line)
-            if m:
-                yaw = float(m.group(1))
-            if settings is None and line.strip() and not line.startswith("#"):
-                settings = ast.literal_eval(line.strip())
+    try:
+        size = os.path.getsize(path)
+        if size > MAX_PRESET_BYTES:
+            raise PredictError(f"{path}: {size:,} bytes is too large for a preset")
+        with open(path, encoding="utf-8") as fh:
+            for line in fh:
+                m = _YAW.match(line)
+                if m:
+                    yaw = float(m.group(1))
+                if settings is None and line.strip() and not line.startswith("#"):
+                    settings = ast.literal_eval(line.strip())
+    except (OSError, ValueError, SyntaxError, MemoryError, RecursionError) as exc:
+        # SyntaxError: not a literal; ValueError: not only literals, a bad yaw, not UTF-8
+        reason = exc.msg if isinstance(exc, SyntaxError) else (str(exc) or type(exc).__name__)
+        raise PredictError(f"{path}: not a Sapling preset TreeSketch can read ({reason})") from None
     if not isinstance(settings, dict):
         raise PredictError(f"{path}: no Sapling dictionary in the preset")
     return settings, yaw

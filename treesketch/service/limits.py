@@ -149,8 +149,15 @@ def check_image(data: bytes, limits: Limits) -> tuple[int, int]:
 
     if not data:
         raise LimitError(400, "the uploaded sketch is empty")
+    try:  # the reader's own format rule, by content: an EPS never reaches Pillow
+        fmt = reader.image_format(data, "the uploaded sketch")
+    except reader.FormatError as exc:
+        raise LimitError(415, str(exc)) from None
+    except reader.SketchError as exc:
+        raise LimitError(400, str(exc)) from None
     try:
-        with Image.open(io.BytesIO(data)) as im:  # lazy: reads the header, decodes nothing
+        # lazy: reads the header, decodes nothing
+        with Image.open(io.BytesIO(data), formats=[fmt]) as im:
             w, h = im.size
     except Image.DecompressionBombError as exc:
         raise LimitError(413, f"the image is a decompression bomb: {exc}") from exc
@@ -177,12 +184,14 @@ def _number(fields: Mapping[str, str], name: str, kind: type) -> float | int | N
     text = fields.get(name, "").strip()
     if text == "" or text.lower() in ("none", "null"):
         return None
+    if kind is int and len(text.lstrip("+-")) > 18:  # past int64: no option is that large
+        raise LimitError(422, f"{name} is out of range ({len(text)} digits)")
     try:
         value = kind(text)
     except ValueError:
-        raise LimitError(422, f"{name} must be a number, got {text!r}") from None
-    if not math.isfinite(value):
-        raise LimitError(422, f"{name} must be finite, got {text!r}")
+        raise LimitError(422, f"{name} must be a number, got {text[:40]!r}") from None
+    if kind is float and not math.isfinite(value):  # (an int is finite; isfinite overflows)
+        raise LimitError(422, f"{name} must be finite, got {text[:40]!r}")
     return value
 
 
