@@ -418,7 +418,8 @@ class Pipeline:
         ones), its probability and a small sketch to pick it by."""
         from render.sketch import SketchRenderer
 
-        ranked = sorted(post, key=lambda s: -post[s])
+        # by probability, then (an estimator that scores few species) the species' order
+        ranked = sorted(wp_species.SPECIES, key=lambda s: -post.get(s, 0.0))
         names = [name, *[s for s in ranked if s != name]][: max(CANDIDATES, len(refined))]
         scores = est.species_scores or {est.species: 1.0}
         out = []

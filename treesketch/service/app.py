@@ -249,6 +249,19 @@ def create_app(config: ServiceConfig) -> FastAPI:
             raise HTTPException(404, "the page is not installed")
         return FileResponse(page, media_type="text/html")
 
+    @app.get("/species")
+    async def species_list() -> dict[str, Any]:
+        """The species a job may be asked for (the page's picker): name and what people
+        call it, the paper's five first."""
+        from weberpenn import species
+
+        return {
+            "species": [
+                {"name": s, "display": species.display_name(s), "paper": s in species.PAPER_SPECIES}
+                for s in species.SPECIES
+            ]
+        }
+
     @app.get("/health")
     async def health() -> dict[str, Any]:
         workers = pool.status()

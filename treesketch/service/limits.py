@@ -215,7 +215,7 @@ def parse_options(
     default_time_limit: float = 50.0,
 ) -> JobOptions:
     """Validated job options from form fields; LimitError(422) naming the first bad one."""
-    known = {"refine", "budget", "time_limit", "height", "estimator", "max_faces"}
+    known = {"refine", "budget", "time_limit", "height", "estimator", "max_faces", "species"}
     unknown = sorted(set(fields) - known)
     if unknown:
         raise LimitError(
@@ -240,6 +240,14 @@ def parse_options(
             422, f"estimator must be one of {', '.join(sorted(estimators))}, got {estimator!r}"
         )
     max_faces = _number(fields, "max_faces", int)
+    species_name = fields.get("species", "").strip()[:64] or None
+    if species_name is not None:
+        from weberpenn import ParamError, species
+
+        try:
+            species_name = species.canonical(species_name)
+        except ParamError as exc:
+            raise LimitError(422, str(exc)) from exc
     options = JobOptions(
         refine=_flag(fields, "refine", True),
         budget=budget,
@@ -247,6 +255,7 @@ def parse_options(
         height=None if height is None else float(height),
         estimator=estimator,
         max_faces=None if max_faces is None else int(max_faces),
+        species=species_name,
     )
     try:
         options.settings()  # the pipeline's own check, before the job is queued

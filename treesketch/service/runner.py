@@ -30,6 +30,9 @@ ARTEFACT_KINDS: dict[str, tuple[str, str]] = {
     "compare.png": ("compare", "image/png"),
     "sketch_before.png": ("sketch_before", "image/png"),
     "sketch_after.png": ("sketch_after", "image/png"),
+    # the result's candidate species as sketches to pick from, best first (the summary's
+    # "candidates" holds their species, probabilities and parameters)
+    **{f"candidate{i}.png": (f"candidate{i}", "image/png") for i in (1, 2, 3)},
 }
 ARTEFACTS: dict[str, str] = {name: media for name, (_, media) in ARTEFACT_KINDS.items()}
 
@@ -44,6 +47,7 @@ class JobOptions:
     height: float | None = None
     estimator: str = "tsn"  # a spec the server allows
     max_faces: int | None = None  # the exported tree's triangle budget (weberpenn.lod)
+    species: str | None = None  # the species the user means (None: the drawing decides)
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -110,7 +114,23 @@ class Runner:
         from treesketch import Pipeline, result_files
 
         pipeline = Pipeline(self.estimator(options.estimator), options.settings())
-        result = pipeline.run(sketch, height=options.height, progress=progress, cancel=cancel)
-        kinds = {kind: name for name, (kind, _) in ARTEFACT_KINDS.items()}
+        result = pipeline.run(
+            sketch,
+            height=options.height,
+            progress=progress,
+            cancel=cancel,
+            species=options.species,
+        )
+        from treesketch.outputs import png_bytes
+
+        kinds = {
+            kind: name
+            for name, (kind, _) in ARTEFACT_KINDS.items()
+            if not kind.startswith("candidate")
+        }
         files = result_files(result, kinds, options.export())
-        return {kinds[k]: data for k, data in files.items() if k in kinds}, result.summary()
+        out = {kinds[k]: data for k, data in files.items() if k in kinds}
+        for i, c in enumerate(result.candidates[:3], 1):
+            if c.sketch is not None:
+                out[f"candidate{i}.png"] = png_bytes(c.sketch)
+        return out, result.summary()
