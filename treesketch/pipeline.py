@@ -160,12 +160,6 @@ def tree_height(params: TreeParams) -> float:
     return mesh_height(build_mesh(grow(params)))
 
 
-def estimate_height(est: Estimate, name: str, mesh0: Any) -> float:
-    """The height of the estimator's tree of species ``name`` (``mesh0``: the mesh of its
-    tree of its own species, already built)."""
-    return mesh_height(mesh0) if name == est.species else tree_height(est.params_for(name))
-
-
 def rescale_height(params: TreeParams, height: float, current: float | None = None) -> TreeParams:
     """Scale ``scale`` and ``scaleV`` so the grown tree is ``height`` tall (metres);
     ``current``: the tree's height when already known (saves growing it once)."""
@@ -338,10 +332,6 @@ class Pipeline:
             )
         timings["render"] = time.perf_counter() - t
 
-        if height is None and cfg.keep_height and params1 is not est.params:
-            # asked for: the estimator's height for this species instead of the one the
-            # searched proportions give its size values
-            height = estimate_height(est, name, mesh0)
         current = mesh_height(mesh1)
         if height is not None and abs(current - height) > 1e-6 * height:
             t = time.perf_counter()
