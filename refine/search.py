@@ -63,8 +63,8 @@ XTOL = 1e-3
 # held at the first estimate unless asked for: the tree's absolute size variation.  Every
 # sketch is framed to its own tree, so a size change shows only as slightly thinner lines
 # and smaller leaves; per unit of sketch distance it moves the mesh more than any other
-# value in every species where it is free (benchmarks/key_sensitivity.py, RESULTS.md), so
-# the search would trade the estimator's size for pixel noise.
+# value in every species where it is free (benchmarks/probes/key_sensitivity.py,
+# RESULTS.md), so the search would trade the estimator's size for pixel noise.
 DEFAULT_HOLD = ("scaleV",)
 MAX_BUDGET = 10_000
 MAX_TIME_LIMIT = 3600.0

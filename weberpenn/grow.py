@@ -12,7 +12,7 @@ What stays random in Sapling and has no realised key (whether a segment splits,
 tree's structure (:mod:`weberpenn._grow_random`): the trunk's key comes from ``seed`` and
 ``params['seed']``, every other stem's from its parent's and its place on the parent,
 so a small change of one value changes the stems it touches, not every later draw of
-the level (``benchmarks/step_curve.py`` measures it).  Each split draw is shifted by
+the level (``benchmarks/probes/step_curve.py`` measures it).  Each split draw is shifted by
 ``rSplits2`` (modulo 1), so it stays uniform (Sapling's statistics) while ``rSplits2`` still changes the tree.  (The
 third-party Render Tree code compares *every* split draw with ``rSplits2``, so a level
 splits at every segment or never; that loses Sapling's stem counts, which the project
