@@ -38,6 +38,7 @@ from .shape import ShapeTarget
 
 __all__ = [
     "METRICS",
+    "PreparedDrawing",
     "SearchSpace",
     "SketchObjective",
     "SketchTarget",
@@ -201,6 +202,51 @@ def metric_distance(
     return make_target(framed(a, size), size, metric, embedder).distance(
         make_target(framed(b, size), size, metric, embedder)
     )
+
+
+@dataclass(frozen=True)
+class PreparedDrawing:
+    """The input drawing as every comparison of one run sees it, built once.
+
+    ``target`` is what the search minimises against (:func:`make_target` of the framed
+    drawing, with the learned embedding's term when ``embedder`` is given); ``shape`` the
+    drawing's shape features for the line distance (``refine.shape.line_distance``): the
+    same object when the metric is ``"shape"`` (the embedding plays no part there).  The
+    pipeline builds one per run and hands it to every species' refinement and to the
+    confidence check, instead of each re-framing and re-preparing the same drawing.
+    """
+
+    size: int
+    metric: str
+    target: Any  # ShapeTarget or SketchTarget
+    shape: ShapeTarget
+    embedder: Any = None
+
+    @classmethod
+    def create(
+        cls, img: Any, size: int = 128, metric: str = "shape", embedder: Any = None
+    ) -> PreparedDrawing:
+        if embedder is not None and metric != "shape":
+            raise ValueError("a learned embedder works with the shape metric only")
+        f = framed(img, size)
+        target = make_target(f, size, metric, embedder)
+        shape = target if metric == "shape" else ShapeTarget.from_image(f, size)
+        return cls(size, metric, target, shape, embedder)
+
+    def check(self, size: int, metric: str) -> PreparedDrawing:
+        """Self, when built for comparisons at ``size`` with ``metric`` (ValueError else)."""
+        if (self.size, self.metric) != (size, metric):
+            raise ValueError(
+                f"the drawing was prepared for size {self.size} and metric {self.metric!r}, "
+                f"not {size} and {metric!r}"
+            )
+        return self
+
+    def distance(self, sketch: Any) -> float:
+        """The search's distance from this drawing to another sketch (framed alike)."""
+        return self.target.distance(
+            make_target(framed(sketch, self.size), self.size, self.metric, self.embedder)
+        )
 
 
 # --------------------------------------------------------------------------- search space

@@ -29,7 +29,7 @@ import numpy as np
 from weberpenn import TreeParams, species
 from weberpenn.params import SPECS
 
-from .objective import METRICS, SearchSpace, SketchObjective, framed, make_target
+from .objective import METRICS, PreparedDrawing, SearchSpace, SketchObjective
 
 __all__ = [
     "ALGORITHMS",
@@ -249,6 +249,9 @@ def refine(
     """Refine ``initial_params`` so its sketch matches ``sketch`` (see the module text and
     :class:`RefineSettings`).
 
+    ``sketch``: an image, or a ``refine.objective.PreparedDrawing`` built for these
+    settings' size and metric (a caller that refines one drawing several times, e.g. for
+    several species, prepares it once; its embedder is then the one used).
     ``embedder``: the loaded ``refine.embed.ShapeEmbedder`` to use (a caller that refines
     many sketches loads it once, ``settings.load_embedder()``); by default the settings'
     own is loaded.
@@ -270,11 +273,15 @@ def refine(
     from weberpenn import species as _species
 
     name = _species.canonical(species) if species else guess_species(initial_params)
-    if embedder is None:
-        embedder = cfg.load_embedder()
-    elif cfg.metric != "shape":
-        raise ValueError("a learned embedder works with the shape metric only")
-    target = make_target(framed(sketch, cfg.size), cfg.size, cfg.metric, embedder)
+    if isinstance(sketch, PreparedDrawing):  # prepared once by the caller (the pipeline)
+        drawing = sketch.check(cfg.size, cfg.metric)
+        if embedder is not None and embedder is not drawing.embedder:
+            raise ValueError("the drawing was prepared with another embedder")
+    else:
+        if embedder is None:
+            embedder = cfg.load_embedder()
+        drawing = PreparedDrawing.create(sketch, cfg.size, cfg.metric, embedder)
+    embedder, target = drawing.embedder, drawing.target
     deadline = None if cfg.time_limit is None else t0 + float(cfg.time_limit)
     if yaw is None and not cfg.search_yaw:
         yaw = 0.0

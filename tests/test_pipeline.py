@@ -244,3 +244,40 @@ def test_species_by_synthesis_keeps_the_better_match() -> None:
     assert evals == sorted(evals)  # progress never runs backwards across candidates
     one = Pipeline(Unsure(), RefineSettings(budget=12, species_tries=1)).run(_gt_sketch("palm", 3))
     assert one.species == "maple" and set(one.extras["tried"]) == {"maple"}
+
+
+def test_the_drawing_is_framed_and_prepared_once_per_run(monkeypatch) -> None:
+    # two species refined, the first estimate's distance and the line distance: every
+    # comparison with the drawing uses the one PreparedDrawing the run builds
+    from refine import objective, shape
+
+    made, prepared = [], []
+    create, from_image = objective.PreparedDrawing.create.__func__, shape.ShapeTarget.from_image
+
+    def counting_create(cls, img, *args, **kwargs):
+        made.append(np.asarray(img).copy())
+        return create(cls, img, *args, **kwargs)
+
+    def counting_from_image(img, *args, **kwargs):
+        prepared.append(np.asarray(img).copy())
+        return from_image(img, *args, **kwargs)
+
+    monkeypatch.setattr(objective.PreparedDrawing, "create", classmethod(counting_create))
+    monkeypatch.setattr(shape.ShapeTarget, "from_image", counting_from_image)
+    r = Pipeline(Unsure(), RefineSettings(budget=12, embedding="none")).run(_gt_sketch("palm", 3))
+    assert set(r.extras["tried"]) == {"maple", "palm"}
+    assert len(made) == 1 and np.array_equal(made[0], r.input_sketch)
+    framed_input = objective.framed(r.input_sketch, 128)
+    assert sum(np.array_equal(p, framed_input) for p in prepared) == 1
+
+
+def test_a_drawing_prepared_for_other_settings_is_refused() -> None:
+    from refine.objective import PreparedDrawing
+    from refine.search import refine
+
+    img = _gt_sketch("palm", 3)
+    drawing = PreparedDrawing.create(img, 64, "ink")
+    with pytest.raises(ValueError, match="prepared for size 64"):
+        refine(drawing, species.sample("palm", 9), RefineSettings(budget=2), species="palm")
+    with pytest.raises(ValueError, match="shape metric only"):
+        PreparedDrawing.create(img, 128, "ink", embedder=object())

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from refine.objective import framed, metric_distance
+from refine.objective import PreparedDrawing, framed
 from refine.search import Cancelled, RefineResult, RefineSettings
 from refine.search import refine as refine_search
 from refine.shape import ShapeTarget, line_distance
@@ -183,11 +183,17 @@ def rescale_height(params: TreeParams, height: float, current: float | None = No
 def tree_line_distance(drawing: Any, tree_sketch: Any, size: int) -> float:
     """``refine.shape.line_distance`` of a drawing and a tree's sketch, both framed as the
     refinement frames them (a tree too small to draw anything is as far as can be)."""
+    return _line_distance(ShapeTarget.from_image(framed(drawing, size), size), tree_sketch)
+
+
+def _line_distance(drawing: ShapeTarget, tree_sketch: Any) -> float:
+    """:func:`tree_line_distance` from the drawing's shape features, already prepared."""
+    size = drawing.size
     try:
         tree = ShapeTarget.from_image(framed(tree_sketch, size), size)
     except SketchError:
         return 1.0
-    return line_distance(ShapeTarget.from_image(framed(drawing, size), size), tree)
+    return line_distance(drawing, tree)
 
 
 def _confidence(loss: float, ink: float, limit: float) -> tuple[float, str | None]:
@@ -267,6 +273,9 @@ class Pipeline:
         t = time.perf_counter()
         tell("read")
         img = prepare_input(load_sketch(sketch))
+        # the drawing as every comparison of this run sees it (each species' search, the
+        # first estimate's distance, the line distance): framed and prepared once
+        drawing = PreparedDrawing.create(img, cfg.size, cfg.metric, self.embedder)
         timings["prepare"] = time.perf_counter() - t
 
         t = time.perf_counter()
@@ -286,7 +295,7 @@ class Pipeline:
                 run_cfg = _share(cfg, i, len(names))
                 tell("refine", done)
                 rr = refine_search(
-                    img,
+                    drawing,
                     est.params_for(candidate),
                     run_cfg,
                     species=candidate,
@@ -327,9 +336,7 @@ class Pipeline:
         if result_refine is not None:
             loss_before, loss_after = loss0, result_refine.loss_after
         else:
-            loss_before = loss_after = metric_distance(
-                img, before, cfg.size, cfg.metric, self.embedder
-            )
+            loss_before = loss_after = drawing.distance(before)
         timings["render"] = time.perf_counter() - t
 
         current = mesh_height(mesh1)
@@ -339,7 +346,7 @@ class Pipeline:
             mesh1 = build_mesh(grow(params1), species=name)
             timings["height"] = time.perf_counter() - t
 
-        ink_after = tree_line_distance(img, after, cfg.size)
+        ink_after = _line_distance(drawing.shape, after)
         limit = LOW_CONFIDENCE_LOSS if self.embedder is not None else LOW_CONFIDENCE_LOSS_SHAPE
         confidence, warning = _confidence(loss_after, ink_after, limit)
         timings["total"] = sum(timings.values())
