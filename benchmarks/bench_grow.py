@@ -34,12 +34,14 @@ import tempfile  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+# benchmarks/ is on the path when this runs as a script
+from results_md import RESULTS, write_section  # noqa: E402
+
 from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
 from weberpenn.export import save_sapling_preset  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 STATS = ROOT.parent / "shared" / "reference" / "sapling_reference_stats.json"
-RESULTS = ROOT / "benchmarks" / "RESULTS.md"
 SECTION = "## Generator: grow + mesh"
 
 
@@ -228,19 +230,6 @@ def markdown(rows: list[dict], trees: int) -> str:
         "",
     ]
     return "\n".join(lines)
-
-
-def write_section(text: str) -> None:
-    old = RESULTS.read_text() if RESULTS.is_file() else "# Benchmark results\n\n"
-    if SECTION in old:
-        start = old.index(SECTION)
-        nxt = old.find("\n## ", start + len(SECTION))
-        new = old[:start] + text + ("" if nxt < 0 else old[nxt + 1 :])
-    else:
-        new = old.rstrip("\n") + "\n\n" + text
-    tmp = RESULTS.with_suffix(".md.tmp")
-    tmp.write_text(new)
-    os.replace(tmp, RESULTS)
 
 
 def main() -> None:

@@ -30,15 +30,16 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+# benchmarks/ is on the path when this runs as a script
+from results_md import RESULTS, write_section  # noqa: E402
+
 from eval.hausdorff import bbox_diagonal, hausdorff  # noqa: E402
 from render.sketch import SketchRenderer  # noqa: E402
 from weberpenn import build_mesh, grow, species  # noqa: E402
 from weberpenn.export import glb_bytes  # noqa: E402
-from weberpenn.fileio import atomic_write  # noqa: E402
 from weberpenn.lod import lod  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-RESULTS = ROOT / "benchmarks" / "RESULTS.md"
 SECTION = "## Level of detail"
 SKETCH_SIZE = 256
 
@@ -128,17 +129,6 @@ def markdown(rows: list[dict], args: argparse.Namespace, budgets: list[int]) -> 
         "keeps rendering the full mesh; `--max-faces` / `lod()` are for what is exported.",
     ]
     return "\n".join(out) + "\n"
-
-
-def write_section(text: str) -> None:
-    old = RESULTS.read_text() if RESULTS.is_file() else "# Benchmark results\n\n"
-    if SECTION in old:
-        start = old.index(SECTION)
-        nxt = old.find("\n## ", start + len(SECTION))
-        new = old[:start] + text + ("" if nxt < 0 else old[nxt + 1 :])
-    else:
-        new = old.rstrip("\n") + "\n\n" + text
-    atomic_write(RESULTS, new)
 
 
 def main() -> None:
