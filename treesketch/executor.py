@@ -33,7 +33,7 @@ import time
 import traceback
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any, Generic, Protocol, TypeVar
+from typing import Any, Generic, Protocol, Self, TypeVar
 
 __all__ = [
     "EXECUTORS",
@@ -116,8 +116,21 @@ def _call(fn: Callable[[Any], Any], index: int, piece: Any, node: str) -> Outcom
     return Outcome(index, value, None, node, os.getpid(), time.perf_counter() - t0)
 
 
+class _Closing:
+    """``with executor:`` closes it at the end; :meth:`close` frees nothing by default."""
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
 # --------------------------------------------------------------------------- local
-class InlineExecutor:
+class InlineExecutor(_Closing):
     """Every piece in this process, one after the other (the default; no dependency)."""
 
     name = "local"
@@ -133,15 +146,6 @@ class InlineExecutor:
         host = socket.gethostname()
         for i, piece in enumerate(pieces):
             yield _call(fn, i, piece, host)
-
-    def close(self) -> None:
-        pass
-
-    def __enter__(self) -> InlineExecutor:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 
 
 # The one worker of a pool process, built by the pool's initializer.  It is per process
@@ -179,7 +183,7 @@ def _pool_piece(index: int, piece: Any) -> Outcome[Any]:
     return _call(_POOL_WORKER["fn"], index, piece, socket.gethostname())
 
 
-class LocalExecutor:
+class LocalExecutor(_Closing):
     """``workers`` processes on this machine (spawned: mitsuba and torch start cleanly);
     ``workers=1`` runs in this process."""
 
@@ -225,15 +229,6 @@ class LocalExecutor:
                         yield Outcome(i, None, f"worker lost: {type(exc).__name__}: {exc}")
                     submit(1)
 
-    def close(self) -> None:
-        pass
-
-    def __enter__(self) -> LocalExecutor:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
 
 # --------------------------------------------------------------------------- Ray
 # Per Ray worker process: the worker built from the factory last seen, by its object id.
@@ -259,7 +254,7 @@ def _ray_piece(factory_box: list[Any], index: int, piece: Any) -> Outcome[Any]:
     return _call(_RAY_WORKER[key], index, piece, node)
 
 
-class RayExecutor:
+class RayExecutor(_Closing):
     """Pieces as Ray tasks.  ``address``: an existing cluster (``"auto"``, ``"HOST:PORT"``,
     ``"ray://HOST:PORT"``); None starts a local Ray for this run with ``num_cpus`` CPUs
     (default: all) and stops it at :meth:`close`.
@@ -350,12 +345,6 @@ class RayExecutor:
         if self._started and self._ray.is_initialized():
             self._ray.shutdown()
         self._started = False
-
-    def __enter__(self) -> RayExecutor:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 
 
 def start_ray(address: str | None = None, num_cpus: int | None = None) -> bool:
