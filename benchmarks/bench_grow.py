@@ -35,7 +35,7 @@ import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 # benchmarks/ is on the path when this runs as a script
-from results_md import RESULTS, write_section  # noqa: E402
+from results_md import write_section  # noqa: E402
 
 from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
 from weberpenn.export import save_sapling_preset  # noqa: E402
@@ -258,7 +258,6 @@ def main() -> None:
         print(text)
     if args.write:
         write_section(text)
-        print(f"updated {RESULTS}")
 
 
 if __name__ == "__main__":

@@ -31,7 +31,7 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 # benchmarks/ is on the path when this runs as a script
-from results_md import RESULTS, write_section  # noqa: E402
+from results_md import write_section  # noqa: E402
 
 from eval.hausdorff import bbox_diagonal, hausdorff  # noqa: E402
 from render.sketch import SketchRenderer  # noqa: E402
@@ -153,7 +153,6 @@ def main() -> None:
     print(text)
     if args.write:
         write_section(text)
-        print(f"updated {RESULTS}")
 
 
 if __name__ == "__main__":

@@ -15,7 +15,7 @@ def write_section(text: str, results: Path = RESULTS) -> None:
     that title, at whatever level it stands in ``results`` (a ``##`` subject of its own or a
     ``###`` section under one; ``text``'s headings move to that level), up to the next
     heading of the same or a higher level; with no such section, append ``text`` at the
-    end.  Written atomically."""
+    end.  Written atomically; says so on stdout."""
     head, _, body = text.partition("\n")
     m = re.match(r"(#+) (.+)", head)
     if m is None:
@@ -25,6 +25,7 @@ def write_section(text: str, results: Path = RESULTS) -> None:
     found = re.search(rf"^(#+) {re.escape(title)}[ \t]*$", old, re.M)
     if found is None:
         atomic_write(results, old.rstrip("\n") + "\n\n" + text.rstrip("\n") + "\n")
+        print(f"added {title!r} to {results}")
         return
     level = len(found.group(1))
     shift = level - len(m.group(1))
@@ -36,3 +37,4 @@ def write_section(text: str, results: Path = RESULTS) -> None:
     end = re.compile(rf"^#{{1,{level}}} ", re.M).search(old, found.end())
     rest = "" if end is None else "\n" + old[end.start() :]
     atomic_write(results, old[: found.start()] + section.rstrip("\n") + "\n" + rest)
+    print(f"updated {title!r} in {results}")
