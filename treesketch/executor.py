@@ -129,6 +129,24 @@ class _Closing:
         self.close()
 
 
+class _Window:
+    """Pieces started a few at a time (a bounded queue keeps memory flat on long runs):
+    ``submit(k)`` starts the next ``k`` with ``start(index, piece)``; ``pending`` maps what
+    ``start`` returned (a future, a Ray reference) to the piece's index."""
+
+    def __init__(self, pieces: Sequence[Any], start: Callable[[int, Any], Any]) -> None:
+        self._todo = iter(enumerate(pieces))
+        self._start = start
+        self.pending: dict[Any, int] = {}
+
+    def submit(self, k: int) -> None:
+        for i, piece in self._todo:
+            self.pending[self._start(i, piece)] = i
+            k -= 1
+            if k <= 0:
+                return
+
+
 # --------------------------------------------------------------------------- local
 class InlineExecutor(_Closing):
     """Every piece in this process, one after the other (the default; no dependency)."""
@@ -208,17 +226,9 @@ class LocalExecutor(_Closing):
             initializer=_pool_init,
             initargs=(os.getpid(), factory),
         ) as pool:
-            todo = iter(enumerate(pieces))
-            pending: dict[Future[Outcome[Any]], int] = {}
-
-            def submit(k: int) -> None:
-                for i, piece in todo:
-                    pending[pool.submit(_pool_piece, i, piece)] = i
-                    k -= 1
-                    if k <= 0:
-                        return
-
-            submit(4 * n)  # a bounded queue keeps memory flat on long runs
+            window = _Window(pieces, lambda i, piece: pool.submit(_pool_piece, i, piece))
+            window.submit(4 * n)
+            pending: dict[Future[Outcome[Any]], int] = window.pending
             while pending:
                 done, _ = wait(pending, return_when=FIRST_COMPLETED)
                 for fut in done:
@@ -227,7 +237,7 @@ class LocalExecutor(_Closing):
                         yield fut.result()
                     except Exception as exc:  # the worker process died (killed, crashed)
                         yield Outcome(i, None, f"worker lost: {type(exc).__name__}: {exc}")
-                    submit(1)
+                    window.submit(1)
 
 
 # --------------------------------------------------------------------------- Ray
@@ -315,17 +325,9 @@ class RayExecutor(_Closing):
             retry_exceptions=False,  # the pieces catch their own errors; never retried
         )
         limit = self.in_flight or max(2, int(2 * self.workers / self.cpus_per_piece))
-        todo = iter(enumerate(pieces))
-        pending: dict[Any, int] = {}
-
-        def submit(k: int) -> None:
-            for i, piece in todo:
-                pending[task.remote(box, i, piece)] = i
-                k -= 1
-                if k <= 0:
-                    return
-
-        submit(limit)
+        window = _Window(pieces, lambda i, piece: task.remote(box, i, piece))
+        window.submit(limit)
+        pending = window.pending
         try:
             while pending:
                 done, _ = ray.wait(list(pending), num_returns=1)
@@ -336,7 +338,7 @@ class RayExecutor(_Closing):
                     except ray.exceptions.RayError as exc:  # lost max_retries + 1 times
                         msg = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
                         yield Outcome(i, None, f"lost: {type(exc).__name__}: {msg}")
-                    submit(1)
+                    window.submit(1)
         finally:
             for ref in pending:  # an abandoned run (Ctrl-C, an error) stops its tasks
                 ray.cancel(ref, force=True)
