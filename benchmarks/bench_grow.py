@@ -27,7 +27,6 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import argparse  # noqa: E402
 import datetime as dt  # noqa: E402
 import json  # noqa: E402
-import platform  # noqa: E402
 import statistics  # noqa: E402
 import subprocess  # noqa: E402
 import tempfile  # noqa: E402
@@ -35,7 +34,7 @@ import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 # benchmarks/ is on the path when this runs as a script
-from results_md import write_section  # noqa: E402
+from results_md import cpu_name, write_section  # noqa: E402
 
 from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
 from weberpenn.export import save_sapling_preset  # noqa: E402
@@ -57,16 +56,6 @@ def _sapling(name: str) -> dict[str, float] | None:
         "branch_tris": statistics.mean(2 * r["branch_faces"] for r in rows),
         "leaf_tris": statistics.mean(2 * r["leaf_faces"] for r in rows),
     }
-
-
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 def run(trees: int) -> list[dict]:
@@ -187,7 +176,7 @@ def markdown(rows: list[dict], trees: int) -> str:
         "",
         f"`.venv/bin/python benchmarks/bench_grow.py --trees {trees} --write`",
         "",
-        f"machine: {_cpu()}, nproc {os.cpu_count()}, one thread, load average {load:.2f} "
+        f"machine: {cpu_name()}, nproc {os.cpu_count()}, one thread, load average {load:.2f} "
         f"(shared with other jobs); {now}. Trees: `species.sample(name, seed)`, seeds "
         f"0..{trees - 1}. Sapling: Blender 3.4 Sapling on the species' three reference "
         "dictionaries (sapling_reference_stats.json, 2-core machine); its quads counted as 2 "

@@ -1,7 +1,9 @@
-"""Replace one section of ``benchmarks/RESULTS.md`` in place (the benchmarks' ``--write``)."""
+"""Replace one section of ``benchmarks/RESULTS.md`` in place (the benchmarks' ``--write``),
+and name the machine a section was measured on."""
 
 from __future__ import annotations
 
+import platform
 import re
 from pathlib import Path
 
@@ -38,3 +40,14 @@ def write_section(text: str, results: Path = RESULTS) -> None:
     rest = "" if end is None else "\n" + old[end.start() :]
     atomic_write(results, old[: found.start()] + section.rstrip("\n") + "\n" + rest)
     print(f"updated {title!r} in {results}")
+
+
+def cpu_name() -> str:
+    """The CPU's model name (``/proc/cpuinfo``), else what ``platform`` knows."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
