@@ -355,16 +355,12 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
         (root / "failed" / f"{job.tree_id}.json").unlink(missing_ok=True)
         return marker
     except Exception as exc:  # one bad tree never stops the run
-        record = {
-            "tree_id": job.tree_id,
-            "status": "failed",
-            "species": job.species,
-            "index": job.index,
-            "tree_seed": job.tree_seed,
-            "error": f"{type(exc).__name__}: {exc}",
-            "traceback": traceback.format_exc(),
-            "params": params.to_dict() if params is not None else None,
-        }
+        record = _failed_record(
+            job,
+            f"{type(exc).__name__}: {exc}",
+            traceback.format_exc(),
+            params.to_dict() if params is not None else None,
+        )
         with contextlib.suppress(OSError):  # disk trouble: still report the failure
             atomic_write(root / "failed" / f"{job.tree_id}.json", _json_bytes(record))
         return record
@@ -465,17 +461,23 @@ def _store(root: Path, job: TreeJob, tf: TreeFiles) -> dict[str, Any]:
 
 def _lost(job: TreeJob, error: str) -> TreeFiles:
     """The record of a tree whose worker was lost more often than the executor retries."""
-    record = {
+    return TreeFiles(_failed_record(job, error.splitlines()[0] if error else "lost", error), {})
+
+
+def _failed_record(
+    job: TreeJob, error: str, trace: str, params: dict[str, Any] | None = None
+) -> dict[str, Any]:
+    """What ``failed/<tree_id>.json`` holds for a tree that could not be built."""
+    return {
         "tree_id": job.tree_id,
         "status": "failed",
         "species": job.species,
         "index": job.index,
         "tree_seed": job.tree_seed,
-        "error": error.splitlines()[0] if error else "lost",
-        "traceback": error,
-        "params": None,
+        "error": error,
+        "traceback": trace,
+        "params": params,
     }
-    return TreeFiles(record, {})
 
 
 # --------------------------------------------------------------------------- the build

@@ -95,28 +95,19 @@ def test_no_refine_and_height() -> None:
         rescale_height(species.sample("palm", 1), -2.0)
 
 
-def test_keep_height_gives_the_refined_tree_the_estimates_height() -> None:
+def test_the_refined_tree_keeps_the_searchs_own_size() -> None:
     # the estimate is a bonsai of another seed: the search changes the trunk's length and
     # bend, which a sketch framed to its tree cannot tell from the tree's size (the
     # hand-made distance alone: with the embedding's term these 25 evaluations find no
     # better point, and the rule under test needs a search that moves)
     img = _gt_sketch("bonsai", 3)
     start = tree_height(Fixed("bonsai", 9).tree)
-    cfg = RefineSettings(budget=25, embedding="none")
-    assert not cfg.keep_height  # the search's own size by default
-    kept = Pipeline(Fixed("bonsai", 9), cfg.replace(keep_height=True)).run(img)
-    free = Pipeline(Fixed("bonsai", 9), cfg).run(img)
+    free = Pipeline(Fixed("bonsai", 9), RefineSettings(budget=25, embedding="none")).run(img)
     assert abs(tree_height(free.params) - start) > 0.01 * start
-    # by default the size values are the estimate's; the height follows the proportions
+    # the size values are the estimate's; the height follows the proportions
     assert all(free.params[k] == Fixed("bonsai", 9).tree[k] for k in ("scale", "scaleV"))
-    lo, hi = kept.tree_mesh.bounds()
-    assert hi[2] - lo[2] == pytest.approx(start, rel=0.01)
-    # the same shape: only scale and scaleV differ, and the sketch is the refined one
-    differ = {k for k in kept.params.to_dict() if kept.params[k] != free.params[k]}
-    assert differ <= {"scale", "scaleV"}
-    assert kept.losses == free.losses
-    with pytest.raises(ValueError, match="keep_height"):
-        RefineSettings(keep_height=1).validate()
+    lo, hi = free.tree_mesh.bounds()
+    assert hi[2] - lo[2] == pytest.approx(tree_height(free.params), rel=1e-6)
 
 
 @pytest.mark.parametrize("height", [float("inf"), 1e308, float("nan"), 0.0, -1.0])
@@ -138,7 +129,8 @@ def test_bad_height_is_refused_before_any_work(height: float) -> None:
         ({"time_limit": float("inf")}, "time_limit"),
         ({"algorithm": "nope"}, "algorithm"),
         ({"hold": ("notakey",)}, "hold"),
-        ({"prior_weight": -1.0}, "prior_weight"),
+        ({"species_margin": 1.0}, "species_margin"),
+        ({"fast_sketch": 1}, "fast_sketch"),
     ],
 )
 def test_settings_are_validated(change: dict, match: str) -> None:
@@ -313,3 +305,40 @@ def test_describe_puts_the_species_in_words() -> None:
     )  # fmt: skip
     assert text == "a palm (70%); could also be a cherry"
     assert describe([Candidate("oak", t, 1.0, 1.0, 1.0)]).startswith("an oak")
+
+
+def test_the_drawing_is_framed_and_prepared_once_per_run(monkeypatch) -> None:
+    # two species refined, the first estimate's distance and the line distance: every
+    # comparison with the drawing uses the one PreparedDrawing the run builds
+    from refine import objective, shape
+
+    made, prepared = [], []
+    create, from_image = objective.PreparedDrawing.create.__func__, shape.ShapeTarget.from_image
+
+    def counting_create(cls, img, *args, **kwargs):
+        made.append(np.asarray(img).copy())
+        return create(cls, img, *args, **kwargs)
+
+    def counting_from_image(img, *args, **kwargs):
+        prepared.append(np.asarray(img).copy())
+        return from_image(img, *args, **kwargs)
+
+    monkeypatch.setattr(objective.PreparedDrawing, "create", classmethod(counting_create))
+    monkeypatch.setattr(shape.ShapeTarget, "from_image", counting_from_image)
+    r = Pipeline(Unsure(), RefineSettings(budget=12, embedding="none")).run(_gt_sketch("palm", 3))
+    assert set(r.extras["tried"]) == {"maple", "palm"}
+    assert len(made) == 1 and np.array_equal(made[0], r.input_sketch)
+    framed_input = objective.framed(r.input_sketch, 128)
+    assert sum(np.array_equal(p, framed_input) for p in prepared) == 1
+
+
+def test_a_drawing_prepared_for_other_settings_is_refused() -> None:
+    from refine.objective import PreparedDrawing
+    from refine.search import refine
+
+    img = _gt_sketch("palm", 3)
+    drawing = PreparedDrawing.create(img, 64, "ink")
+    with pytest.raises(ValueError, match="prepared for size 64"):
+        refine(drawing, species.sample("palm", 9), RefineSettings(budget=2), species="palm")
+    with pytest.raises(ValueError, match="shape metric only"):
+        PreparedDrawing.create(img, 128, "ink", embedder=object())

@@ -77,13 +77,6 @@ def predict_command(
         None, "--summary", help="Also write a JSON summary: species, scores, distances, yaw."
     ),
     algorithm: str = typer.Option("bobyqa", "--algorithm", help="bobyqa, sbplx or cobyla."),
-    seed: int = typer.Option(0, "--seed", help="Refinement seed (nlopt)."),
-    tree_seeds: int = typer.Option(
-        1,
-        "--tree-seeds",
-        help="Tree seeds the refinement tries at its start (a tree's random details: lean, "
-        "branch placement); 1 keeps the estimate's.",
-    ),
     embedding: str = typer.Option(
         "shipped",
         "--embedding",
@@ -145,9 +138,7 @@ def predict_command(
         settings = RefineSettings(
             refine=not no_refine,
             algorithm=algorithm,
-            seed=seed,
             embedding=embedding,
-            tree_seeds=tree_seeds,
         )
         if budget is not None:
             settings = settings.replace(budget=budget)

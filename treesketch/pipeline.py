@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from refine.objective import framed, metric_distance
+from refine.objective import PreparedDrawing, framed
 from refine.search import Cancelled, RefineResult, RefineSettings
 from refine.search import refine as refine_search
 from refine.shape import ShapeTarget, line_distance
@@ -172,12 +172,6 @@ def tree_height(params: TreeParams) -> float:
     return mesh_height(build_mesh(grow(params)))
 
 
-def estimate_height(est: Estimate, name: str, mesh0: Any) -> float:
-    """The height of the estimator's tree of species ``name`` (``mesh0``: the mesh of its
-    tree of its own species, already built)."""
-    return mesh_height(mesh0) if name == est.species else tree_height(est.params_for(name))
-
-
 def rescale_height(params: TreeParams, height: float, current: float | None = None) -> TreeParams:
     """Scale ``scale`` and ``scaleV`` so the grown tree is ``height`` tall (metres);
     ``current``: the tree's height when already known (saves growing it once)."""
@@ -201,11 +195,17 @@ def rescale_height(params: TreeParams, height: float, current: float | None = No
 def tree_line_distance(drawing: Any, tree_sketch: Any, size: int) -> float:
     """``refine.shape.line_distance`` of a drawing and a tree's sketch, both framed as the
     refinement frames them (a tree too small to draw anything is as far as can be)."""
+    return _line_distance(ShapeTarget.from_image(framed(drawing, size), size), tree_sketch)
+
+
+def _line_distance(drawing: ShapeTarget, tree_sketch: Any) -> float:
+    """:func:`tree_line_distance` from the drawing's shape features, already prepared."""
+    size = drawing.size
     try:
         tree = ShapeTarget.from_image(framed(tree_sketch, size), size)
     except SketchError:
         return 1.0
-    return line_distance(ShapeTarget.from_image(framed(drawing, size), size), tree)
+    return line_distance(drawing, tree)
 
 
 def _confidence(loss: float, ink: float, limit: float) -> tuple[float, str | None]:
@@ -289,6 +289,9 @@ class Pipeline:
         t = time.perf_counter()
         tell("read")
         img = prepare_input(load_sketch(sketch))
+        # the drawing as every comparison of this run sees it (each species' search, the
+        # first estimate's distance, the line distance): framed and prepared once
+        drawing = PreparedDrawing.create(img, cfg.size, cfg.metric, self.embedder)
         timings["prepare"] = time.perf_counter() - t
 
         t = time.perf_counter()
@@ -311,7 +314,7 @@ class Pipeline:
                 run_cfg = _share(cfg, i, len(names))
                 tell("refine", done)
                 rr = refine_search(
-                    img,
+                    drawing,
                     est.params_for(candidate),
                     run_cfg,
                     species=candidate,
@@ -352,15 +355,9 @@ class Pipeline:
         if result_refine is not None:
             loss_before, loss_after = loss0, result_refine.loss_after
         else:
-            loss_before = loss_after = metric_distance(
-                img, before, cfg.size, cfg.metric, self.embedder
-            )
+            loss_before = loss_after = drawing.distance(before)
         timings["render"] = time.perf_counter() - t
 
-        if height is None and cfg.keep_height and params1 is not est.params:
-            # asked for: the estimator's height for this species instead of the one the
-            # searched proportions give its size values
-            height = estimate_height(est, name, mesh0)
         current = mesh_height(mesh1)
         if height is not None and abs(current - height) > 1e-6 * height:
             t = time.perf_counter()
@@ -368,7 +365,7 @@ class Pipeline:
             mesh1 = build_mesh(grow(params1), species=name)
             timings["height"] = time.perf_counter() - t
 
-        ink_after = tree_line_distance(img, after, cfg.size)
+        ink_after = _line_distance(drawing.shape, after)
         limit = LOW_CONFIDENCE_LOSS if self.embedder is not None else LOW_CONFIDENCE_LOSS_SHAPE
         tree_like, warning = _confidence(loss_after, ink_after, limit)
         t = time.perf_counter()
