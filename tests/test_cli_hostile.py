@@ -45,19 +45,17 @@ def _plain(res) -> str:
     return res.output
 
 
-@pytest.mark.parametrize("seed", ["-1", "4294967296", HUGE])
-def test_predict_bad_seed_fails_before_the_model_loads(tmp_path, sketch_png, no_model, seed):
+def test_predict_unknown_species_fails_before_the_model_loads(tmp_path, sketch_png, no_model):
     res = runner.invoke(
-        app, ["predict", str(sketch_png), "--out", str(tmp_path / "t.glb"), "--seed", seed, "-q"]
+        app,
+        ["predict", str(sketch_png), "--out", str(tmp_path / "t.glb"), "--species", "baobab"],
     )
     out = _plain(res)
-    assert "--seed" in out and "0..4294967295" in out
+    assert "unknown species 'baobab'" in out and "fir" in out
     assert not (tmp_path / "t.glb").exists()
 
 
-@pytest.mark.parametrize(
-    "option", ["--budget", "--tree-seeds", "--max-faces", "--time-limit", "--height"]
-)
+@pytest.mark.parametrize("option", ["--budget", "--max-faces", "--time-limit", "--height"])
 def test_predict_huge_numbers_fail_before_the_model_loads(tmp_path, sketch_png, no_model, option):
     res = runner.invoke(
         app, ["predict", str(sketch_png), "--out", str(tmp_path / "t.glb"), option, HUGE, "-q"]

@@ -129,7 +129,7 @@ def test_bad_height_is_refused_before_any_work(height: float) -> None:
         ({"time_limit": float("inf")}, "time_limit"),
         ({"algorithm": "nope"}, "algorithm"),
         ({"hold": ("notakey",)}, "hold"),
-        ({"species_margin": 1.0}, "species_margin"),
+        ({"species_ratio": 1.5}, "species_ratio"),
         ({"fast_sketch": 1}, "fast_sketch"),
     ],
 )
