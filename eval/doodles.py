@@ -461,6 +461,23 @@ def _inner_branches(
     return s
 
 
+def _crown_extras(rng: np.random.Generator, cy: float, rx: float, ry: float) -> Strokes:
+    """What people add inside a round crown: a scribbled fill, or a few apples."""
+    if _chance(rng, 0.2):  # scribbled in, back and forth
+        t = np.linspace(0, 1, 160)
+        ys = cy + ry * 0.85 * (2 * t - 1)
+        reach = rx * 0.85 * np.sqrt(np.clip(1 - ((ys - cy) / (ry * 0.85)) ** 2, 0, 1))
+        zig = np.sin(t * 2 * np.pi * int(rng.integers(6, 12)))
+        return [np.stack([reach * zig, ys], 1)]
+    if _chance(rng, 0.15):
+        n = int(rng.integers(3, 8))
+        return [
+            _circle(rx * 0.6 * _u(rng, -1, 1), cy + ry * 0.6 * _u(rng, -1, 1), _u(rng, 4, 7), 12)
+            for _ in range(n)
+        ]
+    return []
+
+
 def _maple(rng: np.random.Generator) -> Strokes:
     rx, ry = _u(rng, 45, 60), _u(rng, 55, 75)
     h = ry * _u(rng, 0.6, 0.9)
@@ -470,7 +487,7 @@ def _maple(rng: np.random.Generator) -> Strokes:
     s.append(_outline(rng, _crown_loop(rng, 0, cy, rx, ry, bumps)))
     if _chance(rng, 0.5):
         s += _inner_branches(rng, -h, rx, ry)
-    return s
+    return s + _crown_extras(rng, cy, rx, ry)
 
 
 def _oak(rng: np.random.Generator) -> Strokes:
@@ -491,7 +508,7 @@ def _oak(rng: np.random.Generator) -> Strokes:
         s.append(_outline(rng, _crown_loop(rng, 0, cy, rx, ry, int(rng.integers(6, 11)))))
     if _chance(rng, 0.6):
         s += _inner_branches(rng, -h, rx, ry)
-    return s
+    return s + _crown_extras(rng, cy, rx, ry)
 
 
 def _cherry(rng: np.random.Generator) -> Strokes:
@@ -568,6 +585,15 @@ def _fir(rng: np.random.Generator) -> Strokes:
         for y in np.linspace(top + h * 0.2, -stub - 10, int(rng.integers(4, 8))):
             span = w * (y - top) / h * 0.8
             s += [line((0, y - 10), (-span, y)), line((0, y - 10), (span, y))]
+    if _chance(rng, 0.25):  # baubles
+        for _ in range(int(rng.integers(3, 9))):
+            y = top + h * _u(rng, 0.3, 0.9)
+            x = w * (y - top) / h * _u(rng, -0.6, 0.6)
+            s.append(_circle(x, y, _u(rng, 3, 6), 10))
+    if _chance(rng, 0.15):  # a star on top
+        r = _u(rng, 8, 12)
+        a = [-math.pi / 2 + k * 4 * math.pi / 5 for k in range(6)]
+        s.append(np.array([(r * math.cos(t), top - r * 0.8 + r * math.sin(t)) for t in a]))
     return s
 
 
@@ -608,17 +634,26 @@ def _birch(rng: np.random.Generator) -> Strokes:
     for y in np.linspace(-h * 0.1, -h * 0.8, int(rng.integers(4, 9))):
         x = float(np.interp(-y, h * t, xs))
         s.append(line((x - half, y), (x + _u(rng, -2, half * 0.6), y - _u(rng, 1, 4))))
-    w = _u(rng, 40, 70)
-    for _ in range(int(rng.integers(2, 5))):  # light, broken clumps of leaves up high
-        cx, cy = _u(rng, -w, w), -h * _u(rng, 0.6, 1.0)
-        a0 = _u(rng, 0, 90)
-        s.append(
-            bumpy(cx, cy, _u(rng, 18, 32), _u(rng, 14, 24), 5, 0.3, a0, a0 + _u(rng, 200, 330))
-        )
-    for side in (-1, 1):
-        if _chance(rng, 0.7):
-            y = -h * _u(rng, 0.5, 0.8)
-            s.append(line((0, y), (side * w * _u(rng, 0.6, 1.0), y - _u(rng, 20, 50))))
+    w = _u(rng, 45, 75)
+    limbs = []
+    for side in (-1, 1):  # thin limbs up and out from the upper trunk
+        for _ in range(int(rng.integers(1, 3))):
+            y = -h * _u(rng, 0.45, 0.8)
+            end = (side * w * _u(rng, 0.5, 0.95), y - _u(rng, 25, 60))
+            x0 = float(np.interp(-y, h * t, xs))
+            limbs.append(end)
+            s.append(line((x0, y), end))
+    if _chance(rng, 0.5):  # light, broken clumps of leaves at the limbs' ends and the top
+        for cx, cy in [*limbs, (xs[-1], -h)]:
+            a0, rx = _u(rng, 0, 90), _u(rng, 18, 30)
+            arc_deg = _u(rng, 200, 330)
+            s.append(bumpy(cx, cy - 8, rx, rx * _u(rng, 0.6, 0.85), 5, 0.3, a0, a0 + arc_deg))
+    else:  # a loose, lumpy, open outline around the upper half
+        cy, ry = -h * 0.78, h * _u(rng, 0.2, 0.27)
+        a0 = 90 + _u(rng, 25, 50)
+        a1 = 90 + 360 - _u(rng, 25, 50)
+        crown = bumpy(xs[-1] * 0.5, cy, w, ry, int(rng.integers(7, 12)), 0.15, a0, a1)
+        s.append(_few_segments(crown, int(rng.integers(8, 16))) if _chance(rng, 0.4) else crown)
     return s
 
 
