@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 import zlib
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 from PIL import Image, ImageDraw
@@ -779,16 +780,27 @@ TREE_SPECIES: tuple[str, ...] = tuple(_TREES)
 # --------------------------------------------------------------------- the hand and the page
 
 
-def _hand(rng: np.random.Generator) -> dict:
-    """How this doodle is drawn: the tool, its line width, its wobble."""
+@dataclass(frozen=True)
+class _Hand:
+    """How one doodle is drawn."""
+
+    tool: str  # pen, marker, phone (a finger) or mouse
+    width: float  # line width, page pixels
+    wobble: float  # sideways wobble, page pixels
+    ink: int  # 0 black to about 110 pencil grey
+
+
+_WIDTHS = {"pen": (2.0, 3.5), "marker": (3.5, 6.0), "phone": (6.0, 9.0), "mouse": (2.0, 4.0)}
+
+
+def _hand(rng: np.random.Generator) -> _Hand:
     tool = str(rng.choice(["pen", "marker", "phone", "mouse"], p=[0.35, 0.25, 0.2, 0.2]))
-    width = {"pen": (2.0, 3.5), "marker": (3.5, 6.0), "phone": (6.0, 9.0), "mouse": (2.0, 4.0)}
-    return {
-        "tool": tool,
-        "width": _u(rng, *width[tool]),
-        "wobble": _u(rng, 0.2, 0.9) * (2.0 if tool == "phone" else 1.0),
-        "ink": int(rng.integers(0, 40)) if _chance(rng, 0.8) else int(rng.integers(40, 110)),
-    }
+    return _Hand(
+        tool=tool,
+        width=_u(rng, *_WIDTHS[tool]),
+        wobble=_u(rng, 0.2, 0.9) * (2.0 if tool == "phone" else 1.0),
+        ink=int(rng.integers(0, 40)) if _chance(rng, 0.8) else int(rng.integers(40, 110)),
+    )
 
 
 def _page(strokes: Strokes, rng: np.random.Generator, fill: tuple[float, float]) -> np.ndarray:
@@ -803,16 +815,16 @@ def _page(strokes: Strokes, rng: np.random.Generator, fill: tuple[float, float])
     tilt = math.radians(_u(rng, -5, 5))
     rot = np.array([[math.cos(tilt), -math.sin(tilt)], [math.sin(tilt), math.cos(tilt)]])
     placed = [((st - centre) * scale) @ rot.T for st in strokes]
-    ss = 1 if hand["tool"] == "mouse" else 2  # the mouse draws aliased pixels
+    ss = 1 if hand.tool == "mouse" else 2  # the mouse draws aliased pixels
     drawn = []
     for st in placed:
-        if hand["tool"] == "mouse":
+        if hand.tool == "mouse":
             drawn.append(jag(st, rng, amp=_u(rng, 0.3, 0.9), step=_u(rng, 3.0, 6.0)))
         else:
-            drawn.append(wobble(st, rng, amp=hand["wobble"], step=4.0) if len(st) > 1 else st)
+            drawn.append(wobble(st, rng, amp=hand.wobble, step=4.0) if len(st) > 1 else st)
     allpts = np.concatenate(drawn)
     lo, hi = allpts.min(axis=0), allpts.max(axis=0)
-    pad = hand["width"] / 2 + 3
+    pad = hand.width / 2 + 3
     # shrink anything the wobble pushed past the page, then place the box at random
     shrink = min(1.0, (SIZE - 2 * pad) / max(float((hi - lo).max()), 1e-6))
     drawn = [(st - (lo + hi) / 2) * shrink for st in drawn]
@@ -821,14 +833,14 @@ def _page(strokes: Strokes, rng: np.random.Generator, fill: tuple[float, float])
     offset = SIZE / 2 + np.array([_u(rng, -room[0], room[0]), _u(rng, -room[1], room[1])])
     im = Image.new("L", (SIZE * ss, SIZE * ss), 255)
     d = ImageDraw.Draw(im)
-    width = max(1, round(hand["width"] * ss))
+    width = max(1, round(hand.width * ss))
     for st in drawn:
         xy = [tuple(p) for p in (st + offset) * ss]
-        d.line(xy, fill=hand["ink"], width=width, joint="curve")
+        d.line(xy, fill=hand.ink, width=width, joint="curve")
         if width >= 3:  # round ends, as a pen or a finger leaves them
             for x, y in (xy[0], xy[-1]):
                 r = width / 2 - 0.5
-                d.ellipse((x - r, y - r, x + r, y + r), fill=hand["ink"])
+                d.ellipse((x - r, y - r, x + r, y + r), fill=hand.ink)
     if ss > 1:
         im = im.resize((SIZE, SIZE), Image.Resampling.BOX)
     return np.asarray(im, dtype=np.uint8)
@@ -842,7 +854,7 @@ def _rng(what: str, seed: int) -> np.random.Generator:
 
 def nontree_doodle(kind: str, seed: int) -> np.ndarray:
     """A doodle of something that is not a tree: a ``(256, 256)`` uint8 image, 255 paper."""
-    if kind not in _NONTREES:
+    if not isinstance(kind, str) or kind not in _NONTREES:
         raise ValueError(f"unknown doodle kind {kind!r}; one of {', '.join(NONTREE_KINDS)}")
     rng = _rng("nontree:" + kind, seed)
     return _page(_NONTREES[kind](rng), rng, (0.4, 0.9))
@@ -851,7 +863,7 @@ def nontree_doodle(kind: str, seed: int) -> np.ndarray:
 def tree_doodle(species: str, seed: int) -> np.ndarray:
     """A doodle of a tree of ``species`` as a person would draw one and name it: a
     ``(256, 256)`` uint8 image, 255 paper."""
-    if species not in _TREES:
+    if not isinstance(species, str) or species not in _TREES:
         raise ValueError(f"unknown tree species {species!r}; one of {', '.join(TREE_SPECIES)}")
     rng = _rng("tree:" + species, seed)
     strokes = _TREES[species](rng)

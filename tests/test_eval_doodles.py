@@ -119,6 +119,7 @@ def test_tree_shapes_differ_by_species(shapes: dict[str, list[dict[str, float]]]
         (lambda: nontree_doodle("tree", 0), "unknown doodle kind 'tree'"),
         (lambda: nontree_doodle("oak", 0), "one of house"),
         (lambda: tree_doodle("spruce", 0), "unknown tree species 'spruce'"),
+        (lambda: tree_doodle(["oak"], 0), r"unknown tree species \['oak'\]"),
         (lambda: tree_doodle("fir", -1), "non-negative integer, got -1"),
         (lambda: tree_doodle("fir", 1.5), "non-negative integer, got 1.5"),
         (lambda: nontree_doodle("cup", True), "non-negative integer, got True"),
