@@ -161,7 +161,7 @@ def _lean(v: Values, d: float) -> None:
     if d == 0:
         return
     _shift_level("curve", 0, -360.0, 360.0)(v, d)
-    _trunk_segments(v)
+    _trunk_segments(v, d)
 
 
 def _bend(v: Values, d: float) -> None:
@@ -171,13 +171,18 @@ def _bend(v: Values, d: float) -> None:
         return
     _shift_level("curve", 0, -360.0, 360.0)(v, d)
     _shift_level("curveBack", 0, -360.0, 360.0)(v, -d)
-    _trunk_segments(v)
+    _trunk_segments(v, d)
 
 
-def _trunk_segments(v: Values) -> None:
+def _trunk_segments(v: Values, d: float) -> None:
+    # a trunk needs segments to bend, and its upward attraction (the palm's 8.6) would
+    # pull any bend straight again: it fades as the bend grows (gone at 90 degrees)
     res = list(v["curveRes"])
     res[0] = max(int(res[0]), TRUNK_CURVE_RES)
     v["curveRes"] = res
+    up = list(v["attractUp"])
+    up[0] = float(up[0]) * max(0.0, 1.0 - abs(d) / 90.0)
+    v["attractUp"] = up
 
 
 def _leaf_size(v: Values, f: float) -> None:
@@ -231,7 +236,7 @@ CONTROLS: tuple[Control, ...] = (
         0.4,
         2.0,
         0.05,
-        "×",
+        "x",
         ("length[1]: times the value (the main branches' length)",),
         neutral=1.0,
         apply_fn=_scale_level("length", 1, 0.0, 1.0),
@@ -258,7 +263,7 @@ CONTROLS: tuple[Control, ...] = (
         0.25,
         2.5,
         0.05,
-        "×",
+        "x",
         ("branches[1]: times the value, rounded, at least 1",),
         neutral=1.0,
         apply_fn=_scale_level("branches", 1, 1.0, float(SPECS["branches"].hi), integer=True),
@@ -279,13 +284,18 @@ CONTROLS: tuple[Control, ...] = (
     Control(
         "trunk_lean",
         "Trunk lean",
-        "Bends the trunk to one side so the whole tree leans.",
+        "Bends the trunk to one side so the tree leans (strongest on a single trunk; a "
+        "trunk that forks low leans little).",
         "number",
-        -60.0,
-        60.0,
+        -90.0,
+        90.0,
         1.0,
         "°",
-        ("curve[0]: plus the value", f"curveRes[0]: at least {TRUNK_CURVE_RES}"),
+        (
+            "curve[0]: plus the value",
+            "attractUp[0]: times 1 - |value| / 90",
+            f"curveRes[0]: at least {TRUNK_CURVE_RES}",
+        ),
         neutral=0.0,
         apply_fn=_lean,
     ),
@@ -301,6 +311,7 @@ CONTROLS: tuple[Control, ...] = (
         (
             "curve[0]: plus the value",
             "curveBack[0]: minus the value",
+            "attractUp[0]: times 1 - |value| / 90",
             f"curveRes[0]: at least {TRUNK_CURVE_RES}",
         ),
         neutral=0.0,
@@ -314,7 +325,7 @@ CONTROLS: tuple[Control, ...] = (
         0.3,
         3.0,
         0.05,
-        "×",
+        "x",
         ("leafScale: times the value",),
         neutral=1.0,
         apply_fn=_leaf_size,
@@ -327,7 +338,7 @@ CONTROLS: tuple[Control, ...] = (
         0.1,
         3.0,
         0.05,
-        "×",
+        "x",
         ("leaves: its size times the value, rounded, at least 1 (the sign kept)",),
         neutral=1.0,
         apply_fn=_leaf_density,

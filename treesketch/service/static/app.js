@@ -421,7 +421,7 @@ function showValue(c, input, out) {
   if (c.kind === "toggle") out.textContent = input.checked ? "on" : "off";
   else if (c.kind === "choice") out.textContent = "";
   else if (c.name === "seed") out.textContent = "";
-  else out.textContent = `${Number(input.value).toFixed(c.step < 1 ? 2 : 0)}${c.unit === "×" ? "×" : ` ${c.unit}`}`;
+  else out.textContent = `${Number(input.value).toFixed(c.step < 1 ? 2 : 0)}${c.unit === "x" ? "×" : ` ${c.unit}`}`;
 }
 
 async function treeRequest(controls, accept, maxFaces) {
@@ -457,7 +457,8 @@ function changedControls() {
   for (const c of table.controls) {
     const v = controlValue(c);
     const was = edit.initial[c.name];
-    if (c.kind === "toggle" || c.kind === "choice" || c.name === "seed" ? v !== was : Math.abs(v - was) > 1e-9) out[c.name] = v;
+    // a slider snaps to its step: within half a step it still shows the tree's own value
+    if (c.kind === "toggle" || c.kind === "choice" || c.name === "seed" ? v !== was : Math.abs(v - was) > c.step / 2) out[c.name] = v;
   }
   return out;
 }
