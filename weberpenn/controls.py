@@ -64,6 +64,7 @@ SHAPE_LABELS: dict[str, str] = {
 }
 MAX_SEED = 2**31 - 1  # Sapling's preset needs a 32-bit signed seed
 HEIGHT_TOLERANCE = 0.005  # relative: nearer than this the tree is not regrown
+HEIGHT_TRIES = 3  # regrowths at most to meet a height
 TRUNK_CURVE_RES = 6  # segments the trunk needs before a lean or a bend can show
 
 
@@ -433,19 +434,26 @@ def grow_with_controls(
     h0 = _mesh_height(mesh)
     if h0 <= 0:
         raise ValueError("the tree has no height to rescale")
-    base, f, h = out, 1.0, h0
-    # the height is nearly proportional to the size values (the leaves' own size is not),
-    # so the second try fits a line through the two trees grown
-    for _ in range(2):
-        if abs(h - want) <= HEIGHT_TOLERANCE * want:
+    base = out
+    # the height is nearly proportional to the size values (the leaves' own size is not):
+    # the first try scales by want / height, the next ones follow the line through the
+    # last two trees grown (secant steps)
+    tried = [(1.0, h0)]
+    for _ in range(HEIGHT_TRIES):
+        f1, h1 = tried[-1]
+        if abs(h1 - want) <= HEIGHT_TOLERANCE * want:
             break
-        slope = h0 / 1.0 if f == 1.0 else (h - h0) / (f - 1.0)
-        f = 1.0 + (want - h0) / slope if slope > 0 else want / h0
+        if len(tried) == 1:
+            f = want / h0
+        else:
+            f0, h_0 = tried[-2]
+            slope = (h1 - h_0) / (f1 - f0) if f1 != f0 else 0.0
+            f = f1 + (want - h1) / slope if slope > 0 else f1 * want / h1
         values = base.to_dict()
         _size_keys(values, max(f, 1e-3))
         out = TreeParams(values)
         mesh = build_mesh(grow(out), species=species_name)
-        h = _mesh_height(mesh)
+        tried.append((f, _mesh_height(mesh)))
     return out, mesh
 
 
