@@ -140,3 +140,38 @@ def test_post_predict_against_a_local_service(backend, tmp_path):
             backend.post_predict("http://127.0.0.1:1", image, tmp_path / "u.glb", timeout=5)
     finally:
         server.shutdown()
+
+
+def test_numpy_bool_alias(backend, monkeypatch):
+    """Debian Blender 3.4's glTF importer calls np.bool (removed in numpy 1.24): the
+    add-on puts it back itself, once."""
+    monkeypatch.delattr(np, "bool", raising=False)  # numpy 1.24..1.26 (numpy 2 has it back)
+    assert "bool" not in np.__dict__
+    assert backend.numpy_bool_alias() is True
+    assert np.bool is bool
+    assert backend.numpy_bool_alias() is False
+
+
+def test_plain_error(backend):
+    blender = RuntimeError(
+        "Error: Python: Traceback (most recent call last):\n"
+        '  File "/usr/share/blender/3.4/scripts/addons/io_scene_gltf2/__init__.py", line 1\n'
+        "    np.bool\n"
+        "AttributeError: module 'numpy' has no attribute 'bool'\n"
+    )
+    assert backend.plain_error(blender) == "module 'numpy' has no attribute 'bool'"
+    assert backend.plain_error(RuntimeError("Error: no image file at /x.png")) == (
+        "no image file at /x.png"
+    )
+    assert backend.plain_error(backend.PredictError("timed out")) == "timed out"
+    assert backend.plain_error(RuntimeError("")) == "RuntimeError"
+
+
+def test_species_and_unique_preset_names(backend):
+    lines = ["refining ...", "species: cherry (first estimate: tsn); view yaw 15", "wrote x"]
+    assert backend.species_of(lines) == "cherry"
+    assert backend.species_of(["nothing here"]) is None
+    taken = ["treesketch_cherry_1.py", "treesketch_cherry_2.py", "other.py"]
+    assert backend.preset_name("cherry", taken) == "treesketch_cherry_3.py"
+    assert backend.preset_name("maple", taken) == "treesketch_maple_1.py"
+    assert backend.preset_name(None, []) == "treesketch_tree_1.py"

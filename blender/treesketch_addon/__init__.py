@@ -32,6 +32,7 @@ bl_info = {
 
 BUNDLED_DRAWING = Path(__file__).with_name("drawing_maple.png")
 SAPLING = "add_curve_sapling"
+COLLECTION = "TreeSketch"  # where every predicted tree goes
 
 
 def _prefs(context) -> bpy.types.AddonPreferences:
@@ -92,7 +93,11 @@ class TREESKETCH_Settings(bpy.types.PropertyGroup):
     )
     refine: BoolProperty(name="Refine", description="Refine the network's estimate", default=True)
     budget: IntProperty(
-        name="Budget", description="Trees the refinement may try", default=40, min=1
+        name="Budget",
+        description="Trees the refinement may try (0: TreeSketch's own default, the same "
+        "as the page's and the CLI's)",
+        default=0,
+        min=0,
     )
     status: StringProperty(name="Status", default="")
     progress: FloatProperty(name="Progress", default=0.0, min=0.0, max=1.0, subtype="FACTOR")
@@ -143,7 +148,8 @@ def prediction_job(context, image: Path, out: backend.Outputs):
     chosen in the preferences; it reads every setting now, so it can run in a thread
     without touching Blender's data."""
     prefs, settings = _prefs(context), context.scene.treesketch
-    refine, budget = bool(settings.refine), int(settings.budget)
+    refine = bool(settings.refine)
+    budget = int(settings.budget) or None  # 0: the project's one default
     if prefs.backend == "CLI":
         cmd = backend.cli_command(
             bpy.path.abspath(prefs.cli_path) or "treesketch",
@@ -152,15 +158,31 @@ def prediction_job(context, image: Path, out: backend.Outputs):
             refine=refine,
             budget=budget,
         )
-        return lambda on_line=None, cancel=None: backend.run_cli(cmd, on_line, cancel)
+
+        def run(on_line=None, cancel=None):
+            lines: list[str] = []
+
+            def seen(line: str) -> None:
+                lines.append(line)
+                if on_line is not None:
+                    on_line(line)
+
+            backend.run_cli(cmd, seen, cancel)
+            return backend.species_of(lines)
+
+        return run
     url = str(prefs.service_url)
     return lambda on_line=None, cancel=None: backend.post_predict(
         url, image, out.glb, refine=refine, budget=budget
-    )
+    ).get("species")
 
 
-def add_result(context, out: backend.Outputs, yaw: float | None = None) -> list:
-    """Add the predicted tree to the scene; returns the new objects."""
+def add_result(
+    context, out: backend.Outputs, yaw: float | None = None, species: str | None = None
+) -> list:
+    """Add the predicted tree to the scene, as one hierarchy (an empty named after the
+    species, the tree's objects under it) in the ``TreeSketch`` collection; returns the
+    new objects, the parent first."""
     settings = context.scene.treesketch
     before = set(bpy.data.objects)
     use_sapling = settings.result == "SAPLING" and out.preset.is_file()
@@ -173,19 +195,44 @@ def add_result(context, out: backend.Outputs, yaw: float | None = None) -> list:
             raise backend.PredictError("Sapling did not build the tree from the preset")
         turn = preset_yaw if yaw is None else yaw
         if _prefs(context).copy_presets:
-            _copy_to_sapling_menu(out.preset)
+            _copy_to_sapling_menu(out.preset, species)
     else:
         images = set(bpy.data.images)
-        bpy.ops.import_scene.gltf(filepath=str(out.glb))
+        backend.numpy_bool_alias()  # Blender 3.4's importer calls np.bool
+        try:
+            bpy.ops.import_scene.gltf(filepath=str(out.glb))
+        except RuntimeError as exc:
+            raise backend.PredictError(
+                f"Blender's glTF importer could not read the tree: {backend.plain_error(exc)}"
+            ) from None
         for img in set(bpy.data.images) - images:
             if img.source == "FILE" and not img.packed_file:
                 img.pack()  # the prediction's folder is removed afterwards
         turn = 0.0  # the GLB already faces the drawn view
     new = [o for o in bpy.data.objects if o not in before]
-    for o in new:
-        if o.parent is None and turn:
-            o.rotation_euler.z -= math.radians(turn)
-    return new
+    parent = _collect(context, new, species or "tree")
+    parent.rotation_euler.z -= math.radians(turn)
+    return [parent, *new]
+
+
+def _collect(context, objects: list, name: str):
+    """Move ``objects`` into the ``TreeSketch`` collection under a new empty ``name``
+    (Blender makes the name unique: maple, maple.001, ...); returns the empty."""
+    coll = bpy.data.collections.get(COLLECTION)
+    if coll is None:
+        coll = bpy.data.collections.new(COLLECTION)
+    if coll.name not in context.scene.collection.children:
+        context.scene.collection.children.link(coll)
+    parent = bpy.data.objects.new(name, None)
+    parent.empty_display_type = "PLAIN_AXES"
+    coll.objects.link(parent)
+    for o in objects:
+        for c in list(o.users_collection):
+            c.objects.unlink(o)
+        coll.objects.link(o)
+        if o.parent is None:
+            o.parent = parent
+    return parent
 
 
 def _enable_sapling() -> None:
@@ -209,10 +256,15 @@ def _enable_sapling() -> None:
     )
 
 
-def _copy_to_sapling_menu(preset: Path) -> None:
-    folder = bpy.utils.user_resource("SCRIPTS", path=f"presets/operator/{SAPLING}", create=True)
-    target = Path(folder) / f"treesketch_{preset.stem}.py"
+def _copy_to_sapling_menu(preset: Path, species: str | None) -> Path:
+    """The preset in Sapling's Import Preset menu, under a name of its own (an earlier
+    prediction's is never overwritten)."""
+    folder = Path(
+        bpy.utils.user_resource("SCRIPTS", path=f"presets/operator/{SAPLING}", create=True)
+    )
+    target = folder / backend.preset_name(species, (p.name for p in folder.iterdir()))
     target.write_bytes(preset.read_bytes())
+    return target
 
 
 class TREESKETCH_OT_predict(bpy.types.Operator):
@@ -232,6 +284,7 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
     _thread = None
     _lines: queue.Queue
     _cancel = False
+    _species = None
 
     def execute(self, context):
         settings = context.scene.treesketch
@@ -250,7 +303,7 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
         if self.wait or bpy.app.background:
             try:
                 job = prediction_job(context, image, self._out)
-                job(on_line=lambda s: print("treesketch:", s))
+                self._species = job(on_line=lambda s: print("treesketch:", s))
             except (backend.PredictError, RuntimeError) as exc:
                 shutil.rmtree(folder, ignore_errors=True)
                 return self._failed(settings, exc)
@@ -261,7 +314,7 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
 
         def work():
             try:
-                job(on_line=self._lines.put, cancel=lambda: self._cancel)
+                self._species = job(on_line=self._lines.put, cancel=lambda: self._cancel)
             except Exception as exc:  # shown in the panel, never lost in a thread
                 self._error = exc
 
@@ -297,8 +350,11 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
         return self._finish(context)
 
     def _failed(self, settings, exc: BaseException) -> set:
-        settings.status = str(exc).splitlines()[0]
-        self.report({"ERROR"}, str(exc))
+        # plain words, never Blender's "Error: Python: Traceback ..." (a failing CLI's
+        # message keeps its last lines below the first)
+        text = backend.plain_error(exc)
+        settings.status = text[:120]
+        self.report({"ERROR"}, text if "Traceback" in str(exc) else str(exc))
         return {"CANCELLED"}
 
     def _finish(self, context) -> set:
@@ -306,12 +362,12 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
         into the .blend by the importer; the preset was copied to Sapling's menu)."""
         settings = context.scene.treesketch
         try:
-            new = add_result(context, self._out)
+            new = add_result(context, self._out, species=self._species)
         except (backend.PredictError, RuntimeError, OSError) as exc:
             return self._failed(settings, exc)
         finally:
             shutil.rmtree(self._folder, ignore_errors=True)
-        settings.progress, settings.status = 1.0, f"added {len(new)} object(s)"
+        settings.progress, settings.status = 1.0, f"added {new[0].name} ({len(new) - 1} object(s))"
         return {"FINISHED"}
 
 
@@ -353,6 +409,8 @@ CLASSES = (TREESKETCH_Preferences, TREESKETCH_Settings, TREESKETCH_OT_predict, T
 
 
 def register() -> None:
+    # while the add-on is on, Blender 3.4's own glTF import works too (it calls np.bool)
+    backend.numpy_bool_alias()
     for cls in CLASSES:
         bpy.utils.register_class(cls)
     bpy.types.Scene.treesketch = bpy.props.PointerProperty(type=TREESKETCH_Settings)

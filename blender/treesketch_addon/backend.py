@@ -10,6 +10,12 @@ both), so the project's test suite checks it without Blender.
 - :func:`strokes_png`: pen strokes (lists of 2-D points) drawn black on white as a PNG,
   framed the way the project's reader expects (tree filling the canvas, base at the
   bottom).
+- :func:`numpy_bool_alias`: puts back ``numpy.bool``, which the glTF importer of Blender
+  3.4 (Debian's) still calls though numpy 1.24 removed it.
+- :func:`plain_error`: one line a person can read from an exception (an operator's
+  ``RuntimeError`` carries Blender's whole "Error: Python: Traceback ..." text).
+- :func:`species_of` / :func:`preset_name`: the predicted species from the CLI's output,
+  and a preset file name of its own for every prediction.
 """
 
 from __future__ import annotations
@@ -33,6 +39,10 @@ import numpy as np
 
 __all__ = [
     "Outputs",
+    "numpy_bool_alias",
+    "plain_error",
+    "preset_name",
+    "species_of",
     "PredictError",
     "cli_command",
     "multipart_body",
@@ -44,6 +54,8 @@ __all__ = [
 ]
 
 _ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
+_SPECIES = re.compile(r"^species: ([A-Za-z0-9_]+)")
+_ERROR_LINE = re.compile(r"^[A-Za-z_][\w.]*(Error|Exception|Exit)\b.*?: ")
 _YAW = re.compile(r"^# view yaw: (-?[0-9.]+) degrees")
 
 
@@ -273,3 +285,50 @@ def progress_fraction(line: str) -> float | None:
     if not m or int(m.group(2)) == 0:
         return None
     return min(int(m.group(1)) / int(m.group(2)), 1.0)
+
+
+def numpy_bool_alias() -> bool:
+    """Give numpy its old ``bool`` alias back when it lacks it (Blender 3.4's glTF importer
+    uses ``np.bool``, removed in numpy 1.24); True when it was added now."""
+    if "bool" in np.__dict__:
+        return False
+    np.bool = bool  # type: ignore[attr-defined]
+    return True
+
+
+def plain_error(exc: BaseException) -> str:
+    """One line for a person: an operator's "Error: Python: Traceback ..." becomes its last
+    line ("AttributeError: module 'numpy' has no attribute 'bool'" -> that sentence
+    without the exception's class name)."""
+    lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+    if not lines:
+        return type(exc).__name__
+    if any("Traceback" in ln for ln in lines):
+        last = lines[-1]
+        for prefix in ("Error: ", "Python: "):
+            last = last.removeprefix(prefix)
+        return _ERROR_LINE.sub("", last) or last
+    first = lines[0]
+    for prefix in ("Error: ", "Python: "):
+        first = first.removeprefix(prefix)
+    return first
+
+
+def species_of(lines: Iterable[str]) -> str | None:
+    """The species ``treesketch predict`` printed ("species: maple (first estimate: ...)")."""
+    for line in lines:
+        m = _SPECIES.match(line)
+        if m:
+            return m.group(1)
+    return None
+
+
+def preset_name(species: str | None, taken: Iterable[str]) -> str:
+    """A Sapling preset file name no earlier prediction has: treesketch_<species>_<n>.py
+    with the first free n."""
+    stem = f"treesketch_{species or 'tree'}"
+    used = set(taken)
+    n = 1
+    while f"{stem}_{n}.py" in used:
+        n += 1
+    return f"{stem}_{n}.py"
