@@ -132,6 +132,9 @@ class Layout:  # records what the panel draws (there is no screen in background 
     def column(self, **kw):
         return self
 
+    def box(self, **kw):
+        return self
+
 
 log = []
 panel = bpy.types.VIEW3D_PT_treesketch
@@ -149,7 +152,11 @@ def check_hierarchy(kind):
     assert parent.type == "EMPTY" and parent.name.split(".")[0] != "tree", parent.name
     tree = [o for o in coll.objects if o.parent is parent]
     assert tree, f"{kind}: nothing under {parent.name}"
-    stray = [o.name for o in bpy.data.objects if coll not in o.users_collection]
+    stray = [
+        o.name
+        for o in bpy.data.objects
+        if o.type in ("MESH", "CURVE") and coll not in o.users_collection
+    ]
     assert not stray, f"{kind}: objects outside the TreeSketch collection: {stray}"
     step(f"{kind}: {parent.name} holds {[o.name for o in tree]} in collection TreeSketch")
     return parent
@@ -177,6 +184,28 @@ if SAPLING:
     presets = sorted(p for p in os.listdir(folder) if p.startswith("treesketch_"))
     assert len(presets) == 2, f"each prediction's preset needs a name of its own: {presets}"
     step(f"two predictions, two presets: {presets}")
+    # 3a'. the panel's controls edit it: more branches, a new tree in the old one's place
+    log = []
+    panel.draw(type("P", (), {"layout": Layout(log)})(), bpy.context)
+    assert ("prop", "crown_width") in log and ("operator", "treesketch.variant") in log, log
+    ctl = bpy.context.scene.treesketch_controls
+    assert ctl.crown_width == 1.0 and ctl.seed == -1 and ctl.crown_shape == "KEEP"
+    ctl.branch_count = 2.0
+    coll = bpy.data.collections["TreeSketch"]
+
+    def roots():
+        return [o.as_pointer() for o in coll.objects if o.parent is None]
+
+    before = roots()
+    assert bpy.ops.treesketch.apply_controls() == {"FINISHED"}, settings.status
+    edited = check_hierarchy("edited Sapling tree")
+    after = roots()  # the edited tree took the old one's place (Blender may reuse its name)
+    assert len(after) == len(before) and before[-1] not in after, (before, after)
+    more = sum(len(o.data.splines) for o in bpy.data.objects if o.type == "CURVE")
+    assert more > splines, (more, splines)
+    assert bpy.ops.treesketch.variant() == {"FINISHED"}, settings.status
+    assert ctl.seed >= 0 and len(roots()) == len(before) and after[-1] not in roots()
+    step(f"controls: branch count x2 gives {more} splines (was {splines}); variant {ctl.seed}")
 else:
     lo, hi = world_z([o for o in bpy.data.objects if o.type == "MESH"])
     step(f"GLB from the bundled drawing: z {lo:.2f}..{hi:.2f}")
@@ -234,4 +263,11 @@ images = {
 }
 assert len(images) == 2 and all(i.packed_file for i in images), "textures not packed"
 step(f"GLB from a Grease Pencil drawing: z {lo:.2f}..{hi:.2f}; {len(images)} textures packed")
+# 3b'. the height control: the GLB tree grown again, 7 m tall
+bpy.context.scene.treesketch_controls.height = 7.0
+assert bpy.ops.treesketch.apply_controls() == {"FINISHED"}, settings.status
+glb_tree = check_hierarchy("edited GLB")
+lo7, hi7 = world_z([o for o in glb_tree.children_recursive if o.type == "MESH"])
+assert abs(hi7 - lo7 - 7.0) < 0.03 * 7.0, (lo7, hi7)
+step(f"controls: height 7 m -> {hi7 - lo7:.2f} m")
 step(f"ALL OK (Blender {bpy.app.version_string})")

@@ -1,15 +1,18 @@
 """TreeSketch for Blender: draw a tree (an image file or a Grease Pencil drawing), get a
 3D tree back, as a native Sapling tree (editable in Sapling's redo panel) or as the
-imported GLB.  Install the zip (``make blender-addon``) in Edit > Preferences > Add-ons,
+imported GLB, then shape it with the project's controls (height, crown width, ..., another
+variant: the table the zip carries as ``controls.json``).  Install the zip (``make blender-addon``) in Edit > Preferences > Add-ons,
 then set where the project's ``treesketch`` program lives (or the service's URL) in the
 add-on's preferences.  Panel: 3D view > sidebar (N) > TreeSketch.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import queue
+import random
 import shutil
 import tempfile
 import threading
@@ -33,6 +36,7 @@ bl_info = {
 BUNDLED_DRAWING = Path(__file__).with_name("drawing_maple.png")
 SAPLING = "add_curve_sapling"
 COLLECTION = "TreeSketch"  # where every predicted tree goes
+CONTROLS = backend.load_controls(Path(__file__).with_name("controls.json"))["controls"]
 
 
 def _prefs(context) -> bpy.types.AddonPreferences:
@@ -100,8 +104,65 @@ class TREESKETCH_Settings(bpy.types.PropertyGroup):
         min=0,
     )
     status: StringProperty(name="Status", default="")
+    # the last prediction, which the controls edit (JSON parameters, species, view yaw)
+    last_params: StringProperty(default="")
+    last_species: StringProperty(default="")
+    last_yaw: FloatProperty(default=0.0)
+    last_tree: StringProperty(default="")  # the parent empty of the tree on show
     progress: FloatProperty(name="Progress", default=0.0, min=0.0, max=1.0, subtype="FACTOR")
     running: BoolProperty(default=False)
+
+
+def _control_group(rows: list) -> type:
+    """A PropertyGroup with one property per control of the table; each starts at its
+    keep value (``backend.keep_value``: the predicted tree as it is)."""
+    ann = {}
+    for r in rows:
+        name, label, text = r["name"], r["label"], r["help"]
+        keep = backend.keep_value(r)
+        if r["kind"] == "toggle":
+            ann[name] = BoolProperty(name=label, description=text, default=True)
+        elif r["kind"] == "choice":
+            items = [("KEEP", "as predicted", "The predicted tree's own")]
+            items += [(c["value"], c["label"], "") for c in r["choices"]]
+            ann[name] = EnumProperty(name=label, description=text, items=items, default="KEEP")
+        elif r["kind"] == "integer":
+            ann[name] = IntProperty(
+                name=label,
+                description=f"{text} (-1: as predicted)",
+                default=-1,
+                min=-1,
+                max=int(r["max"]),
+            )
+        else:
+            relative = r.get("neutral") is not None
+            ann[name] = FloatProperty(
+                name=label,
+                description=text if relative else f"{text} (0: as predicted)",
+                default=float(keep),
+                min=float(r["min"]) if relative else 0.0,
+                max=float(r["max"]),
+                step=max(1, min(100, round(100 * float(r["step"])))),
+            )
+    return type("TREESKETCH_Controls", (bpy.types.PropertyGroup,), {"__annotations__": ann})
+
+
+TREESKETCH_Controls = _control_group(CONTROLS)
+
+
+def _reset_controls(context) -> None:
+    ctl = context.scene.treesketch_controls
+    for r in CONTROLS:
+        setattr(ctl, r["name"], backend.keep_value(r))
+
+
+def _remove_tree(name: str) -> None:
+    """The tree on show (its parent empty and everything under it)."""
+    parent = bpy.data.objects.get(name)
+    if parent is None:
+        return
+    for o in [parent, *parent.children_recursive]:
+        bpy.data.objects.remove(o, do_unlink=True)
 
 
 GPENCIL_TYPES = ("GPENCIL", "GREASEPENCIL")  # Blender < 4.3, Blender 4.3+ (GPv3)
@@ -172,9 +233,13 @@ def prediction_job(context, image: Path, out: backend.Outputs):
 
         return run
     url = str(prefs.service_url)
-    return lambda on_line=None, cancel=None: backend.post_predict(
-        url, image, out.glb, refine=refine, budget=budget
-    ).get("species")
+
+    def ask(on_line=None, cancel=None):
+        reply = backend.post_predict(url, image, out.glb, refine=refine, budget=budget)
+        out.params.write_text(json.dumps(reply.get("params", {})), encoding="utf-8")
+        return reply.get("species")
+
+    return ask
 
 
 def add_result(
@@ -208,7 +273,8 @@ def add_result(
         for img in set(bpy.data.images) - images:
             if img.source == "FILE" and not img.packed_file:
                 img.pack()  # the prediction's folder is removed afterwards
-        turn = 0.0  # the GLB already faces the drawn view
+        # a predicted GLB already faces the drawn view; an edit's from the service does not
+        turn = 0.0 if yaw is None else yaw
     new = [o for o in bpy.data.objects if o not in before]
     parent = _collect(context, new, species or "tree")
     parent.rotation_euler.z -= math.radians(turn)
@@ -363,12 +429,107 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
         settings = context.scene.treesketch
         try:
             new = add_result(context, self._out, species=self._species)
+            _remember(context, self._out, self._species, new[0].name)  # before the files go
         except (backend.PredictError, RuntimeError, OSError) as exc:
             return self._failed(settings, exc)
         finally:
             shutil.rmtree(self._folder, ignore_errors=True)
         settings.progress, settings.status = 1.0, f"added {new[0].name} ({len(new) - 1} object(s))"
         return {"FINISHED"}
+
+
+def _remember(context, out: backend.Outputs, species, tree: str) -> None:
+    """Keep what the controls edit: the prediction's parameters, species and view."""
+    settings = context.scene.treesketch
+    if not out.params.is_file():
+        return
+    settings.last_params = out.params.read_text(encoding="utf-8")
+    settings.last_species = species or ""
+    settings.last_yaw = backend.read_preset(out.preset)[1] if out.preset.is_file() else 0.0
+    settings.last_tree = tree
+    _reset_controls(context)
+
+
+class TREESKETCH_OT_apply_controls(bpy.types.Operator):
+    """Grow the predicted tree again with the panel's controls (it replaces the tree on
+    show)"""
+
+    bl_idname = "treesketch.apply_controls"
+    bl_label = "Apply"
+    bl_options = {"UNDO"}
+
+    def execute(self, context):
+        settings, prefs = context.scene.treesketch, _prefs(context)
+        if not settings.last_params:
+            return self._failed(settings, "make a tree first (Sketch to Tree)")
+        ctl = context.scene.treesketch_controls
+        changed = backend.changed_controls(
+            CONTROLS, {r["name"]: getattr(ctl, r["name"]) for r in CONTROLS}
+        )
+        species = settings.last_species or None
+        folder = Path(tempfile.mkdtemp(prefix="treesketch-edit-"))
+        out = backend.Outputs.in_folder(folder)
+        try:
+            if prefs.backend == "CLI":
+                params = folder / "predicted.json"
+                params.write_text(settings.last_params, encoding="utf-8")
+                cmd = backend.grow_command(
+                    bpy.path.abspath(prefs.cli_path) or "treesketch", params, out, changed
+                )
+                cmd += ["--yaw", f"{settings.last_yaw:g}"]
+                backend.run_cli(cmd, lambda s: print("treesketch:", s))
+                yaw = None  # the GLB and the preset carry the view
+            else:
+                backend.post_trees(
+                    str(prefs.service_url),
+                    json.loads(settings.last_params),
+                    changed,
+                    species,
+                    out,
+                )
+                out.preset.unlink(missing_ok=True)  # (none: the service makes no preset)
+                yaw = settings.last_yaw
+            _remove_tree(settings.last_tree)
+            new = add_result(context, out, yaw=yaw, species=species)
+        except (backend.PredictError, RuntimeError, OSError, ValueError) as exc:
+            return self._failed(settings, backend.plain_error(exc))
+        finally:
+            shutil.rmtree(folder, ignore_errors=True)
+        settings.last_tree = new[0].name
+        what = ", ".join(f"{k}={v}" for k, v in changed.items()) or "as predicted"
+        settings.status = f"{new[0].name}: {what}"[:120]
+        return {"FINISHED"}
+
+    def _failed(self, settings, text: str) -> set:
+        settings.status = text[:120]
+        self.report({"ERROR"}, text)
+        return {"CANCELLED"}
+
+
+class TREESKETCH_OT_variant(bpy.types.Operator):
+    """Another tree of the same kind (a new seed), then apply"""
+
+    bl_idname = "treesketch.variant"
+    bl_label = "Another variant"
+    bl_options = {"UNDO"}
+
+    def execute(self, context):
+        seed = next((r for r in CONTROLS if r["name"] == "seed"), None)
+        if seed is not None:
+            context.scene.treesketch_controls.seed = random.randrange(int(seed["max"]))
+        return bpy.ops.treesketch.apply_controls()
+
+
+class TREESKETCH_OT_reset_controls(bpy.types.Operator):
+    """Every control back to the predicted tree's own, then apply"""
+
+    bl_idname = "treesketch.reset_controls"
+    bl_label = "Reset"
+    bl_options = {"UNDO"}
+
+    def execute(self, context):
+        _reset_controls(context)
+        return bpy.ops.treesketch.apply_controls()
 
 
 class TREESKETCH_PT_panel(bpy.types.Panel):
@@ -403,9 +564,28 @@ class TREESKETCH_PT_panel(bpy.types.Panel):
             layout.prop(settings, "progress", text="Progress (Esc cancels)")
         if settings.status:
             layout.label(text=settings.status)
+        if settings.last_params and CONTROLS:
+            box = layout.box()
+            box.label(text=f"Shape the {settings.last_species or 'tree'}")
+            ctl = context.scene.treesketch_controls
+            for r in CONTROLS:
+                box.prop(ctl, r["name"])
+            row = box.row()
+            row.operator(TREESKETCH_OT_apply_controls.bl_idname)
+            row.operator(TREESKETCH_OT_variant.bl_idname)
+            row.operator(TREESKETCH_OT_reset_controls.bl_idname)
 
 
-CLASSES = (TREESKETCH_Preferences, TREESKETCH_Settings, TREESKETCH_OT_predict, TREESKETCH_PT_panel)
+CLASSES = (
+    TREESKETCH_Preferences,
+    TREESKETCH_Settings,
+    TREESKETCH_Controls,
+    TREESKETCH_OT_predict,
+    TREESKETCH_OT_apply_controls,
+    TREESKETCH_OT_variant,
+    TREESKETCH_OT_reset_controls,
+    TREESKETCH_PT_panel,
+)
 
 
 def register() -> None:
@@ -414,9 +594,11 @@ def register() -> None:
     for cls in CLASSES:
         bpy.utils.register_class(cls)
     bpy.types.Scene.treesketch = bpy.props.PointerProperty(type=TREESKETCH_Settings)
+    bpy.types.Scene.treesketch_controls = bpy.props.PointerProperty(type=TREESKETCH_Controls)
 
 
 def unregister() -> None:
+    del bpy.types.Scene.treesketch_controls
     del bpy.types.Scene.treesketch
     for cls in reversed(CLASSES):
         bpy.utils.unregister_class(cls)

@@ -16,17 +16,23 @@ both), so the project's test suite checks it without Blender.
   ``RuntimeError`` carries Blender's whole "Error: Python: Traceback ..." text).
 - :func:`species_of` / :func:`preset_name`: the predicted species from the CLI's output,
   and a preset file name of its own for every prediction.
+- :func:`load_controls`, :func:`keep_value`, :func:`changed_controls`,
+  :func:`grow_command`, :func:`post_trees`: the controls a person edits the predicted tree
+  with (the project's table, shipped in the zip as ``controls.json``), and the tree grown
+  again from them (``treesketch grow --params --set`` or the service's ``POST /trees``).
 """
 
 from __future__ import annotations
 
 import ast
+import contextlib
 import json
 import os
 import re
 import struct
 import subprocess
 import time
+import urllib.error
 import urllib.parse
 import urllib.request
 import uuid
@@ -39,6 +45,11 @@ import numpy as np
 
 __all__ = [
     "Outputs",
+    "changed_controls",
+    "grow_command",
+    "keep_value",
+    "load_controls",
+    "post_trees",
     "numpy_bool_alias",
     "plain_error",
     "preset_name",
@@ -332,3 +343,99 @@ def preset_name(species: str | None, taken: Iterable[str]) -> str:
     while f"{stem}_{n}.py" in used:
         n += 1
     return f"{stem}_{n}.py"
+
+
+def load_controls(path: str | os.PathLike[str]) -> dict:
+    """The controls table the zip carries (``{"controls": [...], "default_budget": n}``);
+    an empty table when the file is missing (an add-on run from the source folder)."""
+    p = Path(path)
+    if not p.is_file():
+        return {"controls": [], "default_budget": None}
+    return json.loads(p.read_text(encoding="utf-8"))
+
+
+def keep_value(row: dict):
+    """The panel's value of a control that leaves the predicted tree as it is: a relative
+    control's neutral value; for the others a sentinel (height 0, seed -1, a choice
+    "KEEP", a toggle on)."""
+    if row.get("neutral") is not None:
+        return row["neutral"]
+    if row["kind"] == "toggle":
+        return True
+    if row["kind"] == "choice":
+        return "KEEP"
+    return -1 if row["kind"] == "integer" else 0.0
+
+
+def changed_controls(rows: Iterable[dict], values: dict) -> dict:
+    """The controls whose panel value is not their keep value (numbers within half a
+    step of it count as kept)."""
+    out = {}
+    for row in rows:
+        v, keep = values[row["name"]], keep_value(row)
+        if row["kind"] in ("toggle", "choice") or row.get("neutral") is None:
+            if v != keep:
+                out[row["name"]] = v
+        elif abs(float(v) - float(keep)) > float(row["step"]) / 2:
+            out[row["name"]] = v
+    return out
+
+
+def _text(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    return str(v)
+
+
+def grow_command(
+    treesketch: str | os.PathLike[str],
+    params: str | os.PathLike[str],
+    outputs: Outputs,
+    controls: dict,
+) -> list[str]:
+    """``treesketch grow --params P --set NAME=VALUE ...`` writing the GLB, the parameters
+    and the Sapling preset of the edited tree."""
+    cmd = [str(treesketch), "grow", "--params", str(params), "--out", str(outputs.glb)]
+    cmd += ["--save-params", str(outputs.params), "--preset", str(outputs.preset)]
+    for name, value in controls.items():
+        cmd += ["--set", f"{name}={_text(value)}"]
+    return cmd
+
+
+def post_trees(
+    url: str,
+    params: dict,
+    controls: dict,
+    species: str | None,
+    outputs: Outputs,
+    timeout: float = 120.0,
+) -> None:
+    """The service's ``POST /trees``: the edited tree's parameters (JSON) and its GLB at
+    full detail written to ``outputs``."""
+    body = {"params": params, "controls": controls, "species": species, "max_faces": None}
+    endpoint = urllib.parse.urljoin(url.rstrip("/") + "/", "trees")
+    data = json.dumps(body).encode()
+    try:
+        for accept, path in (
+            ("application/json", outputs.params),
+            ("model/gltf-binary", outputs.glb),
+        ):
+            req = urllib.request.Request(
+                endpoint,
+                data=data,
+                headers={"Content-Type": "application/json", "Accept": accept},
+            )
+            with urllib.request.urlopen(req, timeout=timeout) as resp:
+                reply = resp.read()
+            if accept == "application/json":
+                reply = json.dumps(json.loads(reply)["params"]).encode()
+            Path(path).write_bytes(reply)
+    except urllib.error.HTTPError as exc:
+        detail = exc.read().decode(errors="replace")
+        with contextlib.suppress(ValueError, KeyError, TypeError):
+            detail = json.loads(detail)["detail"]
+        raise PredictError(f"TreeSketch service at {url} refused the edit: {detail}") from None
+    except (OSError, ValueError, KeyError) as exc:
+        raise PredictError(f"TreeSketch service at {url}: {exc}") from None
