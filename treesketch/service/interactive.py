@@ -10,7 +10,8 @@ job's current best tree.
   parameters, species, height and control values.
 - ``GET /jobs/{id}/preview/tree.glb`` and ``.../sketch.png``: the job's current best tree
   while it runs (``preview.PreviewWriter``; the job's progress says which ``preview``
-  version is there).
+  version is there).  Local worker processes write it beside the job's results; a Ray
+  actor's job shows none (its files live on another node until the job ends).
 - ``GET /examples`` (names and links) and ``GET /examples/{name}``: the example drawings
   (the repository's ``examples/hand/``, when the service runs from a checkout);
   ``GET /help/controls.png``: pictures of what each control does (``docs/controls.png``).
