@@ -76,6 +76,7 @@ def edits(page, out: Path) -> None:
 
     def shot(caption: str) -> Image.Image:
         page.wait_for_selector("body[data-model=loaded]")
+        page.click("#reset-view")  # an edit keeps the camera; the picture frames each tree
         page.wait_for_timeout(300)
         im = Image.open(io.BytesIO(page.locator("#view canvas").screenshot())).convert("RGB")
         im = im.resize((320, round(320 * im.height / im.width)))
