@@ -289,3 +289,95 @@ def test_read_preset_faults_are_predict_errors(backend, tmp_path, text):
     with pytest.raises(backend.PredictError) as info:
         backend.read_preset(path)
     assert str(path) in str(info.value)
+
+
+def test_numpy_bool_alias(backend, monkeypatch):
+    """Debian Blender 3.4's glTF importer calls np.bool (removed in numpy 1.24): the
+    add-on puts it back itself, once."""
+    monkeypatch.delattr(np, "bool", raising=False)  # numpy 1.24..1.26 (numpy 2 has it back)
+    assert "bool" not in np.__dict__
+    assert backend.numpy_bool_alias() is True
+    assert np.bool is bool
+    assert backend.numpy_bool_alias() is False
+
+
+def test_plain_error(backend):
+    blender = RuntimeError(
+        "Error: Python: Traceback (most recent call last):\n"
+        '  File "/usr/share/blender/3.4/scripts/addons/io_scene_gltf2/__init__.py", line 1\n'
+        "    np.bool\n"
+        "AttributeError: module 'numpy' has no attribute 'bool'\n"
+    )
+    assert backend.plain_error(blender) == "module 'numpy' has no attribute 'bool'"
+    assert backend.plain_error(RuntimeError("Error: no image file at /x.png")) == (
+        "no image file at /x.png"
+    )
+    assert backend.plain_error(backend.PredictError("timed out")) == "timed out"
+    assert backend.plain_error(RuntimeError("")) == "RuntimeError"
+
+
+def test_species_and_unique_preset_names(backend):
+    lines = ["refining ...", "species: cherry (first estimate: tsn); view yaw 15", "wrote x"]
+    assert backend.species_of(lines) == "cherry"
+    assert backend.species_of(["nothing here"]) is None
+    taken = ["treesketch_cherry_1.py", "treesketch_cherry_2.py", "other.py"]
+    assert backend.preset_name("cherry", taken) == "treesketch_cherry_3.py"
+    assert backend.preset_name("maple", taken) == "treesketch_maple_1.py"
+    assert backend.preset_name(None, []) == "treesketch_tree_1.py"
+
+
+def test_controls_in_the_zip_and_the_grow_command(backend, tmp_path):
+    """The panel's controls are the project's table (shipped in the zip); only the ones
+    moved from their keep value go to `treesketch grow --set`."""
+    sys.path.insert(0, str(ROOT / "scripts"))
+    try:
+        from blender_addon_zip import main
+    finally:
+        sys.path.remove(str(ROOT / "scripts"))
+    assert main([str(tmp_path / "a.zip")]) == 0
+    (tmp_path / "controls.json").write_bytes(
+        zipfile.ZipFile(tmp_path / "a.zip").read("treesketch_addon/controls.json")
+    )
+    from refine.search import DEFAULT_BUDGET
+    from weberpenn.controls import CONTROLS
+
+    table = backend.load_controls(tmp_path / "controls.json")
+    assert [r["name"] for r in table["controls"]] == [c.name for c in CONTROLS]
+    assert table["default_budget"] == DEFAULT_BUDGET
+    assert backend.load_controls(tmp_path / "missing.json")["controls"] == []
+    rows = table["controls"]
+    keep = {r["name"]: backend.keep_value(r) for r in rows}
+    assert keep["crown_width"] == 1.0 and keep["height"] == 0.0 and keep["seed"] == -1
+    assert keep["crown_shape"] == "KEEP" and keep["leafy"] is True
+    assert backend.changed_controls(rows, keep) == {}
+    moved = {**keep, "crown_width": 1.3, "leafy": False, "seed": 7, "branch_angle": 0.2}
+    changed = backend.changed_controls(rows, moved)
+    assert changed == {"crown_width": 1.3, "leafy": False, "seed": 7}  # 0.2 deg: within a step
+    out = backend.Outputs.in_folder(tmp_path)
+    cmd = backend.grow_command("/v/bin/treesketch", tmp_path / "p.json", out, changed)
+    assert cmd[:4] == ["/v/bin/treesketch", "grow", "--params", str(tmp_path / "p.json")]
+    sets = [cmd[i + 1] for i, a in enumerate(cmd) if a == "--set"]
+    assert sets == ["crown_width=1.3", "leafy=false", "seed=7"]
+    assert cmd[cmd.index("--preset") + 1] == str(out.preset)
+
+
+def test_post_trees_against_the_service(backend, tmp_path):
+    """The service path of the panel's controls: the real ``POST /trees``."""
+    import json
+
+    from service_helpers import serve
+
+    from treesketch.service import ServiceConfig, create_app
+
+    config = ServiceConfig(
+        data=tmp_path / "data", workers=1, estimator="service_helpers:palm_estimator"
+    )
+    params = species.sample("palm", 4).to_dict()
+    out = backend.Outputs.in_folder(tmp_path)
+    with serve(create_app(config)) as url:
+        backend.post_trees(url, params, {"crown_width": 1.5, "seed": 3}, "palm", out)
+        with pytest.raises(backend.PredictError, match="crown_width"):
+            backend.post_trees(url, params, {"crown_width": 50}, "palm", out)
+    edited = json.loads(out.params.read_text())
+    assert edited["length"][1] == pytest.approx(1.5 * params["length"][1])
+    assert edited["seed"] == 3 and out.glb.read_bytes()[:4] == b"glTF"

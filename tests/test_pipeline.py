@@ -67,7 +67,9 @@ def test_refine_improves_and_fields() -> None:
     assert len(r.tree_mesh.branches.faces) > 0
     assert {"prepare", "estimate", "refine", "total"} <= set(r.timings)
     assert 0.0 < r.confidence <= 1.0
-    assert [p.stage for p in seen][:3] == ["read", "estimate", "refine"]
+    # "estimate" is told as it starts and again with the first estimate's tree
+    assert [p.stage for p in seen][:4] == ["read", "estimate", "estimate", "refine"]
+    assert seen[1].params is None and seen[2].params is not None
     refining = [p for p in seen if p.stage == "refine" and p.evaluations]
     assert refining and refining[-1].evaluations == r.refinement.evaluations
     assert all(p.budget == 25 for p in seen)
@@ -342,3 +344,26 @@ def test_a_drawing_prepared_for_other_settings_is_refused() -> None:
         refine(drawing, species.sample("palm", 9), RefineSettings(budget=2), species="palm")
     with pytest.raises(ValueError, match="shape metric only"):
         PreparedDrawing.create(img, 128, "ink", embedder=object())
+
+
+def test_progress_shows_the_current_best_tree_within_the_budget() -> None:
+    """The first estimate comes with the "estimate" stage; the refinement's best follows;
+    the count never passes the plan (both species' budgets) and the distance only falls."""
+    seen = []
+    r = Pipeline(Unsure(), RefineSettings(budget=12)).run(
+        _gt_sketch("palm", 3), progress=seen.append
+    )
+    assert set(r.extras["tried"]) == {"maple", "palm"}
+    # the plan is known once the candidates are: palm gets max(8, 12 // 2)
+    assert {p.budget for p in seen if p.params is not None} == {12 + 8}
+    assert all(p.evaluations <= p.budget for p in seen)
+    first = next(p for p in seen if p.params is not None)
+    assert first.stage == "estimate" and first.species == "maple" and first.version == 1
+    assert first.params.to_dict() == Unsure().estimate(None).params.to_dict()
+    losses = [p.best_loss for p in seen if not np.isnan(p.best_loss)]
+    assert losses and all(b <= a for a, b in zip(losses, losses[1:], strict=False))
+    versions = [p.version for p in seen]
+    assert versions == sorted(versions) and versions[-1] > 1
+    last = seen[-1]
+    assert last.species == r.species and last.params is not None
+    assert last.best_loss == pytest.approx(min(losses))

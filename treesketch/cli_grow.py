@@ -79,13 +79,21 @@ def grow_command(
         help="Bark and leaf textures (made by the project, embedded in GLB, PNGs beside OBJ) "
         "or flat species colours.",
     ),
+    settings: list[str] = typer.Option(
+        [],
+        "--set",
+        help="Edit the tree with a control, NAME=VALUE (repeatable), e.g. --set "
+        "crown_width=1.3 --set seed=7 --set height=12; `treesketch controls` lists them.",
+    ),
 ) -> None:
     """Grow one Weber-Penn tree and write its mesh.
 
     Examples: `treesketch grow --species maple --seed 3 --out maple.glb`,
-    `treesketch grow --params tree.json --out tree.obj --max-faces 20000`.
+    `treesketch grow --params tree.json --out tree.obj --max-faces 20000`,
+    `treesketch grow --params tree.json --set crown_width=1.3 --set seed=7 --out tree.glb`.
     """
     from weberpenn import build_mesh, grow, load_params, species
+    from weberpenn.controls import check_controls, grow_with_controls
     from weberpenn.export import mesh_files, mesh_paths, preset_text
     from weberpenn.fileio import OutputError, check_targets, write_together
     from weberpenn.lod import MIN_FACES, lod
@@ -121,14 +129,20 @@ def grow_command(
         )
     except OutputError as exc:
         _fail(str(exc))
+    controls: dict[str, str] = {}
+    for item in settings:
+        key, eq, value = item.partition("=")
+        if not eq or not key.strip():
+            _fail(f"--set {item!r}: give NAME=VALUE, e.g. --set crown_width=1.3")
+        controls[key.strip()] = value.strip()
+    try:
+        checked = check_controls(controls)
+    except ValueError as exc:
+        _fail(f"--set: {exc}")
     name: str | None = None
     try:
         if species_name is not None:
-            name = species_name.strip().lower()
-            if name not in species.SPECIES:
-                _fail(
-                    f"unknown species {species_name!r}; choose one of {', '.join(species.SPECIES)}"
-                )
+            name = species.canonical(species_name)
             params = species.sample(name, 0 if seed is None else seed)
         else:
             assert params_path is not None
@@ -136,7 +150,10 @@ def grow_command(
             if seed is not None:
                 params = params.replace(seed=seed)
         t0 = time.perf_counter()
-        full = build_mesh(grow(params), species=name)
+        if checked:
+            params, full = grow_with_controls(params, checked, name)
+        else:
+            full = build_mesh(grow(params), species=name)
         dt = time.perf_counter() - t0
         if full.is_empty:
             _fail("these parameters grow an empty tree (no branches and no leaves)")
@@ -160,6 +177,22 @@ def grow_command(
     )
 
 
+def controls_command() -> None:
+    """Print the controls `grow --set`, the page and the add-on edit a tree with."""
+    from weberpenn.controls import CONTROLS
+
+    for c in CONTROLS:
+        if c.kind == "choice":
+            what = "one of " + ", ".join(f"{v} ({label})" for v, label in c.choices)
+        elif c.kind == "toggle":
+            what = "true or false"
+        else:
+            what = f"{c.lo:g}..{c.hi:g} {c.unit}".rstrip()
+            if c.relative:
+                what += f" (unchanged at {c.neutral:g})"
+        typer.echo(f"{c.name:13} {c.label}: {c.help}\n{'':13} {what}; moves {'; '.join(c.moves)}")
+
+
 def params_command() -> None:
     """Print every parameter: shape, type, head, allowed range and meaning."""
     from weberpenn.params import describe
@@ -171,3 +204,4 @@ def register(app: typer.Typer) -> None:
     """Add this module's commands to the main app."""
     app.command("grow")(grow_command)
     app.command("params")(params_command)
+    app.command("controls")(controls_command)

@@ -4,9 +4,12 @@ together or not at all (``treesketch.outputs.write_outputs``)."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import typer
+
+from refine.search import DEFAULT_BUDGET
 
 from .cli_common import fail
 
@@ -24,7 +27,10 @@ def predict_command(
         False, "--no-refine", help="Skip the refinement: TSN's estimate only."
     ),
     budget: int = typer.Option(
-        None, "--budget", help="Refinement: most trees to evaluate (default 100)."
+        None,
+        "--budget",
+        help=f"Refinement: most trees to evaluate for the first species (default "
+        f"{DEFAULT_BUDGET}; another candidate species gets half as many).",
     ),
     time_limit: float = typer.Option(
         None, "--time-limit", help="Refinement: most seconds (default 50)."
@@ -97,7 +103,14 @@ def predict_command(
 
     from .estimators import ESTIMATORS, load_estimator
     from .outputs import ExportOptions, write_outputs
-    from .pipeline import Pipeline, RefineSettings, SketchError, check_height, load_sketch
+    from .pipeline import (
+        Pipeline,
+        Progress,
+        RefineSettings,
+        SketchError,
+        check_height,
+        load_sketch,
+    )
 
     # every option first: nothing is read, estimated or refined before they all pass
     outputs = {
@@ -168,9 +181,10 @@ def predict_command(
     )
     task = bar.add_task("refine", total=settings.budget, loss="-")
 
-    def on_progress(p: object) -> None:
-        best = getattr(p, "best_loss", float("nan"))
-        bar.update(task, completed=getattr(p, "evaluations", 0), loss=f"{best:.4f}")
+    def on_progress(p: Progress) -> None:
+        # the run's whole plan (every candidate species) and a distance that only falls
+        loss = "-" if math.isnan(p.best_loss) else f"{p.best_loss:.4f}"
+        bar.update(task, total=max(1, p.budget), completed=p.evaluations, loss=loss)
 
     try:
         with bar:

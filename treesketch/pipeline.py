@@ -49,6 +49,7 @@ __all__ = [
     "SketchError",
     "check_height",
     "load_sketch",
+    "planned_evaluations",
     "predict_then_refine",
     "prepare_input",
     "rescale_height",
@@ -74,13 +75,58 @@ MAX_HEIGHT = 200.0  # metres: taller than any tree that grows
 
 @dataclass(frozen=True)
 class Progress:
-    """Where a run is: ``stage`` is "read", "estimate", "refine" or "render"."""
+    """Where a run is: ``stage`` is "read", "estimate", "refine" or "render".
+
+    ``evaluations`` counts the trees of every species tried and never passes ``budget``,
+    the run's whole plan (the estimator's species' budget plus the other candidates');
+    ``best_loss`` (the best tree's sketch distance, NaN before the refinement's first
+    tree) only falls.  ``params`` is the current best tree (the first estimate from the
+    "estimate" stage's end, then the refinement's best), of ``species`` seen from ``yaw``;
+    ``version`` grows by one each time it changes (0: no tree yet)."""
 
     stage: str
     evaluations: int
     budget: int
     best_loss: float
     elapsed: float
+    params: TreeParams | None = None
+    species: str | None = None
+    yaw: float = 0.0
+    version: int = 0
+
+
+class _CurrentBest:
+    """The tree a run would return if it stopped now, by the rule the run picks its result
+    with (the species of highest posterior, ``species_choice.posterior``, from the
+    estimator's scores and each species' best distance so far; only the species the user
+    means when there is one); the shown distance only falls."""
+
+    def __init__(self, scores: dict[str, float]) -> None:
+        self.scores = scores
+        self.best: dict[str, tuple[TreeParams, float, float]] = {}  # species -> tree
+        self.params: TreeParams | None = None
+        self.species: str | None = None
+        self.yaw = 0.0
+        self.shown = math.nan
+        self.version = 0
+
+    def estimate(self, params: TreeParams, species: str, yaw: float) -> None:
+        self.params, self.species, self.yaw = params, species, yaw
+        self.version += 1
+
+    def offer(self, params: TreeParams, yaw: float, loss: float, species: str) -> None:
+        """A candidate's new best tree."""
+        if species in self.best and not loss < self.best[species][2]:
+            return
+        self.best[species] = (params, yaw, loss)
+        post = posterior(self.scores, {s: v[2] for s, v in self.best.items()})
+        pick = max(self.best, key=lambda s: post.get(s, 0.0))
+        p, y, d = self.best[pick]
+        if p is self.params and pick == self.species:
+            return
+        self.params, self.species, self.yaw = p, pick, y
+        self.shown = d if math.isnan(self.shown) else min(self.shown, d)
+        self.version += 1
 
 
 @dataclass(frozen=True)
@@ -223,6 +269,11 @@ def _confidence(loss: float, ink: float, limit: float) -> tuple[float, str | Non
     )
 
 
+def planned_evaluations(cfg: RefineSettings, n: int) -> int:
+    """The most trees a run refining ``n`` species evaluates (see :func:`_share`)."""
+    return sum(_share(cfg, i, n).budget for i in range(n)) if cfg.refine else 0
+
+
 def _share(cfg: RefineSettings, i: int, n: int) -> RefineSettings:
     """Candidate ``i`` of ``n`` species' settings: the estimator's species (``i`` 0) the
     whole budget and, when others are tried, 60% of the time; the others half the budget
@@ -269,21 +320,40 @@ class Pipeline:
         """Sketch (path, bytes, image or array) -> :class:`Result` (see the module text).
 
         ``height`` (metres) rescales the tree; ``progress`` is told of each stage and each
-        refinement evaluation; ``cancel()`` returning True stops the run with
-        :class:`Cancelled` within one tree evaluation; ``species`` (a name of
-        ``weberpenn.species.SPECIES`` or one people use, "christmas tree") is the species
-        the user means: only it is refined, and the result is of it."""
+        refinement evaluation, with the current best tree (:class:`Progress`: the first
+        estimate as soon as it exists, then the refinement's best); ``cancel()``
+        returning True stops the run with :class:`Cancelled` within one tree
+        evaluation; ``species`` (a name of ``weberpenn.species.SPECIES`` or one people
+        use, "christmas tree") is the species the user means: only it is refined, and
+        the result is of it."""
         height = check_height(height)
         chosen = None if species is None else wp_species.canonical(species)
         cfg = self.settings
         t_start = time.perf_counter()
+        plan = cfg.budget if cfg.refine else 0  # until the candidates are known
+        best: _CurrentBest | None = None
 
-        def tell(stage: str, evaluations: int = 0, best: float = math.nan) -> None:
+        def tell(stage: str, evaluations: int = 0) -> None:
             if cancel is not None and cancel():
                 raise Cancelled(f"cancelled during {stage}")
             if progress is not None:
                 elapsed = time.perf_counter() - t_start
-                progress(Progress(stage, evaluations, cfg.budget, best, elapsed))
+                if best is None:
+                    progress(Progress(stage, 0, plan, math.nan, elapsed))
+                    return
+                progress(
+                    Progress(
+                        stage,
+                        min(evaluations, plan),
+                        plan,
+                        best.shown,
+                        elapsed,
+                        best.params,
+                        best.species,
+                        best.yaw,
+                        best.version,
+                    )
+                )
 
         timings: dict[str, float] = {}
         t = time.perf_counter()
@@ -299,6 +369,14 @@ class Pipeline:
         est = self.estimator.estimate(img)
         yaw0 = 0.0 if est.yaw is None else float(est.yaw)
         timings["estimate"] = time.perf_counter() - t
+        best = _CurrentBest(est.species_scores or {est.species: 1.0})
+        if chosen is None:
+            best.estimate(est.params, est.species, yaw0)
+        else:
+            best.estimate(est.params_for(chosen), chosen, yaw0)
+        names = ([chosen] if chosen is not None else self.candidates(est)) if cfg.refine else []
+        plan = planned_evaluations(cfg, len(names))
+        tell("estimate")  # the first tree, at once
 
         t = time.perf_counter()
         result_refine: RefineResult | None = None
@@ -309,7 +387,6 @@ class Pipeline:
         if chosen is not None:
             name = chosen
         if cfg.refine:
-            names = [chosen] if chosen is not None else self.candidates(est)
             for i, candidate in enumerate(names):
                 run_cfg = _share(cfg, i, len(names))
                 tell("refine", done)
@@ -319,9 +396,10 @@ class Pipeline:
                     run_cfg,
                     species=candidate,
                     yaw=None if cfg.search_yaw else yaw0,
-                    progress=lambda n, best, done=done: tell("refine", done + n, best),
+                    progress=lambda n, _loss, done=done: tell("refine", done + n),
                     cancel=cancel,
                     embedder=self.embedder,
+                    on_best=lambda p, y, loss, c=candidate: best.offer(p, y, loss, c),
                 )
                 done += rr.evaluations
                 tried[candidate] = rr.loss_after

@@ -19,6 +19,7 @@ from __future__ import annotations
 import io
 import os
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -91,7 +92,10 @@ def _parts(tm: TreeMesh, yaw: float, max_faces: int | None) -> list[_Part]:
     return out
 
 
+@lru_cache(maxsize=32)
 def _textures(species: str | None) -> dict[str, Image.Image]:
+    # a pure function of the species, made per export before: an edit's light GLB paid
+    # for drawing both pictures every time (read-only for the callers)
     return {
         "bark": bark_texture(species, TEXTURE_SIZE),
         "leaf": leaf_texture(species, TEXTURE_SIZE),

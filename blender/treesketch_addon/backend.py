@@ -13,11 +13,22 @@ both), so the project's test suite checks it without Blender.
 - :func:`strokes_png`: pen strokes (lists of 2-D points) drawn black on white as a PNG,
   framed the way the project's reader expects (tree filling the canvas, base at the
   bottom).
+- :func:`numpy_bool_alias`: puts back ``numpy.bool``, which the glTF importer of Blender
+  3.4 (Debian's) still calls though numpy 1.24 removed it.
+- :func:`plain_error`: one line a person can read from an exception (an operator's
+  ``RuntimeError`` carries Blender's whole "Error: Python: Traceback ..." text).
+- :func:`species_of` / :func:`preset_name`: the predicted species from the CLI's output,
+  and a preset file name of its own for every prediction.
+- :func:`load_controls`, :func:`keep_value`, :func:`changed_controls`,
+  :func:`grow_command`, :func:`post_trees`: the controls a person edits the predicted tree
+  with (the project's table, shipped in the zip as ``controls.json``), and the tree grown
+  again from them (``treesketch grow --params --set`` or the service's ``POST /trees``).
 """
 
 from __future__ import annotations
 
 import ast
+import contextlib
 import json
 import os
 import re
@@ -38,6 +49,15 @@ import numpy as np
 __all__ = [
     "MAX_GLB_BYTES",
     "Outputs",
+    "changed_controls",
+    "grow_command",
+    "keep_value",
+    "load_controls",
+    "post_trees",
+    "numpy_bool_alias",
+    "plain_error",
+    "preset_name",
+    "species_of",
     "PredictError",
     "cli_command",
     "multipart_body",
@@ -49,6 +69,8 @@ __all__ = [
 ]
 
 _ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
+_SPECIES = re.compile(r"^species: ([A-Za-z0-9_]+)")
+_ERROR_LINE = re.compile(r"^[A-Za-z_][\w.]*(Error|Exception|Exit)\b.*?: ")
 _YAW = re.compile(r"^# view yaw: (-?[0-9.]+) degrees")
 
 
@@ -395,3 +417,146 @@ def progress_fraction(line: str) -> float | None:
     if not m or int(m.group(2)) == 0:
         return None
     return min(int(m.group(1)) / int(m.group(2)), 1.0)
+
+
+def numpy_bool_alias() -> bool:
+    """Give numpy its old ``bool`` alias back when it lacks it (Blender 3.4's glTF importer
+    uses ``np.bool``, removed in numpy 1.24); True when it was added now."""
+    if "bool" in np.__dict__:
+        return False
+    np.bool = bool  # type: ignore[attr-defined]
+    return True
+
+
+def plain_error(exc: BaseException) -> str:
+    """One line for a person: an operator's "Error: Python: Traceback ..." becomes its last
+    line ("AttributeError: module 'numpy' has no attribute 'bool'" -> that sentence
+    without the exception's class name)."""
+    lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+    if not lines:
+        return type(exc).__name__
+    if any("Traceback" in ln for ln in lines):
+        last = lines[-1]
+        for prefix in ("Error: ", "Python: "):
+            last = last.removeprefix(prefix)
+        return _ERROR_LINE.sub("", last) or last
+    first = lines[0]
+    for prefix in ("Error: ", "Python: "):
+        first = first.removeprefix(prefix)
+    return first
+
+
+def species_of(lines: Iterable[str]) -> str | None:
+    """The species ``treesketch predict`` printed ("species: maple (first estimate: ...)")."""
+    for line in lines:
+        m = _SPECIES.match(line)
+        if m:
+            return m.group(1)
+    return None
+
+
+def preset_name(species: str | None, taken: Iterable[str]) -> str:
+    """A Sapling preset file name no earlier prediction has: treesketch_<species>_<n>.py
+    with the first free n."""
+    stem = f"treesketch_{species or 'tree'}"
+    used = set(taken)
+    n = 1
+    while f"{stem}_{n}.py" in used:
+        n += 1
+    return f"{stem}_{n}.py"
+
+
+def load_controls(path: str | os.PathLike[str]) -> dict:
+    """The controls table the zip carries (``{"controls": [...], "default_budget": n}``);
+    an empty table when the file is missing (an add-on run from the source folder)."""
+    p = Path(path)
+    if not p.is_file():
+        return {"controls": [], "default_budget": None}
+    return json.loads(p.read_text(encoding="utf-8"))
+
+
+def keep_value(row: dict):
+    """The panel's value of a control that leaves the predicted tree as it is: a relative
+    control's neutral value; for the others a sentinel (height 0, seed -1, a choice
+    "KEEP", a toggle on)."""
+    if row.get("neutral") is not None:
+        return row["neutral"]
+    if row["kind"] == "toggle":
+        return True
+    if row["kind"] == "choice":
+        return "KEEP"
+    return -1 if row["kind"] == "integer" else 0.0
+
+
+def changed_controls(rows: Iterable[dict], values: dict) -> dict:
+    """The controls whose panel value is not their keep value (numbers within half a
+    step of it count as kept)."""
+    out = {}
+    for row in rows:
+        v, keep = values[row["name"]], keep_value(row)
+        if row["kind"] in ("toggle", "choice") or row.get("neutral") is None:
+            if v != keep:
+                out[row["name"]] = v
+        elif abs(float(v) - float(keep)) > float(row["step"]) / 2:
+            out[row["name"]] = v
+    return out
+
+
+def _text(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    return str(v)
+
+
+def grow_command(
+    treesketch: str | os.PathLike[str],
+    params: str | os.PathLike[str],
+    outputs: Outputs,
+    controls: dict,
+) -> list[str]:
+    """``treesketch grow --params P --set NAME=VALUE ...`` writing the GLB, the parameters
+    and the Sapling preset of the edited tree."""
+    cmd = [str(treesketch), "grow", "--params", str(params), "--out", str(outputs.glb)]
+    cmd += ["--save-params", str(outputs.params), "--preset", str(outputs.preset)]
+    for name, value in controls.items():
+        cmd += ["--set", f"{name}={_text(value)}"]
+    return cmd
+
+
+def post_trees(
+    url: str,
+    params: dict,
+    controls: dict,
+    species: str | None,
+    outputs: Outputs,
+    timeout: float = 120.0,
+) -> None:
+    """The service's ``POST /trees``: the edited tree's parameters (JSON) and its GLB at
+    full detail written to ``outputs``."""
+    body = {"params": params, "controls": controls, "species": species, "max_faces": None}
+    endpoint = urllib.parse.urljoin(url.rstrip("/") + "/", "trees")
+    data = json.dumps(body).encode()
+    try:
+        for accept, path in (
+            ("application/json", outputs.params),
+            ("model/gltf-binary", outputs.glb),
+        ):
+            req = urllib.request.Request(
+                endpoint,
+                data=data,
+                headers={"Content-Type": "application/json", "Accept": accept},
+            )
+            with urllib.request.urlopen(req, timeout=timeout) as resp:
+                reply = resp.read()
+            if accept == "application/json":
+                reply = json.dumps(json.loads(reply)["params"]).encode()
+            Path(path).write_bytes(reply)
+    except urllib.error.HTTPError as exc:
+        detail = exc.read().decode(errors="replace")
+        with contextlib.suppress(ValueError, KeyError, TypeError):
+            detail = json.loads(detail)["detail"]
+        raise PredictError(f"TreeSketch service at {url} refused the edit: {detail}") from None
+    except (OSError, ValueError, KeyError) as exc:
+        raise PredictError(f"TreeSketch service at {url}: {exc}") from None

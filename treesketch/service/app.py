@@ -22,8 +22,12 @@ from fastapi.responses import FileResponse, JSONResponse, Response, StreamingRes
 from starlette.concurrency import run_in_threadpool
 from starlette.types import ASGIApp, Receive, Scope, Send
 
+from refine.search import DEFAULT_BUDGET
+
+from .interactive import add_interactive_routes
 from .limits import LimitError, Limits, check_image, parse_options, read_form
 from .pool import WorkerPool, default_workers
+from .preview import PREVIEW_FILES
 from .ray_pool import RayWorkerPool
 from .runner import ARTEFACTS
 from .store import Job, JobStore
@@ -44,7 +48,7 @@ class ServiceConfig:
     estimators: tuple[str, ...] = ("template",)  # what a job may ask for besides the default
     max_queue: int = 64
     limits: Limits = Limits()
-    default_budget: int = 100
+    default_budget: int = DEFAULT_BUDGET
     default_time_limit: float = 50.0
     retention_days: float | None = 30.0
     retention_bytes: int | None = 2 * 1024**3
@@ -95,6 +99,8 @@ def _links(job_id: str) -> dict[str, str]:
     base = f"/jobs/{job_id}"
     links = {"self": base, "events": f"{base}/events"}
     links.update({name: f"{base}/{name}" for name in ARTEFACTS})
+    # the current best tree while the job runs (interactive.py)
+    links.update({f"preview/{name}": f"{base}/preview/{name}" for name in PREVIEW_FILES})
     return links
 
 
@@ -241,6 +247,8 @@ def create_app(config: ServiceConfig) -> FastAPI:
             )
         pool.wakeup()
         return job
+
+    add_interactive_routes(app, store)
 
     @app.get("/", include_in_schema=False)
     async def index() -> Response:

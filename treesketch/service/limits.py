@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 from python_multipart.multipart import MultipartParser, parse_options_header
 
+from refine.search import DEFAULT_BUDGET
 from render import reader
 from treesketch.pipeline import MAX_HEIGHT
 
@@ -211,7 +212,7 @@ def parse_options(
     limits: Limits,
     estimators: Collection[str],
     default_estimator: str,
-    default_budget: int = 100,
+    default_budget: int = DEFAULT_BUDGET,
     default_time_limit: float = 50.0,
 ) -> JobOptions:
     """Validated job options from form fields; LimitError(422) naming the first bad one."""

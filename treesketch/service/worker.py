@@ -22,6 +22,8 @@ from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import Any
 
+from .preview import PreviewWriter
+
 __all__ = ["progress_info", "worker_main"]
 
 WORKER_NICE = 5
@@ -29,24 +31,39 @@ PROGRESS_EVERY = 0.1  # seconds between progress messages (the pipe is cheap, th
 
 
 class _Reporter:
-    """The progress callback of one job: at most one message per PROGRESS_EVERY."""
+    """The progress callback of one job: at most one message per PROGRESS_EVERY, and the
+    current best tree written for the page (``preview.PreviewWriter``)."""
 
-    def __init__(self, conn: Connection, job_id: str, t0: float) -> None:
-        self.conn, self.job_id, self.t0 = conn, job_id, t0
+    def __init__(
+        self, conn: Connection, job_id: str, t0: float, preview: PreviewWriter | None = None
+    ) -> None:
+        self.conn, self.job_id, self.t0, self.preview = conn, job_id, t0, preview
         self.last, self.stage = 0.0, ""
 
     def __call__(self, p: Any) -> None:
-        """``p``: a ``treesketch.Progress``; a new stage is always told."""
+        """``p``: a ``treesketch.Progress``; a new stage and a new preview are always
+        told."""
+        shown = None if self.preview is None else self.preview.offer(p)
         now = time.perf_counter()
-        if p.stage != self.stage or now - self.last >= PROGRESS_EVERY:
+        if shown is not None or p.stage != self.stage or now - self.last >= PROGRESS_EVERY:
             self.last, self.stage = now, p.stage
-            self.conn.send(("progress", self.job_id, progress_info(p, now - self.t0)))
+            info = progress_info(p, now - self.t0)
+            if shown is not None:
+                info["preview"] = shown
+            self.conn.send(("progress", self.job_id, info))
 
 
 def progress_info(p: Any, elapsed: float) -> dict[str, Any]:
-    """A ``treesketch.Progress`` as the plain dict the pool keeps and the API shows."""
+    """A ``treesketch.Progress`` as the plain dict the pool keeps and the API shows
+    (``budget``: the run's whole plan, which ``evaluations`` never passes)."""
     best = p.best_loss if math.isfinite(p.best_loss) else None
-    return {"stage": p.stage, "evaluations": p.evaluations, "best_loss": best, "elapsed": elapsed}
+    return {
+        "stage": p.stage,
+        "evaluations": p.evaluations,
+        "budget": p.budget,
+        "best_loss": best,
+        "elapsed": elapsed,
+    }
 
 
 def worker_main(spec: str, conn: Connection, cancel: Any, root: str) -> None:
@@ -77,7 +94,7 @@ def worker_main(spec: str, conn: Connection, cancel: Any, root: str) -> None:
             return
         job_id, options = msg
         t0 = time.perf_counter()
-        progress = _Reporter(conn, job_id, t0)
+        progress = _Reporter(conn, job_id, t0, PreviewWriter(results / job_id / "preview"))
         try:
             opts = JobOptions.from_dict(options)
             sketch = (uploads / f"{job_id}.img").read_bytes()
