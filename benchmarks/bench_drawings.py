@@ -17,15 +17,13 @@ and line distances and reports which are flagged at the current
 shape thresholds that flags <= 10 % of trees and >= 95 % of non-trees, if there is one.
 
 ``refine``: 25 held-out-style drawings (5 per species, seeds 950+ or ``--first-seed``+)
-through the pipeline at its default settings but ``--budget`` (40) and ``--tree-seeds``:
+through the pipeline at its default settings but ``--budget`` (40) and ``--set``:
 the sketch distance before/after, the species after synthesis against the truth, and the
 mesh error before (TSN) and after (refined):
 the combined branch+leaf Hausdorff max distance normalised by the ground truth's diagonal
 (``eval.hausdorff``), each tree turned into the ground truth's frame by its own view (TSN,
 which has no view, as a front view), as ``benchmarks/bench_refine.py`` does, and the
-"aligned" distance (each tree turned about its trunk to its best fit); the refined tree is
-also scored at the search's own size and scaled to the estimate's height
-(``RefineSettings.keep_height``), whichever of the two the pipeline returned.
+"aligned" distance (each tree turned about its trunk to its best fit).
 
 ``estimate``: milliseconds per ``Pipeline.estimate`` (normaliser + TSN) on 10 drawings and
 the hand drawings of examples/hand, and per stage, wall clock and CPU time, [median, max]
@@ -371,7 +369,6 @@ def settings(args: argparse.Namespace, **more: Any) -> RefineSettings:
     return RefineSettings(
         budget=args.budget,
         embedding=args.embedding,
-        tree_seeds=args.tree_seeds,
         **(dict(args.set) | more),
     ).validate()
 
@@ -454,7 +451,6 @@ def part_warning(args: argparse.Namespace) -> dict:
 
 def part_refine(args: argparse.Namespace) -> dict:
     from eval.hausdorff import aligned_tree_hausdorff, bbox_diagonal, hausdorff, rotate_about_trunk
-    from treesketch.pipeline import estimate_height, mesh_height, rescale_height
 
     pipe = Pipeline(
         "tsn",
@@ -483,23 +479,6 @@ def part_refine(args: argparse.Namespace) -> dict:
         h1 = hausdorff(rotate_about_trunk(m1, d["yaw"] - res.yaw).combined(), *truth)
         _, a0 = aligned_tree_hausdorff(m0, gt_mesh, args.samples, args.align_step)
         _, a1 = aligned_tree_hausdorff(m1, gt_mesh, args.samples, args.align_step)
-        # the search's own dictionary and the same scaled to the estimate's height (what
-        # ``RefineSettings.keep_height`` does): the pipeline's output is one of them, the
-        # other is this run's reference for that rule
-        rr = res.refinement
-        h_own = h_kept = h1
-        if rr is not None:
-            m_own = m1
-            if rr.params != res.params:
-                m_own = build_mesh(grow(rr.params), species=res.species)
-                h_own = hausdorff(rotate_about_trunk(m_own, d["yaw"] - res.yaw).combined(), *truth)
-            height = estimate_height(est, res.species, m0)
-            kept = rescale_height(rr.params, height, current=mesh_height(m_own))
-            if kept != res.params:
-                m_kept = build_mesh(grow(kept), species=res.species)
-                h_kept = hausdorff(
-                    rotate_about_trunk(m_kept, d["yaw"] - res.yaw).combined(), *truth
-                )
         rec = {
             "name": d["name"],
             "style": d["style"],
@@ -510,8 +489,6 @@ def part_refine(args: argparse.Namespace) -> dict:
             "loss_after": res.losses["after"],
             "haus_before": h0.max_norm,
             "haus_after": h1.max_norm,
-            "haus_after_own_size": h_own.max_norm,
-            "haus_after_height_kept": h_kept.max_norm,
             "aligned_before": a0.max_norm,
             "aligned_after": a1.max_norm,
             "yaw_view": d["yaw"],
@@ -538,12 +515,6 @@ def refine_summary(records: list[dict]) -> dict:
         "n": n,
         "loss_fell": frac(lambda r: r["loss_after"] < r["loss_before"]),
         "haus_improved": frac(lambda r: r["haus_after"] < r["haus_before"]),
-        "haus_improved_own_size": frac(
-            lambda r: r.get("haus_after_own_size", r["haus_after"]) < r["haus_before"]
-        ),
-        "haus_improved_height_kept": frac(
-            lambda r: r.get("haus_after_height_kept", r["haus_after"]) < r["haus_before"]
-        ),
         "aligned_improved": frac(lambda r: r["aligned_after"] < r["aligned_before"]),
         "species_tsn_right": frac(lambda r: r["species_tsn"] == r["species_true"]),
         "species_right": frac(lambda r: r["species"] == r["species_true"]),
@@ -682,18 +653,12 @@ def main(argv: list[str] | None = None) -> int:
         help="RefineSettings.embedding: shipped, none or a checkpoint (warning and refine)",
     )
     ap.add_argument(
-        "--tree-seeds",
-        type=int,
-        default=RefineSettings().tree_seeds,
-        help="RefineSettings.tree_seeds (warning and refine; 1: the estimate's seed only)",
-    )
-    ap.add_argument(
         "--set",
         type=setting,
         action="append",
         default=[],
         metavar="KEY=VALUE",
-        help="any other RefineSettings field (warning and refine), e.g. prior_weight=0.5",
+        help="any other RefineSettings field (warning and refine), e.g. species_tries=1",
     )
     args = ap.parse_args(argv)
     if args.markdown is not None:

@@ -27,19 +27,20 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import argparse  # noqa: E402
 import datetime as dt  # noqa: E402
 import json  # noqa: E402
-import platform  # noqa: E402
 import statistics  # noqa: E402
 import subprocess  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+# benchmarks/ is on the path when this runs as a script
+from results_md import cpu_name, write_section  # noqa: E402
+
 from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
 from weberpenn.export import save_sapling_preset  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 STATS = ROOT.parent / "shared" / "reference" / "sapling_reference_stats.json"
-RESULTS = ROOT / "benchmarks" / "RESULTS.md"
 SECTION = "## Generator: grow + mesh"
 
 
@@ -55,16 +56,6 @@ def _sapling(name: str) -> dict[str, float] | None:
         "branch_tris": statistics.mean(2 * r["branch_faces"] for r in rows),
         "leaf_tris": statistics.mean(2 * r["leaf_faces"] for r in rows),
     }
-
-
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 def run(trees: int) -> list[dict]:
@@ -185,7 +176,7 @@ def markdown(rows: list[dict], trees: int) -> str:
         "",
         f"`.venv/bin/python benchmarks/bench_grow.py --trees {trees} --write`",
         "",
-        f"machine: {_cpu()}, nproc {os.cpu_count()}, one thread, load average {load:.2f} "
+        f"machine: {cpu_name()}, nproc {os.cpu_count()}, one thread, load average {load:.2f} "
         f"(shared with other jobs); {now}. Trees: `species.sample(name, seed)`, seeds "
         f"0..{trees - 1}. Sapling: Blender 3.4 Sapling on the species' three reference "
         "dictionaries (sapling_reference_stats.json, 2-core machine); its quads counted as 2 "
@@ -230,19 +221,6 @@ def markdown(rows: list[dict], trees: int) -> str:
     return "\n".join(lines)
 
 
-def write_section(text: str) -> None:
-    old = RESULTS.read_text() if RESULTS.is_file() else "# Benchmark results\n\n"
-    if SECTION in old:
-        start = old.index(SECTION)
-        nxt = old.find("\n## ", start + len(SECTION))
-        new = old[:start] + text + ("" if nxt < 0 else old[nxt + 1 :])
-    else:
-        new = old.rstrip("\n") + "\n\n" + text
-    tmp = RESULTS.with_suffix(".md.tmp")
-    tmp.write_text(new)
-    os.replace(tmp, RESULTS)
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--trees", type=int, default=20, help="trees per species (seeds 0..N-1)")
@@ -269,7 +247,6 @@ def main() -> None:
         print(text)
     if args.write:
         write_section(text)
-        print(f"updated {RESULTS}")
 
 
 if __name__ == "__main__":

@@ -109,8 +109,8 @@ def run_tree(
     tsn_mesh = build_mesh(grow(tsn_params), species=est.species)
     ref_mesh = rotate_about_trunk(run.tree_mesh, -run.yaw)
     r = run.refinement
-    # the search's own dictionary, before the pipeline gives it a height (the estimate's
-    # with ``keep_height``; the ground truth's with --known-height)
+    # the search's own dictionary, before the pipeline gives it a height (the ground
+    # truth's with --known-height)
     searched = None
     if r is not None and r.params != run.params:
         free_mesh = build_mesh(grow(r.params), species=run.species)
@@ -202,12 +202,6 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--time-limit", type=float, default=RefineSettings().time_limit)
     ap.add_argument("--samples", type=int, default=DEFAULT_SAMPLES)
     ap.add_argument(
-        "--global-evals",
-        type=int,
-        default=RefineSettings().global_evals,
-        help="evaluations of the global stage (GN_CRS2_LM) before the local search, within the budget",
-    )
-    ap.add_argument(
         "--known-yaw",
         action="store_true",
         help="keep the view at the front, the sketch's true view (an oracle): no yaw search",
@@ -228,7 +222,6 @@ def main(argv: list[str] | None = None) -> int:
         settings = RefineSettings(
             budget=args.budget,
             time_limit=args.time_limit,
-            global_evals=args.global_evals,
             search_yaw=not args.known_yaw,
         ).validate()
     except ValueError as e:

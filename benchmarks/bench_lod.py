@@ -23,34 +23,24 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import datetime as dt  # noqa: E402
-import platform  # noqa: E402
 import statistics  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+# benchmarks/ is on the path when this runs as a script
+from results_md import cpu_name, write_section  # noqa: E402
+
 from eval.hausdorff import bbox_diagonal, hausdorff  # noqa: E402
 from render.sketch import SketchRenderer  # noqa: E402
 from weberpenn import build_mesh, grow, species  # noqa: E402
 from weberpenn.export import glb_bytes  # noqa: E402
-from weberpenn.fileio import atomic_write  # noqa: E402
 from weberpenn.lod import lod  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-RESULTS = ROOT / "benchmarks" / "RESULTS.md"
 SECTION = "## Level of detail"
 SKETCH_SIZE = 256
-
-
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
 
 
 def measure(name: str, seed: int, budgets: list[int], samples: int) -> list[dict]:
@@ -93,7 +83,7 @@ def markdown(rows: list[dict], args: argparse.Namespace, budgets: list[int]) -> 
     out = [
         SECTION,
         "",
-        f"{cmd} ({now}; {_cpu()}, {os.cpu_count()} cores, no GPU, one thread). Per species, "
+        f"{cmd} ({now}; {cpu_name()}, {os.cpu_count()} cores, no GPU, one thread). Per species, "
         f"median over seeds 0..{args.trees - 1}; the full tree is the reference, measured in "
         "the same run. Triangles; textured GLB size; symmetric Hausdorff distance of the LOD "
         "to the full mesh (`eval.hausdorff`, "
@@ -130,17 +120,6 @@ def markdown(rows: list[dict], args: argparse.Namespace, budgets: list[int]) -> 
     return "\n".join(out) + "\n"
 
 
-def write_section(text: str) -> None:
-    old = RESULTS.read_text() if RESULTS.is_file() else "# Benchmark results\n\n"
-    if SECTION in old:
-        start = old.index(SECTION)
-        nxt = old.find("\n## ", start + len(SECTION))
-        new = old[:start] + text + ("" if nxt < 0 else old[nxt + 1 :])
-    else:
-        new = old.rstrip("\n") + "\n\n" + text
-    atomic_write(RESULTS, new)
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--trees", type=int, default=3, help="trees per species (seeds 0..N-1)")
@@ -163,7 +142,6 @@ def main() -> None:
     print(text)
     if args.write:
         write_section(text)
-        print(f"updated {RESULTS}")
 
 
 if __name__ == "__main__":

@@ -186,11 +186,6 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="give refinement the sketch's true view yaw (an oracle; default: searched)",
     )
-    ap.add_argument(
-        "--all-dims",
-        action="store_true",
-        help="search every free value, also those that do not change the tree (live_only off)",
-    )
     ap.add_argument("--shift", type=float, default=0.25)
     ap.add_argument("--species", default=None, help="comma list (default: all five)")
     ap.add_argument(
@@ -203,16 +198,6 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--samples", type=int, default=10_000, help="Hausdorff samples per side")
     ap.add_argument("--algorithm", default="bobyqa", help="bobyqa, sbplx or cobyla")
-    ap.add_argument("--initial-step", type=float, default=None, help="unit-cube first step")
-    ap.add_argument(
-        "--prior-weight", type=float, default=None, help="pull towards the first estimate"
-    )
-    ap.add_argument(
-        "--global-evals",
-        type=int,
-        default=None,
-        help="evaluations of the global stage (GN_CRS2_LM) before the local one, within the budget",
-    )
     ap.add_argument(
         "--align-step", type=float, default=15.0, help="turns tried for the aligned distance"
     )
@@ -234,14 +219,7 @@ def main(argv: list[str] | None = None) -> int:
         time_limit=args.time_limit,
         algorithm=args.algorithm,
         search_yaw=not args.known_yaw,
-        live_only=not args.all_dims,
     )
-    if args.initial_step is not None:
-        settings = settings.replace(initial_step=args.initial_step)
-    if args.prior_weight is not None:
-        settings = settings.replace(prior_weight=args.prior_weight)
-    if args.global_evals is not None:
-        settings = settings.replace(global_evals=args.global_evals)
     if args.hold is not None:
         settings = settings.replace(hold=tuple(k for k in args.hold.split(",") if k))
     try:

@@ -18,10 +18,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import socket
 import statistics
-import subprocess
-import sys
 import tempfile
 import threading
 import time
@@ -31,14 +28,11 @@ from pathlib import Path
 import httpx
 import psutil
 
+# benchmarks/ is on the path when this runs as a script
+from serve_process import ServeProcess
+
 ROOT = Path(__file__).resolve().parents[1]
 SKETCH = ROOT / "examples" / "sketch_maple.png"
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def rss_mb(pid: int) -> dict[str, float]:
@@ -61,45 +55,10 @@ class Run:
     rss: dict[int, dict[str, float]] = field(default_factory=dict)
 
 
-class Server:
+class Server(ServeProcess):
     def __init__(self, workers: int, data: Path, budget: int) -> None:
-        self.port = free_port()
-        self.url = f"http://127.0.0.1:{self.port}"
-        cmd = [
-            sys.executable,
-            "-m",
-            "treesketch.cli",
-            "serve",
-            "--port",
-            str(self.port),
-            "--data",
-            str(data),
-            "--workers",
-            str(workers),
-            "--budget",
-            str(budget),
-            "--max-queue",
-            "256",
-        ]
-        self.proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-        deadline = time.monotonic() + 180
-        while True:
-            try:
-                h = httpx.get(self.url + "/status", timeout=2).json()
-                if sum(w["ready"] for w in h["workers"]) == workers:
-                    break
-            except (httpx.HTTPError, ValueError, KeyError):
-                pass
-            if time.monotonic() > deadline or self.proc.poll() is not None:
-                raise RuntimeError("the server did not start: " + self.proc.stderr.read().decode())
-            time.sleep(0.5)
-
-    def stop(self) -> None:
-        self.proc.terminate()
-        try:
-            self.proc.wait(30)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
+        args = ["--budget", str(budget), "--max-queue", "256"]
+        super().__init__(args, data, workers, data / "serve.log", timeout=180.0)
 
 
 def run_jobs(

@@ -25,9 +25,7 @@ import argparse
 import json
 import os
 import platform
-import socket
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -36,40 +34,18 @@ from typing import Any
 
 import httpx
 
+# benchmarks/ is on the path when this runs as a script
+from serve_process import ServeProcess
+
 ROOT = Path(__file__).resolve().parents[1]
 SKETCH = ROOT / "examples" / "hand" / "palm.png"
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-class Server:
-    """``treesketch serve ARGS`` on a free port, waited for until ``workers`` are ready."""
+class Server(ServeProcess):
+    """The service with the template estimator, and a client to submit and wait."""
 
     def __init__(self, args: list[str], data: Path, workers: int, log: Path) -> None:
-        self.port = free_port()
-        self.url = f"http://127.0.0.1:{self.port}"
-        cmd = [sys.executable, "-m", "treesketch.cli", "serve", "--port", str(self.port)]
-        cmd += ["--data", str(data), "--workers", str(workers), "--estimator", "template"]
-        self.log = open(log, "w")  # noqa: SIM115 - closed in stop()
-        t0 = time.perf_counter()
-        self.proc = subprocess.Popen(cmd + args, stdout=self.log, stderr=subprocess.STDOUT)
-        deadline = time.monotonic() + 300
-        while True:
-            try:
-                h = httpx.get(self.url + "/status", timeout=2).json()
-                if sum(w["ready"] for w in h["workers"]) == workers:
-                    break
-            except (httpx.HTTPError, ValueError, KeyError):
-                pass
-            if time.monotonic() > deadline or self.proc.poll() is not None:
-                self.stop()
-                raise RuntimeError(f"the server did not start; see {log}")
-            time.sleep(0.2)
-        self.start_s = time.perf_counter() - t0
+        super().__init__(["--estimator", "template", *args], data, workers, log)
         self.http = httpx.Client(base_url=self.url, timeout=30)
 
     def submit(self, budget: int) -> str:
@@ -87,14 +63,6 @@ class Server:
                 return body
             time.sleep(0.02)
         raise RuntimeError(f"job {job_id} did not finish in {timeout} s")
-
-    def stop(self) -> None:
-        self.proc.terminate()
-        try:
-            self.proc.wait(60)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-        self.log.close()
 
 
 def latency(server: Server, jobs: int, budget: int) -> dict[str, Any]:

@@ -120,22 +120,18 @@ def main() -> None:
             file=sys.stderr,
             flush=True,
         )
-    print("Full path (before: build_mesh + mitsuba scene)\n")
-    print(
-        "| species | triangles | "
-        + " | ".join(f"{s} ms" for s in STAGES)
-        + " | evaluation ms | largest stage |"
-    )
-    print("|---|---:|" + "---:|" * len(STAGES) + "---:|---|")
-    print("\n".join(full_rows))
-    print("\nFast path (after: sketch_mesh + raster), same trees, same run\n")
-    print(
-        "| species | triangles | "
-        + " | ".join(f"{s} ms" for s in STAGES)
-        + " | evaluation ms | before ms | speed-up | distance change |"
-    )
-    print("|---|---:|" + "---:|" * len(STAGES) + "---:|---:|---:|---:|")
-    print("\n".join(fast_rows))
+    for title, last, rows in (
+        ("Full path (before: build_mesh + mitsuba scene)", ("largest stage",), full_rows),
+        (
+            "Fast path (after: sketch_mesh + raster), same trees, same run",
+            ("before ms", "speed-up", "distance change"),
+            fast_rows,
+        ),
+    ):
+        cols = ["triangles", *(f"{s} ms" for s in STAGES), "evaluation ms", *last]
+        print(f"\n{title}\n\n| species | " + " | ".join(cols) + " |")
+        print("|---|" + "---:|" * (len(cols) - 1) + ("---|" if len(last) == 1 else "---:|"))
+        print("\n".join(rows))
 
 
 if __name__ == "__main__":

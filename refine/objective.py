@@ -29,7 +29,6 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from render.camera import view_direction
 from render.reader import SketchError, normalise_drawing
 from weberpenn import TreeParams, build_mesh, grow, species
 from weberpenn.params import SPECS
@@ -38,8 +37,8 @@ from .prepare import prepare_sketch
 from .shape import ShapeTarget
 
 __all__ = [
-    "DISCRETE_NEIGHBOUR_KEYS",
     "METRICS",
+    "PreparedDrawing",
     "SearchSpace",
     "SketchObjective",
     "SketchTarget",
@@ -50,7 +49,6 @@ __all__ = [
     "sketch_distance",
 ]
 
-DISCRETE_NEIGHBOUR_KEYS = ("baseSplits", "nrings")
 _DARK = 0.5  # a pixel darker than this (fraction of white) is a line pixel
 _EMPTY_PENALTY = 1.0
 _FILL_DENSITY = 0.15
@@ -206,6 +204,51 @@ def metric_distance(
     )
 
 
+@dataclass(frozen=True)
+class PreparedDrawing:
+    """The input drawing as every comparison of one run sees it, built once.
+
+    ``target`` is what the search minimises against (:func:`make_target` of the framed
+    drawing, with the learned embedding's term when ``embedder`` is given); ``shape`` the
+    drawing's shape features for the line distance (``refine.shape.line_distance``): the
+    same object when the metric is ``"shape"`` (the embedding plays no part there).  The
+    pipeline builds one per run and hands it to every species' refinement and to the
+    confidence check, instead of each re-framing and re-preparing the same drawing.
+    """
+
+    size: int
+    metric: str
+    target: Any  # ShapeTarget or SketchTarget
+    shape: ShapeTarget
+    embedder: Any = None
+
+    @classmethod
+    def create(
+        cls, img: Any, size: int = 128, metric: str = "shape", embedder: Any = None
+    ) -> PreparedDrawing:
+        if embedder is not None and metric != "shape":
+            raise ValueError("a learned embedder works with the shape metric only")
+        f = framed(img, size)
+        target = make_target(f, size, metric, embedder)
+        shape = target if metric == "shape" else ShapeTarget.from_image(f, size)
+        return cls(size, metric, target, shape, embedder)
+
+    def check(self, size: int, metric: str) -> PreparedDrawing:
+        """Self, when built for comparisons at ``size`` with ``metric`` (ValueError else)."""
+        if (self.size, self.metric) != (size, metric):
+            raise ValueError(
+                f"the drawing was prepared for size {self.size} and metric {self.metric!r}, "
+                f"not {size} and {metric!r}"
+            )
+        return self
+
+    def distance(self, sketch: Any) -> float:
+        """The search's distance from this drawing to another sketch (framed alike)."""
+        return self.target.distance(
+            make_target(framed(sketch, self.size), self.size, self.metric, self.embedder)
+        )
+
+
 # --------------------------------------------------------------------------- search space
 
 
@@ -296,10 +339,6 @@ class SearchSpace:
             xs.append((float(yaw) % 360.0) / 360.0)
         return np.clip(np.asarray(xs, dtype=np.float64), 0.0, 1.0)
 
-    def with_base(self, base: TreeParams) -> SearchSpace:
-        base = species.project(self.species, base, search=True)
-        return SearchSpace(self.species, base, self.dims, self.search_yaw, self.fixed_yaw)
-
     def without(self, keys: Sequence[str]) -> SearchSpace:
         """The same space minus the dimensions whose key (or label) is in ``keys``."""
         drop = set(keys)
@@ -346,40 +385,10 @@ class SearchSpace:
 # --------------------------------------------------------------------------- objective
 
 
-def tree_points(skeleton: Any) -> np.ndarray:
-    """``(n, 3)``: a grown tree's stem points and leaves relative to its trunk base (the
-    origin), divided by its height (an empty array for a tree with no height)."""
-    pts = np.concatenate(
-        [np.asarray(skeleton.points, float).reshape(-1, 3),
-         np.asarray(skeleton.leaf_positions, float).reshape(-1, 3)]
-    )  # fmt: skip
-    height = float(np.ptp(pts[:, 2])) if len(pts) else 0.0
-    if not height > 0:
-        return np.zeros((0, 3))
-    return pts / height
-
-
-def depth_extent(points: np.ndarray, yaw: float) -> np.ndarray:
-    """``(2,)``: the nearest and the farthest of ``points`` (:func:`tree_points`) along
-    the line of sight at ``yaw``: how deep the tree reaches towards and away from the
-    viewer, as fractions of its height."""
-    if len(points) == 0:
-        return np.zeros(2)
-    d = points[:, :2] @ view_direction(yaw)[:2]
-    return np.array([d.min(), d.max()])
-
-
-def mass_offset(skeleton: Any) -> np.ndarray:
-    """``(2,)``: the mean horizontal position of a grown tree's stem points and leaves
-    relative to its trunk base (the origin), divided by its height."""
-    pts = tree_points(skeleton)
-    return pts[:, :2].mean(axis=0) if len(pts) else np.zeros(2)
-
-
 @dataclass
 class SketchObjective:
     """``objective(x)`` -> sketch distance of the tree at ``x`` to the target (plus the
-    optional prior :meth:`penalty`).
+    view's :meth:`penalty`).
 
     Counts evaluations (cache hits excluded), keeps the best point seen, and caches losses
     by the point rounded to ``decimals``.  The last tree's renderer is kept so points that
@@ -396,35 +405,22 @@ class SketchObjective:
     space: SearchSpace
     metric: str = "shape"
     decimals: int = 6
-    prior: np.ndarray | None = None  # unit-cube point (first estimate) the prior pulls to
-    prior_weight: float = 0.0
     yaw_prior: float = 0.0  # degrees: the view assumed unless the sketch says otherwise
     yaw_weight: float = 0.0
-    depth_weight: float = 0.0  # weight of the (depth offset / height)^2 term: :meth:`depth`
-    extent_weight: float = 0.0  # weight of the depth-extent term: :meth:`extent_change`
-    extent_reference: np.ndarray | None = None  # tree_points of the tree it compares with
     evaluations: int = 0
-    best_loss: float = math.inf  # objective: sketch distance + prior penalty
+    best_loss: float = math.inf  # objective: sketch distance + view penalty
     best_sketch_loss: float = math.inf  # the sketch distance alone at the best point
     best_x: np.ndarray | None = None
     best_params: TreeParams | None = None
     best_yaw: float = 0.0
-    best_space: SearchSpace | None = None
     trace: list[tuple[int, float, float]] = field(default_factory=list)  # (eval, loss, best)
     fast: bool = True
     embedder: Any = None  # refine.embed.ShapeEmbedder: the one that made the target's embedding
     _cache: dict[tuple[float, ...], float] = field(default_factory=dict, repr=False)
     _sketch_losses: dict[tuple[float, ...], float] = field(default_factory=dict, repr=False)
-    _skeleton: Any = field(default=None, repr=False)  # the last tree grown
-    _mass: np.ndarray | None = field(default=None, repr=False)  # its mass_offset, when asked
-    _points: np.ndarray | None = field(default=None, repr=False)  # its tree_points, when asked
     _scene_key: tuple[float, ...] | None = field(default=None, repr=False)
     _renderer: Any = field(default=None, repr=False)
     render_seconds: float = 0.0
-
-    def __post_init__(self) -> None:
-        if self.prior is not None:  # on the same grid as the evaluated points
-            self.prior = np.asarray(self.key(self.prior), dtype=np.float64)
 
     def key(self, x: Sequence[float]) -> tuple[float, ...]:
         return tuple(round(float(v), self.decimals) for v in np.clip(x, 0.0, 1.0))
@@ -437,7 +433,6 @@ class SketchObjective:
         scene_key = k[: len(self.space.dims)]
         if self._scene_key != scene_key or self._renderer is None:
             skeleton = grow(self.space.to_params(x))
-            self._skeleton, self._mass, self._points = skeleton, None, None
             name = self.space.species
             if self.fast:
                 mesh = sketch_mesh(skeleton, self.target.size, name)
@@ -459,68 +454,17 @@ class SketchObjective:
         return self.target.distance(cand)
 
     def penalty(self, x: Sequence[float]) -> float:
-        """``prior_weight`` times the squared distance from ``prior`` over the searched
-        values (not the yaw): a move must buy more sketch match than it strays from the
-        first estimate, so values the sketch barely constrains stay where the estimator
-        put them instead of drifting with the sketch distance's pixel noise.
-
-        Plus ``yaw_weight * (turn / 180)^2`` for a searched yaw ``turn`` degrees away from
+        """``yaw_weight * (turn / 180)^2`` for a searched yaw ``turn`` degrees away from
         ``yaw_prior``: a view other than the assumed one must fit clearly better (many
         trees look alike from every side, and a noise-picked view turns the whole tree)."""
-        out = 0.0
-        if self.yaw_weight > 0 and self.space.search_yaw:
-            turn = abs((self.space.yaw(x) - self.yaw_prior + 180.0) % 360.0 - 180.0) / 180.0
-            out += self.yaw_weight * turn * turn
-        if self.prior is None or self.prior_weight <= 0:
-            return out
-        n = len(self.space.dims)
-        d = np.asarray(x[:n], dtype=np.float64) - np.asarray(self.prior[:n], dtype=np.float64)
-        return out + float(self.prior_weight * np.dot(d, d))
-
-    def depth(self, yaw: float) -> float:
-        """How far the last grown tree's mass (:func:`mass_offset`) lies from its trunk
-        base along the line of sight at ``yaw``, as a fraction of its height.
-
-        A drawing shows where a tree's mass sits across the page, never how far towards
-        or away from the viewer: the same sketch is a tree leaning towards the viewer
-        seen from one side and leaning away seen from the other.  The expected depth of a
-        drawn tree's lean is zero, so among trees that match the sketch alike the search
-        should keep the one whose lean lies in the picture plane: a tree turned to a view
-        where its lean points at the camera is wrong by the whole lean on average."""
-        if self._mass is None:
-            self._mass = mass_offset(self._skeleton)
-        return float(self._mass @ view_direction(yaw)[:2])
-
-    def extent_change(self, yaw: float) -> float:
-        """How much the last grown tree's depth extent (:func:`depth_extent`) at ``yaw``
-        differs from ``extent_reference``'s at the same view: the sum of the squared
-        changes of its nearest and farthest depth, as fractions of height.
-
-        A drawing shows how far a tree reaches across the page, never how deep: a value
-        the search moves to fit the outline also moves branches towards or away from the
-        viewer, where nothing checks them.  The first estimate's depth is the best guess
-        the drawing leaves, so a change of depth must be paid for by the sketch.  The
-        reference is seen at the candidate's own view, so turning the tree costs nothing
-        here (the view has its own prior)."""
-        if self.extent_reference is None:
+        if self.yaw_weight <= 0 or not self.space.search_yaw:
             return 0.0
-        if self._points is None:
-            self._points = tree_points(self._skeleton)
-        d = depth_extent(self._points, yaw) - depth_extent(self.extent_reference, yaw)
-        return float(d @ d)
+        turn = abs((self.space.yaw(x) - self.yaw_prior + 180.0) % 360.0 - 180.0) / 180.0
+        return self.yaw_weight * turn * turn
 
     def sketch_loss(self, x: Sequence[float]) -> float:
         """The sketch distance alone (no penalties) at a point evaluated in this space."""
         return self._sketch_losses[self.key(x)]
-
-    def rebase(self, space: SearchSpace) -> None:
-        """Search another space (e.g. a different held discrete value): clears the cache,
-        keeps the counters and the best point seen."""
-        self.space = space
-        self._cache.clear()
-        self._sketch_losses.clear()
-        self._scene_key = None
-        self._renderer = None
 
     def cached(self, x: Sequence[float]) -> float | None:
         """The loss already computed at ``x`` (same rounded point), or None."""
@@ -539,10 +483,6 @@ class SketchObjective:
         sketch_loss = self.loss_of_sketch(self.sketch_at(k))
         self.render_seconds += time.perf_counter() - t0
         loss = sketch_loss + self.penalty(k)
-        if self.depth_weight > 0:  # the tree just grown is the one at ``k``
-            loss += self.depth_weight * self.depth(self.space.yaw(k)) ** 2
-        if self.extent_weight > 0:
-            loss += self.extent_weight * self.extent_change(self.space.yaw(k))
         self._cache[k] = loss
         self._sketch_losses[k] = sketch_loss
         self.evaluations += 1
@@ -552,6 +492,5 @@ class SketchObjective:
             self.best_x = np.asarray(k, dtype=np.float64)
             self.best_params = self.space.to_params(k)
             self.best_yaw = self.space.yaw(k)
-            self.best_space = self.space
         self.trace.append((self.evaluations, loss, self.best_loss))
         return loss

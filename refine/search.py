@@ -3,14 +3,15 @@ tree's sketch matches the input sketch.
 
 ``refine(sketch, initial_params)`` evaluates the start point first (at 24 views
 15 degrees apart, ``START_YAWS``, as many as a third of the budget allows; keeping the best
-yaw), optionally the same values grown from a
-few other tree seeds at the best two views (``RefineSettings.tree_seeds``: the seed draws
-a tree's random details, which way a trunk leans, where the big branches sit, which no
-continuous value reaches), optionally tries neighbouring values of
-the discrete keys that matter most (``baseSplits``, ``nrings``), optionally runs a short
-global stage (CRS2), then an nlopt local search (BOBYQA by default) in the unit cube.  It
-stops on the evaluation budget, the time limit or nlopt's tolerances, and always returns
-the best point seen, so the loss after is never above the loss before.
+yaw), then runs an nlopt local search (BOBYQA by default) in the unit cube.  It stops on
+the evaluation budget, the time limit or nlopt's tolerances, and always returns the best
+point seen, so the loss after is never above the loss before.
+
+Studies measured to give nothing and removed (their numbers stay in
+``benchmarks/RESULTS.md``, "Options measured and removed"; the code last lived at commit
+548efa3): a global CRS2 stage, neighbouring discrete values, a prior towards the start, a
+depth and a depth-extent term, other tree seeds at the start, and scaling the refined tree
+to the estimate's height.
 """
 
 from __future__ import annotations
@@ -25,21 +26,14 @@ from typing import Any
 
 import numpy as np
 
-from weberpenn import TreeParams, grow, species
+from weberpenn import TreeParams, species
 from weberpenn.params import SPECS
 
-from .objective import (
-    DISCRETE_NEIGHBOUR_KEYS,
-    METRICS,
-    SearchSpace,
-    SketchObjective,
-    framed,
-    make_target,
-    tree_points,
-)
+from .objective import METRICS, PreparedDrawing, SearchSpace, SketchObjective
 
 __all__ = [
     "ALGORITHMS",
+    "DEFAULT_BUDGET",
     "DEFAULT_HOLD",
     "MAX_BUDGET",
     "MAX_TIME_LIMIT",
@@ -62,26 +56,28 @@ START_YAWS = (
     + (30.0, 120.0, 210.0, 300.0, 75.0, 165.0, 255.0, 345.0)
 )
 # objective penalty for a view turned from the front: 0.015 at 90 degrees, 0.06 at 180
+# (a view other than the front must fit clearly better; RESULTS.md, "Refinement")
 YAW_WEIGHT = 0.06
-# objective penalty per (depth offset of the tree's mass / its height)^2 at the searched
-# view (``SketchObjective.depth``): a lean the drawing cannot show stays out of the depth
-DEPTH_WEIGHT = 0.0
-# objective penalty per squared change of the tree's depth extent (its nearest and
-# farthest reach along the line of sight, fractions of its height) from the first
-# estimate's at the same view (``SketchObjective.extent_change``)
-EXTENT_WEIGHT = 0.0
+# the local search's first step and its tolerance, in the unit cube
+INITIAL_STEP = 0.12
+XTOL = 1e-3
 # held at the first estimate unless asked for: the tree's absolute size variation.  Every
 # sketch is framed to its own tree, so a size change shows only as slightly thinner lines
 # and smaller leaves; per unit of sketch distance it moves the mesh more than any other
-# value in every species where it is free (benchmarks/key_sensitivity.py, RESULTS.md), so
-# the search would trade the estimator's size for pixel noise.
+# value in every species where it is free (benchmarks/probes/key_sensitivity.py,
+# RESULTS.md), so the search would trade the estimator's size for pixel noise.
 DEFAULT_HOLD = ("scaleV",)
 MAX_BUDGET = 10_000
-MAX_TREE_SEEDS = 16
+# the one default refinement budget (tree evaluations of the estimator's species): the
+# settings, the CLI, the service, the page and the Blender add-on all take it from here.
+# 40 is the budget the refinement's quality is measured at (bench_drawings --part refine)
+DEFAULT_BUDGET = 40
 MAX_TIME_LIMIT = 3600.0
 EMBEDDINGS = ("shipped", "none")  # RefineSettings.embedding's names (else a checkpoint path)
 
 Progress = Callable[[int, float], None]
+# told of each new best point: (its parameters, its yaw, its sketch distance)
+OnBest = Callable[[TreeParams, float, float], None]
 
 
 @dataclass(frozen=True)
@@ -132,16 +128,26 @@ def guess_species(params: TreeParams) -> str:
     return best
 
 
-def _discrete_candidates(name: str, params: TreeParams) -> list[TreeParams]:
-    out = []
-    for u in species.unfixed(name):
-        if u.key not in DISCRETE_NEIGHBOUR_KEYS or u.rule != "randint":
-            continue
-        v = int(params[u.key])
-        for w in (v - 1, v + 1):
-            if u.lo <= w <= u.hi:
-                out.append(params.replace(**{u.key: w}))
-    return out
+def _shown(value: Any) -> str:
+    """A value for a message: its repr, cut short (a number may have 400 digits)."""
+    text = repr(value)
+    return text if len(text) <= 60 else f"{text[:40]}... ({len(text)} characters)"
+
+
+def _finite(value: Any) -> bool:
+    """A real number (not a bool) that is a finite float (an int of 309 digits is not:
+    ``math.isfinite`` and ``float()`` raise OverflowError on it)."""
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+        return False
+    try:
+        return math.isfinite(float(value))
+    except OverflowError:
+        return False
+
+
+def _int_in(name: str, value: Any, lo: int, hi: int, unit: str = "") -> None:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or not lo <= value <= hi:
+        raise ValueError(f"{name} must be an integer in {lo}..{hi}{unit}, got {_shown(value)}")
 
 
 @dataclass(frozen=True)
@@ -150,23 +156,13 @@ class RefineSettings:
 
     ``refine`` False skips the search (the estimate is returned as it is); ``budget`` caps
     the tree evaluations (grow + mesh + sketch; the start views count) and ``time_limit``
-    the seconds; ``search_yaw`` False keeps the estimator's view (or the front) instead of
-    searching it; ``keys`` restricts the searched values and ``hold`` (default
-    :data:`DEFAULT_HOLD`; ``()`` for none) keeps some at their first estimate;
-    ``live_only`` drops the values that do not change this tree at all
-    (``SearchSpace.live``); ``global_evals`` > 0 runs GN_CRS2_LM first; ``prior_weight`` > 0
-    adds ``prior_weight * |x - x_start|^2`` (unit cube, yaw excluded) to what is minimised;
-    ``yaw_weight`` (when the yaw is searched) adds ``yaw_weight * (turn from the front
-    view / 180)^2``, so the front view is kept unless another fits clearly better;
-    ``depth_weight`` (when the yaw is searched) adds ``depth_weight * (depth / height)^2``
-    for the depth at which the tree's mass lies off its trunk base along the line of
-    sight (``SketchObjective.depth``): of the views that match alike, the one that shows
-    a lean across the picture, not towards the viewer;
-    ``extent_weight`` adds ``extent_weight`` times the squared change of the tree's depth
-    extent (its nearest and farthest reach along the line of sight, fractions of its
-    height) from the first estimate's seen at the same view
-    (``SketchObjective.extent_change``): the values the search moves to fit the outline
-    must not, unpaid, move branches in the depth that no drawing shows;
+    the seconds; ``algorithm`` is the nlopt local search (``ALGORITHMS``);
+    ``search_yaw`` False keeps the estimator's view (or the front) instead of searching it
+    (a searched view turned from the front pays :data:`YAW_WEIGHT`); ``keys`` restricts the
+    searched values and ``hold`` (default :data:`DEFAULT_HOLD`; ``()`` for none) keeps some
+    at their first estimate; values that do not change the tree at all are never searched
+    (``SearchSpace.live``).
+
     ``size`` is the side in pixels the search renders and compares at; ``metric`` is the
     sketch distance: ``"shape"`` (style-blind, ``refine.shape``) or ``"ink"`` (line
     pixels, ``refine.objective.sketch_distance``); ``fast_sketch`` (default) draws the
@@ -175,118 +171,64 @@ class RefineSettings:
     ``embedding`` (shape metric): the learned style-blind embedding added to the shape
     distance (``refine.embed``): ``"shipped"`` (``checkpoints/shape_embed.pt``), a
     checkpoint's path, or ``"none"`` for the hand-made shape distance alone.
-    ``tree_seeds``: how many tree seeds the start tries (the start's own, then the next
-    ones), each at the two best views of the first; 1 (the default) keeps the start's
-    seed.  Skipped when they would take the start past half the budget, or when every
-    value is held.  It finds the seed of a drawing made from a generated tree, but on 100
-    held-out-style drawings it did not lower the mesh error against the truth
-    (``benchmarks/RESULTS.md``, "Tree seeds at the start"), so it is off by default.
-    ``keep_height`` (``treesketch.Pipeline``, when no height is given; off by default): the
-    refined tree is scaled to the height of the estimator's tree of its species.  Off, it
-    keeps the size values the search does not move (the species' ``scale``, the
-    estimator's ``scaleV``: :data:`DEFAULT_HOLD`) and the proportions it fitted, so its
-    height follows the proportions: a taller trunk found in the drawing makes a taller
-    tree, where the rule would shrink every branch to the estimate's height.  On the
-    held-out-style drawings and the 15 published trees the rule raised the mean mesh
-    error (``benchmarks/RESULTS.md``, "The search's own size").
 
     Species by synthesis (``treesketch.Pipeline``): up to ``species_tries`` species are
     refined, the estimator's best and any other whose score is at least ``species_ratio``
     times the best's (the others with half the budget; 60% of the time limit for the
-    estimator's species and the rest shared by the others); the tree
-    whose sketch matches best wins, but another species replaces the estimator's only when
-    its distance is lower by more than ``species_margin`` (a fraction of the estimator's
-    species' distance): the network names the species far more reliably than a sketch
-    distance between two close species does.  ``species_tries`` 1 refines the estimator's
-    species only.
+    estimator's species and the rest shared by the others); the estimator's scores and the
+    refined trees' distances decide together (``treesketch.species_choice``).
+    ``species_tries`` 1 refines the estimator's species only.
+    The refined tree keeps the size values the search does not move (the species'
+    ``scale``, the estimator's ``scaleV``) and the proportions it fitted; a height given to
+    ``Pipeline.run`` rescales it.
     """
 
     refine: bool = True
-    budget: int = 100
+    budget: int = DEFAULT_BUDGET
     time_limit: float | None = 50.0
     algorithm: str = "bobyqa"
-    seed: int = 0
     size: int = 128
     search_yaw: bool = True
     keys: tuple[str, ...] | None = None
     hold: tuple[str, ...] = DEFAULT_HOLD
-    live_only: bool = True
-    global_evals: int = 0
-    discrete_neighbours: bool = False
-    initial_step: float = 0.12
-    xtol: float = 1e-3
-    prior_weight: float = 0.0
-    yaw_weight: float = YAW_WEIGHT
-    depth_weight: float = DEPTH_WEIGHT
-    extent_weight: float = EXTENT_WEIGHT
     species_tries: int = 2
     species_ratio: float = 0.5
-    species_margin: float = 0.2
     metric: str = "shape"
     fast_sketch: bool = True
-    keep_height: bool = False
     embedding: str = "shipped"
-    tree_seeds: int = 1
 
     def replace(self, **changes: Any) -> RefineSettings:
         return dataclasses.replace(self, **changes).validate()
 
     def validate(self) -> RefineSettings:
         """Check every option (before any work); returns self.  Raises ValueError naming
-        the option and the value."""
-        b = self.budget
-        if isinstance(b, bool) or not isinstance(b, int | np.integer) or not 1 <= b <= MAX_BUDGET:
-            raise ValueError(f"budget must be an integer in 1..{MAX_BUDGET}, got {b!r}")
+        the option and the value.  Every integer has bounds (a seed of 400 digits would
+        overflow nlopt's ``srand`` once the model is loaded and the search starts) and a
+        number of any size is refused plainly (``math.isfinite`` overflows on a huge int)."""
+        _int_in("budget", self.budget, 1, MAX_BUDGET)
         t = self.time_limit
-        if t is not None and not (
-            isinstance(t, int | float) and math.isfinite(t) and 0 < t <= MAX_TIME_LIMIT
-        ):
-            raise ValueError(f"time_limit must be seconds in (0, {MAX_TIME_LIMIT:g}], got {t!r}")
+        if t is not None and not (_finite(t) and 0 < t <= MAX_TIME_LIMIT):
+            raise ValueError(
+                f"time_limit must be seconds in (0, {MAX_TIME_LIMIT:g}], got {_shown(t)}"
+            )
         if str(self.algorithm).lower() not in ALGORITHMS:
             raise ValueError(
-                f"unknown algorithm {self.algorithm!r}; choose one of {', '.join(ALGORITHMS)}"
+                f"unknown algorithm {_shown(self.algorithm)}; choose one of {', '.join(ALGORITHMS)}"
             )
-        if (
-            isinstance(self.size, bool)
-            or not isinstance(self.size, int)
-            or not 32 <= self.size <= 512
-        ):
-            raise ValueError(f"size must be an integer in 32..512 pixels, got {self.size!r}")
-        if not isinstance(self.seed, int) or isinstance(self.seed, bool):
-            raise ValueError(f"seed must be an integer, got {self.seed!r}")
+        _int_in("size", self.size, 32, 512, " pixels")
         unknown = [k for k in self.hold if str(k).split("[")[0] not in SPECS]
         if unknown:
             raise ValueError(f"hold: not parameter names: {', '.join(map(str, unknown))}")
-        for label in (
-            "prior_weight",
-            "yaw_weight",
-            "depth_weight",
-            "extent_weight",
-            "initial_step",
-            "xtol",
-        ):
-            w = getattr(self, label)
-            if not (isinstance(w, int | float) and math.isfinite(w) and w >= 0):
-                raise ValueError(f"{label} must be a number >= 0, got {w!r}")
-        if not isinstance(self.species_tries, int) or not 1 <= self.species_tries <= 5:
-            raise ValueError(
-                f"species_tries must be an integer in 1..5, got {self.species_tries!r}"
-            )
-        if not (isinstance(self.species_ratio, int | float) and 0 <= self.species_ratio <= 1):
-            raise ValueError(f"species_ratio must be in [0, 1], got {self.species_ratio!r}")
-        m = self.species_margin
-        if isinstance(m, bool) or not (isinstance(m, int | float) and 0 <= m < 1):
-            raise ValueError(f"species_margin must be in [0, 1), got {m!r}")
+        _int_in("species_tries", self.species_tries, 1, 5)
+        r = self.species_ratio
+        if not (_finite(r) and 0 <= r <= 1):
+            raise ValueError(f"species_ratio must be in [0, 1], got {_shown(r)}")
         if self.metric not in METRICS:
-            raise ValueError(f"metric must be one of {', '.join(METRICS)}, got {self.metric!r}")
-        for flag in ("fast_sketch", "keep_height"):
-            if not isinstance(getattr(self, flag), bool):
-                raise ValueError(f"{flag} must be True or False, got {getattr(self, flag)!r}")
-        n = self.tree_seeds
-        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_TREE_SEEDS:
-            raise ValueError(f"tree_seeds must be an integer in 1..{MAX_TREE_SEEDS}, got {n!r}")
-        if not isinstance(self.global_evals, int) or self.global_evals < 0:
-            raise ValueError(f"global_evals must be an integer >= 0, got {self.global_evals!r}")
+            raise ValueError(
+                f"metric must be one of {', '.join(METRICS)}, got {_shown(self.metric)}"
+            )
+        if not isinstance(self.fast_sketch, bool):
+            raise ValueError(f"fast_sketch must be True or False, got {self.fast_sketch!r}")
         e = self.embedding
         if not isinstance(e, str) or not (e in EMBEDDINGS or Path(e).is_file()):
             raise ValueError(
@@ -319,17 +261,23 @@ def refine(
     progress: Progress | None = None,
     cancel: Callable[[], bool] | None = None,
     embedder: Any = None,
+    on_best: OnBest | None = None,
 ) -> RefineResult:
     """Refine ``initial_params`` so its sketch matches ``sketch`` (see the module text and
     :class:`RefineSettings`).
 
+    ``sketch``: an image, or a ``refine.objective.PreparedDrawing`` built for these
+    settings' size and metric (a caller that refines one drawing several times, e.g. for
+    several species, prepares it once; its embedder is then the one used).
     ``embedder``: the loaded ``refine.embed.ShapeEmbedder`` to use (a caller that refines
     many sketches loads it once, ``settings.load_embedder()``); by default the settings'
     own is loaded.
 
     ``yaw`` fixes the view (degrees) instead of searching it; ``progress(evaluations,
     best_loss)`` is called after each new evaluation; ``cancel()`` is asked before each
-    one and raises :class:`Cancelled` when it returns True.  ``loss_before`` /
+    one and raises :class:`Cancelled` when it returns True; ``on_best(params, yaw,
+    sketch_distance)`` is called whenever an evaluation is the best so far (what a caller
+    shows while the search runs).  ``loss_before`` /
     ``loss_after`` are the sketch distance; the start point is always evaluated, whatever
     the time limit, so both are finite.
     """
@@ -344,11 +292,15 @@ def refine(
     from weberpenn import species as _species
 
     name = _species.canonical(species) if species else guess_species(initial_params)
-    if embedder is None:
-        embedder = cfg.load_embedder()
-    elif cfg.metric != "shape":
-        raise ValueError("a learned embedder works with the shape metric only")
-    target = make_target(framed(sketch, cfg.size), cfg.size, cfg.metric, embedder)
+    if isinstance(sketch, PreparedDrawing):  # prepared once by the caller (the pipeline)
+        drawing = sketch.check(cfg.size, cfg.metric)
+        if embedder is not None and embedder is not drawing.embedder:
+            raise ValueError("the drawing was prepared with another embedder")
+    else:
+        if embedder is None:
+            embedder = cfg.load_embedder()
+        drawing = PreparedDrawing.create(sketch, cfg.size, cfg.metric, embedder)
+    embedder, target = drawing.embedder, drawing.target
     deadline = None if cfg.time_limit is None else t0 + float(cfg.time_limit)
     if yaw is None and not cfg.search_yaw:
         yaw = 0.0
@@ -357,25 +309,15 @@ def refine(
         name, initial_params, cfg.keys, search_yaw=yaw is None, yaw=yaw or 0.0
     )
     space = space.without([str(k) for k in cfg.hold])
-    # liveness is judged at the start's discrete values: their neighbours (baseSplits,
-    # nrings) change no value's liveness (checked on a sampled tree of each species)
-    if cfg.live_only:
-        space = space.live()
+    # liveness is judged at the start's values: a value that does not change this tree
+    # costs BOBYQA two evaluations and drifts without a signal
+    space = space.live()
     obj = SketchObjective(
         target,
         space,
         metric=cfg.metric,
-        prior=space.from_params(initial_params, 0.0),
-        prior_weight=float(cfg.prior_weight),
         yaw_prior=0.0,
-        yaw_weight=float(cfg.yaw_weight),
-        depth_weight=float(cfg.depth_weight) if space.search_yaw else 0.0,
-        extent_weight=float(cfg.extent_weight),
-        extent_reference=(
-            tree_points(grow(space.to_params(space.from_params(initial_params))))
-            if cfg.extent_weight > 0
-            else None
-        ),
+        yaw_weight=YAW_WEIGHT,
         fast=cfg.fast_sketch,
         embedder=embedder,
     )
@@ -398,8 +340,10 @@ def refine(
         if why is not None:
             stopped[0] = why
             raise _Stop(why)
-        n_before = obj.evaluations
+        n_before, best_before = obj.evaluations, obj.best_loss
         loss = obj(x)
+        if on_best is not None and obj.best_loss < best_before and obj.best_params is not None:
+            on_best(obj.best_params, obj.best_yaw, obj.best_sketch_loss)
         if progress is not None and obj.evaluations != n_before:
             progress(obj.evaluations, obj.best_loss)
         return loss
@@ -410,9 +354,6 @@ def refine(
     start_yaw = float(yaw or 0.0)
     yaws = START_YAWS if yaw is None else (float(yaw),)
     start_cap = max(1, budget // 3)
-    # x0 stays the start (its own seed at its best view) in ``start_space``: what "before"
-    # is and what the result falls back to; later stages begin from ``obj.best_x``
-    start_space = space
 
     def at_view(y: float) -> np.ndarray:
         x = x0.copy()
@@ -421,64 +362,35 @@ def refine(
         return x
 
     try:
-        seen: list[tuple[float, float]] = []  # (loss, yaw) of the start's own seed
         for i, y in enumerate(yaws):
             if i > 0 and (obj.evaluations >= start_cap or out_of_budget()):
                 break
             x = at_view(y)
             loss = evaluate(x)  # sketch distance + the view's penalty
-            seen.append((loss, y))
             if loss < start_total:
                 start_total, start_yaw = loss, y
                 loss_before = obj.sketch_loss(x)  # the sketch distance alone
         x0 = at_view(start_yaw)
-        # 1b. other tree seeds at the best views, while the start keeps within half the
-        # budget and something is searched at all; "before" stays the start's own seed
-        best_views = [y for _, y in sorted(seen)[:2]]
-        seed0 = int(space.base["seed"])
-        extra = (cfg.tree_seeds - 1) * len(best_views)
-        if extra and space.n > 0 and obj.evaluations + extra <= budget // 2:
-            for k in range(1, cfg.tree_seeds):
-                obj.rebase(space.with_base(space.base.replace(seed=seed0 + k)))
-                for y in best_views:
-                    evaluate(at_view(y))
-            space = obj.best_space or space
-            obj.rebase(space)
-        # 2. neighbouring discrete values
-        if cfg.discrete_neighbours:
-            best = obj.best_x if obj.best_x is not None else x0
-            for cand in _discrete_candidates(name, space.base):
-                alt = space.with_base(cand)
-                obj.rebase(alt)
-                if evaluate(best) <= obj.best_loss and obj.best_space is alt:
-                    space = alt
-            obj.rebase(obj.best_space or space)
-            space = obj.space
-        # 3. optional global stage, then 4. local search
-        nlopt.srand(int(cfg.seed))
-        stages: list[tuple[int, int]] = []
-        if cfg.global_evals > 0 and space.n >= 2:
-            stages.append((nlopt.GN_CRS2_LM, int(cfg.global_evals)))
+        # 2. the local search from the best point seen
         local = getattr(nlopt, ALGORITHMS[alg_name])
         if local == nlopt.LN_BOBYQA and space.n < 2:
             local = nlopt.LN_COBYLA
-        if space.n > 0:  # nothing to search: the start point is the answer
-            stages.append((local, budget))
-        for alg, cap in stages:
-            if out_of_budget() is not None:
-                stopped[0] = out_of_budget() or stopped[0]
-                break
-            opt = nlopt.opt(alg, space.n)
+        if space.n == 0:  # nothing to search: the start point is the answer
+            pass
+        elif out_of_budget() is not None:
+            stopped[0] = out_of_budget() or stopped[0]
+        else:
+            nlopt.srand(0)  # the local algorithms draw nothing at random; kept reproducible
+            opt = nlopt.opt(local, space.n)
             opt.set_lower_bounds(np.zeros(space.n))
             opt.set_upper_bounds(np.ones(space.n))
             opt.set_min_objective(lambda x, grad: evaluate(x))
-            opt.set_maxeval(int(min(cap, budget - obj.evaluations) + obj.cache_size + 5))
+            opt.set_maxeval(int(budget - obj.evaluations + obj.cache_size + 5))
             if deadline is not None:
                 opt.set_maxtime(max(1e-3, deadline - time.perf_counter()))
-            if alg != nlopt.GN_CRS2_LM:
-                opt.set_initial_step(np.full(space.n, cfg.initial_step))
-                opt.set_xtol_abs(np.full(space.n, cfg.xtol))
-                opt.set_ftol_abs(1e-6)
+            opt.set_initial_step(np.full(space.n, INITIAL_STEP))
+            opt.set_xtol_abs(np.full(space.n, XTOL))
+            opt.set_ftol_abs(1e-6)
             start = obj.best_x if obj.best_x is not None else x0
             try:
                 opt.optimize(np.clip(np.asarray(start, dtype=np.float64), 0.0, 1.0))
@@ -501,12 +413,12 @@ def refine(
 
     if obj.best_params is None:  # not even the start point fitted the budget/time
         loss_after = loss_before
-        best_params, best_yaw = start_space.to_params(x0), start_yaw
+        best_params, best_yaw = space.to_params(x0), start_yaw
     else:
         loss_after = obj.best_sketch_loss  # <= best objective <= objective at the start
         best_params, best_yaw = obj.best_params, obj.best_yaw
     if loss_after > loss_before:  # the view penalty traded sketch match for the front view
-        loss_after, best_params, best_yaw = loss_before, start_space.to_params(x0), start_yaw
+        loss_after, best_params, best_yaw = loss_before, space.to_params(x0), start_yaw
     return RefineResult(
         params=best_params,
         yaw=float(best_yaw),

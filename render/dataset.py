@@ -321,7 +321,9 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
         styled = "styles" in settings
         rows = []
         for view_no, view in enumerate(settings["views"]):
-            for style, img in _draw_view(renderer, view, view_no, job.tree_seed, settings):
+            for style, img in _draw_view(
+                renderer, view, view_no, job.tree_seed, settings, job.species
+            ):
                 p = paths_for(job, view, style)
                 atomic_write(root / p["sketch"], png_bytes(img))
                 row = {
@@ -353,23 +355,24 @@ def build_tree(job: TreeJob, settings: dict[str, Any], out: str) -> dict[str, An
         (root / "failed" / f"{job.tree_id}.json").unlink(missing_ok=True)
         return marker
     except Exception as exc:  # one bad tree never stops the run
-        record = {
-            "tree_id": job.tree_id,
-            "status": "failed",
-            "species": job.species,
-            "index": job.index,
-            "tree_seed": job.tree_seed,
-            "error": f"{type(exc).__name__}: {exc}",
-            "traceback": traceback.format_exc(),
-            "params": params.to_dict() if params is not None else None,
-        }
+        record = _failed_record(
+            job,
+            f"{type(exc).__name__}: {exc}",
+            traceback.format_exc(),
+            params.to_dict() if params is not None else None,
+        )
         with contextlib.suppress(OSError):  # disk trouble: still report the failure
             atomic_write(root / "failed" / f"{job.tree_id}.json", _json_bytes(record))
         return record
 
 
 def _draw_view(
-    renderer: Any, view: str, view_no: int, tree_seed_: int, settings: dict[str, Any]
+    renderer: Any,
+    view: str,
+    view_no: int,
+    tree_seed_: int,
+    settings: dict[str, Any],
+    species: str | None = None,
 ) -> list[tuple[str, np.ndarray]]:
     """One view in each of its styles, as (style, uint8 sketch); the SG one is exactly
     ``renderer.sketch(view, size)``."""
@@ -377,10 +380,12 @@ def _draw_view(
     styles = view_styles(settings, tree_seed_, view_no)
     if styles == ["sg"]:
         return [("sg", renderer.sketch(view, size))]
+    from weberpenn.species import doodle_foliage
+
     from .styles import STYLES, Silhouettes, draw
 
     parts = renderer.parts(view, size)
-    sil = Silhouettes.from_parts(parts)
+    sil = Silhouettes.from_parts(parts, species is not None and doodle_foliage(species))
     out = []
     for style in styles:
         if style == "sg":
@@ -456,17 +461,23 @@ def _store(root: Path, job: TreeJob, tf: TreeFiles) -> dict[str, Any]:
 
 def _lost(job: TreeJob, error: str) -> TreeFiles:
     """The record of a tree whose worker was lost more often than the executor retries."""
-    record = {
+    return TreeFiles(_failed_record(job, error.splitlines()[0] if error else "lost", error), {})
+
+
+def _failed_record(
+    job: TreeJob, error: str, trace: str, params: dict[str, Any] | None = None
+) -> dict[str, Any]:
+    """What ``failed/<tree_id>.json`` holds for a tree that could not be built."""
+    return {
         "tree_id": job.tree_id,
         "status": "failed",
         "species": job.species,
         "index": job.index,
         "tree_seed": job.tree_seed,
-        "error": error.splitlines()[0] if error else "lost",
-        "traceback": error,
-        "params": None,
+        "error": error,
+        "traceback": trace,
+        "params": params,
     }
-    return TreeFiles(record, {})
 
 
 # --------------------------------------------------------------------------- the build
@@ -657,8 +668,13 @@ def build_dataset(
     progress: bool | None = None,
     on_tree: Callable[[dict[str, Any]], None] | None = None,
     executor: PieceRunner | None = None,
+    only_split: str | None = None,
 ) -> BuildSummary:
     """Build (or resume) the dataset described by ``cfg``; see the module docstring.
+
+    ``only_split`` ("train", "val" or "test") builds only that split's trees, the same
+    trees and files as the full build (a test split to score a network on, in a tenth of
+    the time); the manifest then lists that split alone.
 
     ``executor`` spreads the trees (``treesketch.executor``: a local process pool, Ray);
     None builds them in this process.  Whichever runs them, the files are the same bytes.
@@ -670,6 +686,8 @@ def build_dataset(
         )
     if executor is not None and int(cfg.workers) > 1:
         raise DatasetError("give either workers or an executor, not both")
+    if only_split not in (None, "train", "val", "test"):
+        raise DatasetError(f"only_split must be train, val or test, got {only_split!r}")
     root = cfg.out_dir
     if root.exists() and not root.is_dir():
         raise DatasetError(f"--out {root} exists and is not a folder")
@@ -684,7 +702,7 @@ def build_dataset(
         removed = _clean_temp_files(root)
         if removed:
             log.info("removed %d temporary files left by an interrupted run", removed)
-        jobs = plan(cfg)
+        jobs = [j for j in plan(cfg) if only_split is None or j.split == only_split]
         todo = [j for j in jobs if not _is_finished(root, j, settings)]
         skipped = len(jobs) - len(todo)
         if todo:

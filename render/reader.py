@@ -3,13 +3,22 @@
 ``read_sketch(source)`` takes a path, bytes, a PIL image or an array (grey, RGB, RGBA, with
 values 0..255 or 0..1) and gives an ``(H, W)`` ``uint8`` grey image, 255 = white:
 
-1. **Limits before decoding.**  An encoded image's header is read first: its pixel count
+1. **Limits before decoding.**  An encoded image's format is recognised from its first
+   bytes (:func:`image_format`): only the raster formats in :data:`FORMATS` are handed to
+   Pillow, and only to that format's reader, so an EPS or PDF (which Pillow would give to
+   Ghostscript) is refused unread.  Its header is read next: its pixel count
    (at most :data:`MAX_PIXELS`), its sides (at least :data:`MIN_SIDE`) and its aspect ratio
    (at most :data:`MAX_ASPECT`) are checked before a single pixel is decoded, so a 109-byte
    PNG that declares 30000 x 30000 pixels or a 1 x 20000 strip is refused at once, with
    bounded memory (Pillow's decompression-bomb error is turned into the same message).
-2. **Alpha flattened on white**, then **one grey formula** (ITU-R 601 luma, Pillow's "L").
-3. **One ink rule** (:func:`ink_mask`): a pixel is ink when it is darker than
+2. **Upright**: a photo's EXIF orientation (a phone stores a portrait photo sideways and
+   says so) is applied.
+3. **Alpha flattened on white**, then **one grey formula** (ITU-R 601 luma, Pillow's "L");
+   **one level rule** for every kind of pixel value (:func:`_levels`): booleans are black
+   and white (False black, as in a 1-bit PNG), floats in 0..1 are fractions of white,
+   wider values are 0..255, or 0..65535 when any is over 255 (a 16-bit PNG, scan or
+   array), and NaN or infinite values are refused.
+4. **One ink rule** (:func:`ink_mask`): a pixel is ink when it is darker than
    :data:`INK_LEVEL`.  A page with (almost) no ink is refused as blank, a page that is
    mostly ink as all dark (:func:`check_ink`).
 
@@ -21,19 +30,23 @@ from __future__ import annotations
 
 import io
 import os
+import warnings
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 __all__ = [
+    "FORMATS",
     "INK_LEVEL",
     "MAX_ASPECT",
     "MAX_BYTES",
     "MAX_PIXELS",
     "MIN_SIDE",
+    "FormatError",
     "SketchError",
     "check_ink",
+    "image_format",
     "ink_mask",
     "read_sketch",
 ]
@@ -49,6 +62,68 @@ MAX_INK = 0.9  # fraction above which the page counts as all dark
 
 class SketchError(ValueError):
     """The input is not a usable sketch (unreadable, too large, blank, all dark)."""
+
+
+class FormatError(SketchError):
+    """The input is a picture, but in a format that is not read (EPS, PDF, SVG, HEIC...)."""
+
+
+# The raster formats a sketch may come in (Pillow's names), each recognised by its first
+# bytes (https://www.garykessler.net/library/file_sigs.html) before Pillow sees the data:
+# left to itself Pillow tries every plugin it has, EPS among them, which runs Ghostscript.
+FORMATS = ("PNG", "JPEG", "WEBP", "GIF", "BMP", "TIFF")
+_NAMES = "PNG, JPEG, WebP, GIF, BMP or TIFF"
+
+
+def _raster(head: bytes) -> str | None:
+    if head.startswith(b"\x89PNG\r\n\x1a\n"):
+        return "PNG"
+    if head.startswith(b"\xff\xd8\xff"):
+        return "JPEG"
+    if head[:4] == b"RIFF" and head[8:12] == b"WEBP":
+        return "WEBP"
+    if head[:6] in (b"GIF87a", b"GIF89a"):
+        return "GIF"
+    if head[:2] == b"BM":
+        return "BMP"
+    if head[:4] in (b"II*\x00", b"MM\x00*"):
+        return "TIFF"
+    return None
+
+
+def _other(head: bytes) -> str | None:
+    """The name of a known picture or document format that is not read, for the message."""
+    text = head.lstrip(b"\xef\xbb\xbf \t\r\n").lower()
+    if head.startswith((b"%!PS", b"\xc5\xd0\xd3\xc6")):
+        return "PostScript (EPS)"
+    if head.startswith(b"%PDF"):
+        return "PDF"
+    if text.startswith((b"<svg", b"<?xml")) and b"<svg" in text:
+        return "SVG"
+    if head[4:8] == b"ftyp" and head[8:12] in (b"heic", b"heix", b"mif1", b"msf1", b"hevc"):
+        return "HEIC (a phone's 'high efficiency' photo)"
+    if head[4:8] == b"ftyp" and head[8:12] in (b"avif", b"avis"):
+        return "AVIF"
+    if head.startswith(b"8BPS"):
+        return "Photoshop (PSD)"
+    return None
+
+
+def image_format(data: bytes, what: str = "the image") -> str:
+    """The format (a name in :data:`FORMATS`) of encoded image ``data``, from its first
+    bytes alone; :class:`FormatError` for a known format that is not read, SketchError for
+    anything else."""
+    head = bytes(data[:64])
+    fmt = _raster(head)
+    if fmt is not None:
+        return fmt
+    other = _other(head)
+    if other is not None:
+        raise FormatError(
+            f"{what} is {other}, not a raster picture; send a {_NAMES} image "
+            "(export or save it as PNG or JPEG)"
+        )
+    raise SketchError(f"{what} is not an image in a format read here ({_NAMES})")
 
 
 def _check_size(width: int, height: int) -> None:
@@ -78,17 +153,22 @@ def _open(data: bytes, what: str) -> Any:
         raise SketchError(f"{what} is {len(data):,} bytes, over the limit of {MAX_BYTES:,}")
     if not data:
         raise SketchError(f"{what} is empty")
+    fmt = image_format(data, what)
     try:
-        with Image.open(io.BytesIO(data)) as im:  # lazy: reads the header only
-            _check_size(*im.size)
-            im.load()
-            return _flatten(im)
+        # only the one reader the first bytes name (lazy: reads the header only); Pillow's
+        # warnings about the file (a damaged EXIF block) would only be noise on stderr
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            with Image.open(io.BytesIO(data), formats=[fmt]) as im:
+                _check_size(*im.size)
+                im.load()
+                return _upright(_flatten(im), _orientation(im))
     except SketchError:
         raise
     except Image.DecompressionBombError:
         raise SketchError(f"{what} declares too many pixels to be a sketch") from None
     except UnidentifiedImageError:
-        raise SketchError(f"{what} is not an image Pillow can read (PNG, JPEG, ...)") from None
+        raise SketchError(f"{what} is a damaged {fmt} image (its header is not valid)") from None
     except (OSError, ValueError, SyntaxError, EOFError) as exc:
         raise SketchError(f"{what} is a damaged or truncated image ({_plain(exc)})") from None
 
@@ -101,6 +181,56 @@ def _plain(exc: BaseException) -> str:
     return text or type(exc).__name__
 
 
+EXIF_ORIENTATION = 0x0112
+
+
+def _orientation(im: Any) -> int:
+    """The EXIF orientation (1..8) a picture says it is stored in; 1 (as stored) when it
+    says nothing or its EXIF block is damaged: the picture is still worth reading."""
+    try:
+        with warnings.catch_warnings():  # Pillow warns of a damaged block on stderr
+            warnings.simplefilter("ignore")
+            value = int(im.getexif().get(EXIF_ORIENTATION, 1))
+    except Exception:  # noqa: BLE001 - any damage inside the EXIF block
+        return 1
+    return value if 1 <= value <= 8 else 1
+
+
+def _upright(g: np.ndarray, orientation: int) -> np.ndarray:
+    """A grey image stored with EXIF ``orientation``, turned the way it was taken (the
+    same turns as Pillow's ``ImageOps.exif_transpose``)."""
+    if orientation in (5, 6, 7, 8):  # stored on its side: a quarter turn (and a mirror)
+        g = {5: g.T, 6: np.rot90(g, -1), 7: g.T[::-1, ::-1], 8: np.rot90(g, 1)}[orientation]
+    elif orientation in (2, 3, 4):
+        g = {2: g[:, ::-1], 3: g[::-1, ::-1], 4: g[::-1]}[orientation]
+    return np.ascontiguousarray(g)
+
+
+def _levels(a: np.ndarray) -> np.ndarray:
+    """Pixel values of any numeric type -> float32 0..255 (255 = white), one rule for
+    arrays and decoded images alike: booleans black (False) and white (True), as in a
+    1-bit PNG; floats all within 0..1 are fractions of white; other values are 0..255, or
+    0..65535 when any is over 255 (16 bits: a 16-bit PNG, a scan, a uint16 array).
+    NaN and infinite values are refused."""
+    if a.dtype == np.bool_:
+        return a.astype(np.float32) * 255.0
+    if a.dtype == np.uint8:
+        return a.astype(np.float32)
+    if a.dtype.kind == "f" and not np.isfinite(a).all():
+        raise SketchError(
+            "the image holds NaN or infinite values; a sketch's pixels are numbers from "
+            "black to white"
+        )
+    top = float(a.max(initial=0))
+    if a.dtype.kind == "f" and top <= 1.0:
+        scale = 255.0
+    elif top > 255.0:
+        scale = 255.0 / 65535.0
+    else:
+        scale = 1.0
+    return np.clip(a.astype(np.float32) * np.float32(scale), 0.0, 255.0)
+
+
 def _flatten(im: Any) -> np.ndarray:
     """A PIL image -> uint8 grey: alpha composited on white, then ITU-R 601 luma."""
     from PIL import Image
@@ -111,9 +241,7 @@ def _flatten(im: Any) -> np.ndarray:
         bg.alpha_composite(rgba)
         im = bg
     elif im.mode in ("I", "I;16", "I;16B", "I;16L", "F"):
-        a = np.asarray(im, dtype=np.float64)
-        top = 65535.0 if a.max(initial=0) > 255 else 255.0
-        return np.clip(np.round(a / top * 255.0), 0, 255).astype(np.uint8)
+        return np.round(_levels(np.asarray(im))).astype(np.uint8)
     return np.asarray(im.convert("L"), dtype=np.uint8)
 
 
@@ -129,12 +257,7 @@ def _from_array(source: Any) -> np.ndarray:
     _check_size(a.shape[1], a.shape[0])
     if a.dtype == np.uint8 and a.ndim == 2:
         return a.copy()
-    f = a.astype(np.float32)
-    if not np.isfinite(f).all():
-        raise SketchError("the image holds NaN or infinite values")
-    if a.dtype.kind == "f" and f.max(initial=0.0) <= 1.0:
-        f = f * 255.0
-    f = np.clip(f, 0.0, 255.0)
+    f = _levels(a)
     if f.ndim == 3:
         if f.shape[2] == 4:
             alpha = f[..., 3:] / 255.0
@@ -161,12 +284,18 @@ def read_sketch(source: Any) -> np.ndarray:
     if isinstance(source, bytes | bytearray | memoryview):
         return _open(bytes(source), "the uploaded sketch")
     if isinstance(source, Image.Image):
+        # an image opened by the caller: Pillow chose its reader, so refuse the formats
+        # not read here before loading (an EPS would run Ghostscript)
+        if source.format is not None and source.format not in (*FORMATS, "MPO"):
+            raise FormatError(
+                f"the image is {source.format}, not one of the formats read: {_NAMES}"
+            )
         _check_size(*source.size)
         try:
             source.load()
         except Image.DecompressionBombError:
             raise SketchError("the image declares too many pixels to be a sketch") from None
-        return _flatten(source)
+        return _upright(_flatten(source), _orientation(source))
     return _from_array(source)
 
 

@@ -16,6 +16,11 @@ draws the style's free choices: wave, stroke width, gaps, ...) and the output si
 - ``felt``: a felt tip: few thick strokes, a smooth crown outline, the trunk as one stroke.
 - ``bare``: a winter tree: no foliage, the trunk and branches down to the twigs as pen
   strokes (the thick parts often as two lines).
+- ``doodle``: a quick finger or mouse doodle: the crown as a polyline of 5 to 20 jittered
+  segments (sometimes left open), a fitted "lollipop" ellipse, a zigzag (pointed crowns:
+  a Christmas tree) or loops; thin foliage (palm fronds, hanging twigs) as single strokes;
+  the trunk as two lines or one; a few branches as single strokes; one even line width
+  of a phone or a mouse.
 
 Each function takes its constants as keyword arguments (pixel sizes are for a 256-pixel
 drawing and scale with the work size); ``STYLES`` maps a name to its function and
@@ -44,6 +49,7 @@ __all__ = [
     "bare",
     "check_styles",
     "cloud",
+    "doodle",
     "draw",
     "felt",
     "pen",
@@ -61,6 +67,9 @@ class Silhouettes:
 
     branches: np.ndarray
     leaves: np.ndarray
+    # the foliage is drawn as single strokes (palm fronds, hanging willow twigs): a fact
+    # of the species (``weberpenn.species.doodle_foliage``), not of the pixels
+    foliage_strokes: bool = False
 
     def __post_init__(self) -> None:
         b = np.asarray(self.branches)
@@ -71,9 +80,9 @@ class Silhouettes:
             )
 
     @classmethod
-    def from_parts(cls, parts: Any) -> Silhouettes:
+    def from_parts(cls, parts: Any, foliage_strokes: bool = False) -> Silhouettes:
         """From a :class:`render.sketch.SketchParts` (its silhouettes are at work size)."""
-        return cls(parts.branch_silhouette, parts.leaf_silhouette)
+        return cls(parts.branch_silhouette, parts.leaf_silhouette, foliage_strokes)
 
     @property
     def n(self) -> int:
@@ -467,6 +476,148 @@ def felt(
     return _finish(ink, size)
 
 
+def _polylines(n: int, lines: list[np.ndarray]) -> np.ndarray:
+    """One-pixel mask of polylines (each ``(k, 2)`` row/column points, clipped to the page)."""
+    from skimage.draw import line
+
+    mask = np.zeros((n, n), bool)
+    for pts in lines:
+        p = np.clip(np.round(pts).astype(int), 0, n - 1)
+        for (r0, c0), (r1, c1) in zip(p[:-1], p[1:], strict=True):
+            rr, cc = line(r0, c0, r1, c1)
+            mask[rr, cc] = True
+    return mask
+
+
+def _outline(mask: np.ndarray) -> np.ndarray:
+    """The longest closed contour of a mask, ``(k, 2)``, as arc-length samples."""
+    from skimage import measure
+
+    contours = measure.find_contours(np.pad(mask, 1).astype(np.float32), 0.5)
+    return max(contours, key=len) - 1.0
+
+
+def _resample(c: np.ndarray, k: int, start: float) -> np.ndarray:
+    """``k`` points spaced evenly along a closed contour, from ``start`` (0..1) of its length."""
+    seg = np.hypot(*np.diff(c, axis=0).T)
+    arc = np.concatenate([[0.0], np.cumsum(seg)])
+    at = (start + np.arange(k) / k) % 1.0 * arc[-1]
+    return np.stack([np.interp(at, arc, c[:, 0]), np.interp(at, arc, c[:, 1])], axis=1)
+
+
+def _crown_lines(
+    crown: np.ndarray, rng: np.random.Generator, s: float, mode: str, open_p: float
+) -> list[np.ndarray]:
+    """The crown as a doodle: polyline, ellipse, zigzag or loops (row/column points)."""
+    c = _outline(crown)
+    centre = c.mean(axis=0)
+    if mode == "ellipse":  # the lollipop: the crown's second moments as an ellipse
+        rr, cc = np.nonzero(crown)
+        cov = np.cov(np.stack([rr, cc]).astype(np.float64))
+        w, v = np.linalg.eigh(cov)
+        t = np.linspace(0, 2 * np.pi, int(rng.integers(10, 21)) + 1) + rng.uniform(0, 2 * np.pi)
+        unit = np.stack([np.cos(t), np.sin(t)], axis=1) * (2.0 * np.sqrt(np.maximum(w, 1.0)))
+        pts = unit @ v.T + np.array([rr.mean(), cc.mean()])
+        return [pts + rng.normal(0, 1.5 * s, pts.shape)]
+    if mode == "zigzag":  # a Christmas tree: tiers whose tips follow the crown's width
+        rows = np.nonzero(crown.any(axis=1))[0]
+        top, bottom = float(rows[0]), float(rows[-1])
+        cols = np.nonzero(crown.any(axis=0))[0]
+        mid = (cols[0] + cols[-1]) / 2.0
+        tiers = int(rng.integers(3, 7))
+        ys = top + (bottom - top) * (np.arange(1, tiers + 1) / tiers) ** rng.uniform(0.8, 1.1)
+        half = np.array([crown[int(min(y, bottom))].sum() / 2.0 for y in ys])
+        inner = rng.uniform(0.4, 0.7)
+        left = [(top, mid)]
+        for i, (y, w) in enumerate(zip(ys, half, strict=True)):
+            left.append((y, mid - w))
+            if i < tiers - 1:
+                left.append((y, mid - inner * w))
+        right = [(y, 2 * mid - x) for y, x in reversed(left[1:])]
+        pts = np.array(left + right + [(top, mid)], dtype=np.float64)
+        return [pts + rng.normal(0, 1.0 * s, pts.shape)]
+    elif mode == "loops":  # a chain of small loops around the crown
+        k = int(rng.integers(8, 15))
+        at = _resample(c, 12 * k, rng.uniform())
+        r = rng.uniform(5.0, 10.0) * s
+        t = np.linspace(0.0, 2 * np.pi * k, len(at))
+        normal = at - centre
+        normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-6)
+        pts = at + normal * (r * (0.5 + 0.5 * np.cos(t)))[:, None]
+    else:  # a polyline of 5 to 20 segments
+        pts = _resample(c, int(rng.integers(5, 21)), rng.uniform())
+    pts = pts + rng.normal(0, 1.5 * s, pts.shape)
+    pts = np.concatenate([pts, pts[:1]])
+    if rng.random() < open_p:  # the stroke stops short of where it began
+        pts = pts[: max(3, int(len(pts) * rng.uniform(0.8, 0.95)))]
+    return [pts]
+
+
+def doodle(
+    sil: Silhouettes,
+    rng: np.random.Generator,
+    size: int = 256,
+    *,
+    line_px: tuple[float, float] = (1.5, 5.0),
+    open_crown: float = 0.3,
+    inner_branches: float = 0.4,
+    two_line_trunk: float = 0.5,
+    bare_line_px: tuple[float, float] = (1.2, 2.5),
+    wobble_px: tuple[float, float] = (0.5, 2.0),
+) -> np.ndarray:
+    """A quick doodle: polyline, lollipop, zigzag or looped crown, or thin foliage as
+    single strokes; the trunk as two lines or one; one even line width."""
+    g = _geometry(sil)
+    s = g.s
+    lw = rng.uniform(*line_px) * s
+    n = g.n
+    ink = np.zeros((n, n), np.float32)
+    crown = g.crown(rng.uniform(3.0, 6.0))
+    leaf_px = float(g.leaves.sum())
+    thin = sil.foliage_strokes
+    if crown.any() and leaf_px > 0:
+        rows = np.nonzero(crown.any(axis=1))[0]
+        top, bottom = rows[0], rows[-1]
+        width = crown.sum(axis=1)
+        upper = width[top : top + max(1, (bottom - top) // 3)].mean()
+        lower = width[bottom - max(1, (bottom - top) // 3) : bottom + 1].mean()
+        pointed = upper < 0.5 * lower
+        modes = ("polyline", "ellipse", "zigzag", "loops", "strokes")
+        weights = np.array(
+            [0.35, 0.2, 0.8 if pointed else 0.02, 0.15, 1.2 if thin else 0.05], np.float64
+        )
+        mode = str(rng.choice(modes, p=weights / weights.sum()))
+        if mode == "strokes":
+            from skimage.morphology import skeletonize
+
+            strokes = skeletonize(g.leaves) & ~ndimage.binary_dilation(g.branches, iterations=1)
+            lab, k = ndimage.label(strokes, structure=np.ones((3, 3)))
+            if k:  # specks of a stroke are not drawn
+                sizes = ndimage.sum_labels(strokes, lab, index=np.arange(1, k + 1))
+                strokes = np.isin(lab, np.flatnonzero(sizes >= 6 * s) + 1)
+            ink = np.maximum(ink, _stroke(_dist_to(strokes), lw))
+        else:
+            lines = _crown_lines(crown, rng, s, mode, open_crown)
+            ink = np.maximum(ink, _stroke(_dist_to(_polylines(n, lines)), lw))
+    else:
+        crown = np.zeros((n, n), bool)
+    below = g.branches & ~crown
+    if rng.random() < two_line_trunk:
+        # the trunk as two lines (a bare tree: its thickest limbs only)
+        thick = _opening(below, (1.5 if leaf_px else 3.0) * s)
+        if thick.any():
+            ink = np.maximum(ink, _stroke(_sdf(thick), lw))
+            below = below & ~ndimage.binary_dilation(thick, iterations=2)
+    if leaf_px == 0:  # a bare tree: thinner lines, the main limbs only
+        lw = min(lw, rng.uniform(*bare_line_px) * s)
+    main = g.main_branches(2.5 if leaf_px == 0 else 2.0)
+    keep = main & ~crown if leaf_px and rng.random() >= inner_branches else main
+    keep = keep & (below | crown | (leaf_px == 0))
+    ink = np.maximum(ink, _stroke(_dist_to(keep), lw) if keep.any() else 0.0)
+    ink = _warp(ink, rng, rng.uniform(*wobble_px) * s, 16 * s)
+    return _finish(ink, size)
+
+
 STYLES: dict[str, StyleFn] = {
     "sg": sg,
     "pen": pen,
@@ -475,6 +626,7 @@ STYLES: dict[str, StyleFn] = {
     "pencil": pencil,
     "felt": felt,
     "bare": bare,
+    "doodle": doodle,
 }
 
 

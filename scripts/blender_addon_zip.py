@@ -1,12 +1,16 @@
 """Build the installable add-on zip: ``python scripts/blender_addon_zip.py [OUT.zip]``.
 
 The zip holds the folder ``treesketch_addon/`` (Blender's Install... button takes it as
-is).  Written through the project's atomic writer.
+is) and ``treesketch_addon/controls.json``: the controls table
+(``weberpenn.controls.table()``) and the default budget, written here so that the add-on's
+panel shows the very controls of the project that built it (Blender's Python cannot import
+the project).  Written through the project's atomic writer.
 """
 
 from __future__ import annotations
 
 import io
+import json
 import sys
 import zipfile
 from pathlib import Path
@@ -14,6 +18,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from refine.search import DEFAULT_BUDGET  # noqa: E402
+from weberpenn.controls import table  # noqa: E402
 from weberpenn.fileio import atomic_write  # noqa: E402
 
 ADDON = ROOT / "blender" / "treesketch_addon"
@@ -26,7 +32,12 @@ def addon_zip() -> bytes:
         for f in sorted(ADDON.rglob("*")):
             if f.is_file() and "__pycache__" not in f.parts:
                 zf.write(f, f"treesketch_addon/{f.relative_to(ADDON).as_posix()}")
+        zf.writestr("treesketch_addon/controls.json", controls_json())
     return buf.getvalue()
+
+
+def controls_json() -> str:
+    return json.dumps({"controls": table(), "default_budget": DEFAULT_BUDGET}, indent=1)
 
 
 def main(argv: list[str]) -> int:

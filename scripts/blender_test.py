@@ -3,21 +3,27 @@
     blender -b --factory-startup --python-exit-code 1 --python scripts/blender_test.py -- \
         ZIP GLB HEIGHT TREESKETCH_CLI
 
-1. Blender's glTF importer reads our GLB: the tree stands along +Z, base at z~0, height
-   equal to ours within 1 %.
-2. The add-on installs from its zip, registers its panel, and the panel draws.
+0. The add-on installs from its zip (it gives numpy back the ``bool`` alias that Debian
+   Blender 3.4's glTF importer calls; this script patches nothing).
+1. Blender's own glTF importer, called plainly, reads our GLB: the tree stands along +Z,
+   base at z~0, height equal to ours within 1 %.
+2. The add-on registers its panel, and the panel draws.
 3. It adds a tree from the bundled drawing through the project's CLI, as a native
    Sapling tree (every level and the leaves: no Limit Import), and from a Grease Pencil
-   drawing as the imported GLB, standing upright.
+   drawing as the imported GLB, standing upright; each comes in as one hierarchy (an
+   empty named after the species) in the ``TreeSketch`` collection, and each
+   prediction's Sapling preset gets a name of its own; a broken preset is reported by
+   the operator in plain words.
 """
 
+import os
 import sys
 import time
+from pathlib import Path
 
 import numpy as _np
 
-if not hasattr(_np, "bool"):
-    _np.bool = bool  # Debian Blender 3.4's glTF importer calls np.bool (gone in numpy 2)
+NUMPY_HAD_BOOL = "bool" in _np.__dict__  # numpy >= 1.24 has no np.bool
 
 import bpy  # type: ignore[import-not-found]  # noqa: E402, I001 - bpy first (bpy module)
 import addon_utils  # type: ignore[import-not-found]  # noqa: E402
@@ -43,7 +49,13 @@ def step(msg):
     print(f"BLENDER_TEST {time.time() - T0:6.1f}s {msg}", flush=True)
 
 
-# 1. our GLB through Blender's own importer
+# 0. install the add-on from its zip and enable it
+bpy.ops.preferences.addon_install(filepath=ZIP, overwrite=True)
+addon_utils.enable("treesketch_addon", default_set=True)
+assert "bool" in _np.__dict__, "the add-on did not give numpy its bool alias"
+step(f"add-on on; numpy {_np.__version__} had np.bool: {NUMPY_HAD_BOOL}, now: True")
+
+# 1. our GLB through Blender's own importer, called plainly
 clear()
 bpy.ops.import_scene.gltf(filepath=GLB)
 meshes = [o for o in bpy.data.objects if o.type == "MESH"]
@@ -97,12 +109,10 @@ if SAPLING:
         f"Sapling Import Preset (splines, leaf faces): ours {levels[False]}, Limit on {levels[True]}"
     )
 
-# 2. install the add-on from its zip, enable, draw the panel
-bpy.ops.preferences.addon_install(filepath=ZIP, overwrite=True)
-addon_utils.enable("treesketch_addon", default_set=True)
+# 2. the add-on's panel
 assert hasattr(bpy.types, "VIEW3D_PT_treesketch"), "panel not registered"
 prefs = bpy.context.preferences.addons["treesketch_addon"].preferences
-prefs.cli_path, prefs.copy_presets = CLI, False
+prefs.cli_path, prefs.copy_presets = CLI, True
 
 
 class Layout:  # records what the panel draws (there is no screen in background mode)
@@ -124,12 +134,35 @@ class Layout:  # records what the panel draws (there is no screen in background 
     def column(self, **kw):
         return self
 
+    def box(self, **kw):
+        return self
+
 
 log = []
 panel = bpy.types.VIEW3D_PT_treesketch
 panel.draw(type("P", (), {"layout": Layout(log)})(), bpy.context)
 assert ("operator", "treesketch.predict") in log and ("prop", "image_path") in log, log
 step(f"add-on installed, panel draws {len(log)} items")
+
+
+def check_hierarchy(kind):
+    """The last prediction: one empty named after its species (not the fallback "tree"),
+    the tree's objects under it, everything in the TreeSketch collection."""
+    coll = bpy.data.collections["TreeSketch"]
+    assert coll.name in bpy.context.scene.collection.children
+    parent = [o for o in coll.objects if o.parent is None][-1]
+    assert parent.type == "EMPTY" and parent.name.split(".")[0] != "tree", parent.name
+    tree = [o for o in coll.objects if o.parent is parent]
+    assert tree, f"{kind}: nothing under {parent.name}"
+    stray = [
+        o.name
+        for o in bpy.data.objects
+        if o.type in ("MESH", "CURVE") and coll not in o.users_collection
+    ]
+    assert not stray, f"{kind}: objects outside the TreeSketch collection: {stray}"
+    step(f"{kind}: {parent.name} holds {[o.name for o in tree]} in collection TreeSketch")
+    return parent
+
 
 # 3a. the bundled drawing -> native Sapling tree (the GLB where Sapling is missing)
 clear()
@@ -145,6 +178,36 @@ if SAPLING:
     assert leaves and len(leaves[0].data.polygons) > 0, "Sapling made no leaves (Limit Import?)"
     n_leaves = len(leaves[0].data.polygons)
     step(f"Sapling tree from the bundled drawing: {splines} splines, {n_leaves} leaves")
+    first = check_hierarchy("Sapling tree")
+    # a second prediction: its own preset in Sapling's menu, its own parent
+    assert bpy.ops.treesketch.predict(wait=True) == {"FINISHED"}, settings.status
+    second = check_hierarchy("second Sapling tree")
+    assert second.name != first.name
+    presets = sorted(p for p in os.listdir(folder) if p.startswith("treesketch_"))
+    assert len(presets) == 2, f"each prediction's preset needs a name of its own: {presets}"
+    step(f"two predictions, two presets: {presets}")
+    # 3a'. the panel's controls edit it: more branches, a new tree in the old one's place
+    log = []
+    panel.draw(type("P", (), {"layout": Layout(log)})(), bpy.context)
+    assert ("prop", "crown_width") in log and ("operator", "treesketch.variant") in log, log
+    ctl = bpy.context.scene.treesketch_controls
+    assert ctl.crown_width == 1.0 and ctl.seed == -1 and ctl.crown_shape == "KEEP"
+    ctl.branch_count = 2.0
+    coll = bpy.data.collections["TreeSketch"]
+
+    def roots():
+        return [o.as_pointer() for o in coll.objects if o.parent is None]
+
+    before = roots()
+    assert bpy.ops.treesketch.apply_controls() == {"FINISHED"}, settings.status
+    edited = check_hierarchy("edited Sapling tree")
+    after = roots()  # the edited tree took the old one's place (Blender may reuse its name)
+    assert len(after) == len(before) and before[-1] not in after, (before, after)
+    more = sum(len(o.data.splines) for o in bpy.data.objects if o.type == "CURVE")
+    assert more > splines, (more, splines)
+    assert bpy.ops.treesketch.variant() == {"FINISHED"}, settings.status
+    assert ctl.seed >= 0 and len(roots()) == len(before) and after[-1] not in roots()
+    step(f"controls: branch count x2 gives {more} splines (was {splines}); variant {ctl.seed}")
 else:
     lo, hi = world_z([o for o in bpy.data.objects if o.type == "MESH"])
     step(f"GLB from the bundled drawing: z {lo:.2f}..{hi:.2f}")
@@ -155,6 +218,29 @@ else:
     except RuntimeError as exc:
         assert "Sapling Tree Gen is not installed" in str(exc), exc
     step("asking for a Sapling tree without Sapling: refused up front with a plain message")
+
+# 3c. the prediction leaves a preset that is not a literal (cut short): the operator
+# reports it plainly, no Python error escapes it (issue 30, item 7)
+if SAPLING:
+    broken_cli = Path(GLB).with_name("broken_treesketch")
+    broken_cli.write_text(
+        "#!/bin/sh\n"
+        'while [ $# -gt 0 ]; do case "$1" in --out) out=$2;; --preset) preset=$2;; esac; '
+        "shift; done\n"
+        'printf glTF > "$out"; printf "{\'levels\': 3,\\n" > "$preset"\n'
+    )
+    broken_cli.chmod(0o755)
+    prefs.cli_path = str(broken_cli)
+    clear()
+    try:  # an operator that reports an error raises it when called from Python
+        bpy.ops.treesketch.predict(wait=True)
+        raise AssertionError("a broken preset was not refused")
+    except RuntimeError as exc:
+        assert "not a Sapling preset TreeSketch can read" in str(exc), exc
+        assert "Traceback" not in str(exc), exc
+    assert not bpy.data.objects, "a broken preset added objects"
+    prefs.cli_path = CLI
+    step("a broken preset: the operator reports it plainly")
 
 # 3b. a Grease Pencil drawing -> the GLB
 clear()
@@ -192,6 +278,7 @@ meshes = [o for o in bpy.data.objects if o.type == "MESH"]
 assert meshes, "no GLB imported"
 lo, hi = world_z(meshes)
 assert abs(lo) < 0.02 * (hi - lo) and hi - lo > 0.5, (lo, hi)
+check_hierarchy("GLB")
 images = {
     n.image
     for o in meshes
@@ -201,4 +288,11 @@ images = {
 }
 assert len(images) == 2 and all(i.packed_file for i in images), "textures not packed"
 step(f"GLB from a Grease Pencil drawing: z {lo:.2f}..{hi:.2f}; {len(images)} textures packed")
+# 3b'. the height control: the GLB tree grown again, 7 m tall
+bpy.context.scene.treesketch_controls.height = 7.0
+assert bpy.ops.treesketch.apply_controls() == {"FINISHED"}, settings.status
+glb_tree = check_hierarchy("edited GLB")
+lo7, hi7 = world_z([o for o in glb_tree.children_recursive if o.type == "MESH"])
+assert abs(hi7 - lo7 - 7.0) < 0.03 * 7.0, (lo7, hi7)
+step(f"controls: height 7 m -> {hi7 - lo7:.2f} m")
 step(f"ALL OK (Blender {bpy.app.version_string})")

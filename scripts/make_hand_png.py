@@ -1,13 +1,19 @@
 """Hand-style drawings outside the training styles, and what the pipeline makes of them.
 
-    .venv/bin/python scripts/make_hand_png.py --inputs-only   # examples/hand/*.png
+    .venv/bin/python scripts/make_hand_png.py --inputs-only   # examples/hand/*.png, species.json
     nice -n 10 .venv/bin/python scripts/make_hand_png.py      # ... and docs/hand.png
 
 Each drawing is written here as strokes (polylines in page pixels), drawn with PIL at about
 4 px with a little seeded wobble, the way a person draws: a lollipop tree, stacked
 triangles, a leaning bonsai, a palm, a wide cherry, a scribbled bush, a ballpoint tree on
 lined paper, a pencil tree on grey paper, a small tree in the corner of a big page, a
-weeping tree, a bare winter tree, a child's cloud tree.  ``docs/hand.png`` shows, per
+weeping tree, a bare winter tree, a child's cloud tree; and twelve of the trees people draw
+most, the way they draw them (issue 27): a zigzag Christmas tree, a finger-drawn lollipop on
+a phone, a palm whose fronds are single lines, a bare tree of uneven forks, a weeping willow,
+an oak, a poplar, a birch, a child's crayon tree, a tree in four finger strokes, a fir of
+three drooping tiers, a jaggy tree drawn with a mouse.  None uses ``render.styles``: they are
+inputs made outside the training styles.  ``examples/hand/species.json`` names, per drawing,
+the species a person would name (and others they fairly could).  ``docs/hand.png`` shows, per
 drawing: the input, the normalised input (``Pipeline`` sees this), the refined tree's sketch
 and its colour render, labelled with the species, the final distance and any warning.
 """
@@ -20,6 +26,7 @@ import math
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
@@ -27,58 +34,10 @@ from PIL import Image, ImageDraw, ImageFont
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from eval.strokes import Stroke, arc, branches, bumpy, curve, jag, line, wobble  # noqa: E402
 from weberpenn.fileio import atomic_target, atomic_write  # noqa: E402
 
-Stroke = np.ndarray  # (n, 2) page pixels, x right, y down
 EXAMPLES = ROOT / "examples" / "hand"
-
-
-def wobble(pts: Stroke, rng: np.random.Generator, amp: float = 2.0, step: float = 6.0) -> Stroke:
-    """The stroke resampled every ``step`` px with a smooth sideways wobble of ``amp`` px."""
-    pts = np.asarray(pts, dtype=float)
-    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
-    s = np.concatenate([[0.0], np.cumsum(seg)])
-    n = max(2, int(s[-1] / step) + 1)
-    t = np.linspace(0.0, s[-1], n)
-    out = np.stack([np.interp(t, s, pts[:, 0]), np.interp(t, s, pts[:, 1])], axis=1)
-    k = np.ones(5) / 5
-    noise = np.stack(
-        [np.convolve(rng.normal(0, amp, n + 4), k, mode="valid") for _ in range(2)], axis=1
-    )
-    return out + noise[:n] * 1.5
-
-
-def arc(cx: float, cy: float, rx: float, ry: float, a0: float, a1: float, n: int = 60) -> Stroke:
-    """Ellipse arc from ``a0`` to ``a1`` degrees (0 = right, 90 = down)."""
-    a = np.radians(np.linspace(a0, a1, n))
-    return np.stack([cx + rx * np.cos(a), cy + ry * np.sin(a)], axis=1)
-
-
-def bumpy(
-    cx: float, cy: float, rx: float, ry: float, bumps: int, depth: float, a0=0.0, a1=360.0
-) -> Stroke:
-    """A cloud outline: an ellipse with ``bumps`` scallops of relative ``depth``."""
-    a = np.radians(np.linspace(a0, a1, bumps * 16))
-    r = 1.0 + depth * np.abs(np.sin(a * bumps / 2))
-    return np.stack([cx + rx * r * np.cos(a), cy + ry * r * np.sin(a)], axis=1)
-
-
-def line(*pts: tuple[float, float]) -> Stroke:
-    return np.array(pts, dtype=float)
-
-
-def branches(
-    x: float, y: float, angle: float, length: float, depth: int, rng: np.random.Generator
-) -> list[Stroke]:
-    """A recursive branching (angle in degrees, 90 = up)."""
-    a = math.radians(angle)
-    x2, y2 = x + length * math.cos(a), y - length * math.sin(a)
-    out = [line((x, y), (x2, y2))]
-    if depth > 0:
-        for turn in (-1, 1):
-            spread = turn * rng.uniform(20, 40)
-            out += branches(x2, y2, angle + spread, length * rng.uniform(0.6, 0.8), depth - 1, rng)
-    return out
 
 
 # --------------------------------------------------------------------- the drawings
@@ -205,19 +164,229 @@ def cloud_tree(rng: np.random.Generator) -> Page:
     return (512, 512), WHITE, [(trunk, 5, BLACK), (crown, 5, BLACK)]
 
 
-DRAWINGS: dict[str, tuple[Callable[[np.random.Generator], Page], str]] = {
-    "lollipop": (lollipop, "a lollipop: a stick and a circle"),
-    "conifer": (conifer, "stacked triangles"),
-    "bonsai": (bonsai, "a leaning bonsai in a pot"),
-    "palm": (palm, "a palm with fronds"),
-    "cherry": (cherry, "a cherry with a wide crown"),
-    "bush": (bush, "a scribbled bush"),
-    "ballpoint": (ballpoint, "ballpoint on lined paper"),
-    "grey_paper": (grey_paper, "pencil on grey paper"),
-    "corner": (corner, "small, in a corner of a big page"),
-    "weeping": (weeping, "a weeping tree"),
-    "winter": (winter, "a bare winter tree"),
-    "cloud_tree": (cloud_tree, "a child's cloud tree"),
+# ---- twelve more (issue 27): the trees people draw most, and how they draw them on a phone,
+# with a mouse or a crayon.  Appended after the first twelve, so those keep their seeds and
+# bytes.
+
+
+def christmas_tree(rng: np.random.Generator) -> Page:
+    # one zigzag outline: out to a tip, back in, out again, four times down each side
+    tiers = ((150, 70, 40), (250, 110, 60), (350, 150, 85), (440, 195, 0))
+    left: list[tuple[float, float]] = [(256, 35)]
+    for y, half, back in tiers:
+        left += [(256 - half, y)] + ([(256 - back, y - 8)] if back else [])
+    right = [(512 - x, y) for x, y in reversed(left)]
+    outline = line(*left, *right)
+    trunk = line((236, 440), (236, 495), (276, 495), (276, 440))
+    return (512, 512), WHITE, [(outline, 4, BLACK), (trunk, 4, BLACK)]
+
+
+def phone_lollipop(rng: np.random.Generator) -> Page:
+    # a finger on a phone: one thick wobbly loop that overshoots its start, one thick stick
+    loop = arc(262, 190, 130, 140, 80, 80 + 380, 90)
+    loop = wobble(loop, rng, amp=3.5, step=10.0)
+    stick = wobble(line((252, 495), (256, 400), (262, 325)), rng, amp=2.5, step=10.0)
+    return (512, 512), WHITE, [(stick, 16, BLACK), (loop, 14, BLACK)]
+
+
+def palm_lines(rng: np.random.Generator) -> Page:
+    # a curved trunk and each frond one swept line, no leaflets: the palm that came out as a
+    # cherry (its fronds' hull looks like a filled crown)
+    t = np.linspace(0, 1, 24)
+    xs = 300 - 90 * t + 60 * t**2
+    ys = 495 - 330 * t
+    s = [np.stack([xs - 9 + 4 * t, ys], 1), np.stack([xs + 9 - 4 * t, ys], 1)]
+    tx, ty = float(xs[-1]), float(ys[-1]) - 4
+    for dx, lift, dy in (
+        (-190, 60, 95), (-150, 80, 20), (-70, 95, -45), (60, 100, -50),
+        (150, 85, 15), (195, 55, 100), (-110, 10, 150), (115, 10, 145),
+    ):  # fmt: skip
+        s.append(curve((tx, ty), (tx + 0.45 * dx, ty - lift), (tx + dx, ty + dy)))
+    return (512, 512), WHITE, [(p, 4, BLACK) for p in s]
+
+
+def _limbs(
+    x: float, y: float, angle: float, length: float, depth: int, rng: np.random.Generator
+) -> list[tuple[Stroke, float]]:
+    """Uneven forks of two or three, the limbs thinner as they go: a bare tree's crown."""
+    a = math.radians(angle)
+    x2, y2 = x + length * math.cos(a), y - length * math.sin(a)
+    out = [(line((x, y), (x2, y2)), 1.5 + 1.2 * depth)]
+    if depth > 0:
+        for k in range(int(rng.integers(2, 4))):
+            turn = angle + rng.uniform(-48, 48) + (k - 1) * 12
+            out += _limbs(x2, y2, turn, length * rng.uniform(0.55, 0.8), depth - 1, rng)
+    return out
+
+
+def bare_winter(rng: np.random.Generator) -> Page:
+    sub = np.random.default_rng(11)
+    trunk = [line((238, 498), (244, 400), (236, 330)), line((274, 498), (268, 400), (272, 330))]
+    limbs = [(p, 4.0) for p in trunk]
+    for angle, length in ((128, 95), (92, 120), (55, 100)):
+        limbs += _limbs(254, 335, angle, length, 3, sub)
+    return (512, 512), WHITE, [(p, w, BLACK) for p, w in limbs]
+
+
+def willow(rng: np.random.Generator) -> Page:
+    # limbs arch up and out like a fountain; long wavy strands hang from them to the ground
+    s = [line((244, 498), (250, 330), (248, 150)), line((266, 498), (262, 330), (264, 150))]
+    arches = []
+    for k in range(3):  # each limb rises over the middle and falls outwards, both sides
+        ctrl, end = (236 - 30 * k, 35 + 35 * k), (105 - 30 * k, 215 + 20 * k)
+        arches.append(curve((256, 150), ctrl, end))
+        arches.append(curve((256, 150), (512 - ctrl[0], ctrl[1]), (512 - end[0], end[1])))
+    s += arches
+    for a in arches:
+        for f in (0.45, 0.65, 0.85, 1.0):
+            x, y = a[int(f * (len(a) - 1))]
+            drop = np.linspace(0, 1, 14)
+            length = rng.uniform(170, 250) * (0.6 + 0.4 * f)
+            sway = rng.uniform(-10, 10)
+            s.append(np.stack([x + sway * np.sin(drop * 5), y + length * drop], 1))
+    return (512, 512), WHITE, [(p, 3.5, BLACK) for p in s]
+
+
+def oak(rng: np.random.Generator) -> Page:
+    # a wide, lumpy crown of uneven lobes on a short, thick trunk with flared roots
+    a = np.radians(np.linspace(200, 200 + 360, 260))
+    lobes = 1 + 0.13 * np.abs(np.sin(a * 4.5)) + 0.06 * np.abs(np.sin(a * 7 + 1.0))
+    crown = np.stack([256 + 225 * lobes * np.cos(a), 215 + 125 * lobes * np.sin(a)], 1)
+    crown = crown[(crown[:, 1] < 320) | (np.abs(crown[:, 0] - 256) > 60)]
+    trunk = [
+        line((180, 498), (215, 470), (222, 395), (215, 335)),
+        line((335, 498), (295, 470), (290, 395), (300, 335)),
+    ]
+    limbs = [
+        line((222, 360), (160, 290)),
+        line((292, 360), (360, 280)),
+        line((256, 350), (252, 260)),
+    ]
+    return (512, 512), WHITE, [(crown, 5, BLACK)] + [(p, 5, BLACK) for p in trunk + limbs]
+
+
+def poplar(rng: np.random.Generator) -> Page:
+    # a tall narrow flame of a crown on a short trunk, a few upright strokes inside
+    t = np.linspace(0, 1, 40)
+    half = 62 * np.sin(np.pi * t**0.8) ** 0.9
+    ys = 25 + 405 * t
+    outline = np.concatenate(
+        [np.stack([256 - half, ys], 1), np.stack([256 + half, ys], 1)[::-1]], axis=0
+    )
+    s = [outline, line((248, 498), (249, 425)), line((264, 498), (263, 425))]
+    s += [line((x, y0), (x + 2, y0 - 70)) for x, y0 in ((236, 330), (270, 260), (250, 180))]
+    return (512, 512), WHITE, [(p, 3.5, BLACK) for p in s]
+
+
+def birch(rng: np.random.Generator) -> Page:
+    # a slender white trunk marked with dashes, thin limbs and a light, broken crown
+    t = np.linspace(0, 1, 20)
+    xs = 256 + 18 * np.sin(t * 2.4)
+    ys = 498 - 370 * t
+    s: list[tuple[Stroke, float]] = [
+        (np.stack([xs - 8 + 3 * t, ys], 1), 3.0),
+        (np.stack([xs + 8 - 3 * t, ys], 1), 3.0),
+    ]
+    for y in (470, 430, 395, 350, 305, 262, 220):
+        x = float(np.interp(498 - y, 498 - ys[::-1], xs[::-1]))
+        s.append((line((x - 6, y), (x + 4, y - 3)), 4.0))
+    s += [(line((263, 300), (330, 230)), 2.5), (line((252, 260), (190, 200)), 2.5)]
+    for cx, cy, rx, ry in ((256, 110, 75, 60), (185, 190, 55, 40), (335, 205, 60, 42)):
+        clump = bumpy(cx, cy, rx, ry, 6, 0.3, rng.uniform(0, 60), rng.uniform(250, 310))
+        s.append((clump, 2.5))
+    return (512, 512), WHITE, [(p, w, GRAPHITE) for p, w in s]
+
+
+def child_tree(rng: np.random.Generator) -> Page:
+    # crayon: a brown rectangle trunk and a green round crown scribbled in
+    brown, green = (100, 60, 25), (30, 120, 40)
+    trunk = line((222, 498), (222, 330), (290, 330), (290, 498), (222, 498))
+    ring = arc(256, 200, 170, 150, 0, 370, 80)
+    t = np.linspace(0, 1, 220)
+    zig = np.stack([256 + 150 * np.sin(t * 2 * np.pi * 9), 85 + 230 * t], 1)
+    zig[:, 0] = 256 + (zig[:, 0] - 256) * np.sqrt(np.clip(1 - ((zig[:, 1] - 200) / 150) ** 2, 0, 1))
+    return (512, 512), WHITE, [(trunk, 7, brown), (ring, 6, green), (zig, 3, green)]
+
+
+def phone_doodle(rng: np.random.Generator) -> Page:
+    # four thick finger strokes: the trunk, an egg of a crown, two limbs
+    trunk = wobble(line((256, 498), (252, 400), (256, 300)), rng, amp=2.0, step=12.0)
+    crown = wobble(arc(256, 190, 140, 170, 95, 95 + 355, 70), rng, amp=4.0, step=12.0)
+    limbs = [
+        wobble(line((254, 350), (190, 250)), rng, amp=2.0, step=12.0),
+        wobble(line((256, 330), (330, 240)), rng, amp=2.0, step=12.0),
+    ]
+    return (
+        (512, 512),
+        WHITE,
+        [(trunk, 18, BLACK), (crown, 15, BLACK)] + [(p, 13, BLACK) for p in limbs],
+    )
+
+
+def fir_tiers(rng: np.random.Generator) -> Page:
+    # three triangles with drooping sides and a scalloped hem, each tucked under the one
+    # above, in pencil
+    s = []
+    for top, base, half in ((30, 185, 85), (125, 320, 135), (240, 445, 185)):
+        side = np.linspace(0, 1, 12)[:, None]
+        sag = 12 * np.sin(np.pi * side)
+        left = np.hstack([256 - half * side + sag * 0.5, top + (base - top) * side + sag])
+        hem = arc(256, base, half, 10, 180, 0, 30)
+        hem[:, 1] = base - 8 * np.abs(np.sin(np.radians(np.linspace(0, 540, 30))))
+        right = left[::-1].copy()
+        right[:, 0] = 512 - right[:, 0]
+        s.append(np.concatenate([left, hem, right], axis=0))
+    s += [line((246, 498), (246, 445)), line((266, 498), (266, 445))]
+    return (512, 512), WHITE, [(p, 3.5, GRAPHITE) for p in s]
+
+
+def mouse_tree(rng: np.random.Generator) -> Page:
+    # a mouse in a paint program: straight jaggy segments, the crown left open at the trunk
+    a = np.radians(np.linspace(105, 105 + 330, 14))
+    crown = np.stack([256 + 150 * np.cos(a), 185 + 160 * np.sin(a)], 1)
+    crown += rng.normal(0, 10, crown.shape)  # each click a little off the round
+    crown[np.argmin(crown[:, 1]), 1] -= 25  # a peak where the mouse slipped up
+    s = [jag(crown, rng, amp=2.5, step=6.0)]
+    s += [jag(line((240, 500), (242, 335)), rng, 1.8, 7.0)]
+    s += [jag(line((270, 500), (268, 335)), rng, 1.8, 7.0)]
+    return (512, 512), WHITE, [(p, 3, BLACK) for p in s]
+
+
+class Drawing(NamedTuple):
+    make: Callable[[np.random.Generator], Page]
+    what: str
+    species: str  # the species a person would name (one of weberpenn.species.SPECIES)
+    also: tuple[str, ...]  # others a person could fairly name for the same drawing
+
+
+# the order is the seed (1000 + index): append new drawings, never insert or reorder
+DRAWINGS: dict[str, Drawing] = {
+    "lollipop": Drawing(lollipop, "a lollipop: a stick and a circle", "oak", ("maple",)),
+    "conifer": Drawing(conifer, "stacked triangles", "fir", ("pine",)),
+    "bonsai": Drawing(bonsai, "a leaning bonsai in a pot", "bonsai", ()),
+    "palm": Drawing(palm, "a palm with fronds", "palm", ()),
+    "cherry": Drawing(cherry, "a cherry with a wide crown", "cherry", ("oak",)),
+    "bush": Drawing(bush, "a scribbled bush", "oak", ("maple",)),
+    "ballpoint": Drawing(ballpoint, "ballpoint on lined paper", "winter", ()),
+    "grey_paper": Drawing(grey_paper, "pencil on grey paper", "maple", ("oak",)),
+    "corner": Drawing(corner, "small, in a corner of a big page", "maple", ("oak",)),
+    "weeping": Drawing(weeping, "a weeping tree", "willow", ()),
+    "winter": Drawing(winter, "a bare winter tree", "winter", ()),
+    "cloud_tree": Drawing(cloud_tree, "a child's cloud tree", "oak", ("maple",)),
+    "christmas_tree": Drawing(
+        christmas_tree, "a Christmas tree: a zigzag triangle", "fir", ("pine",)
+    ),
+    "phone_lollipop": Drawing(phone_lollipop, "a lollipop by finger on a phone", "oak", ("maple",)),
+    "palm_lines": Drawing(palm_lines, "a palm, each frond one line", "palm", ()),
+    "bare_winter": Drawing(bare_winter, "a bare tree, uneven forks", "winter", ()),
+    "willow": Drawing(willow, "a weeping willow, strands to the ground", "willow", ()),
+    "oak": Drawing(oak, "an oak: wide lumpy crown, thick trunk", "oak", ()),
+    "poplar": Drawing(poplar, "a poplar: a tall narrow flame", "poplar", ()),
+    "birch": Drawing(birch, "a birch: marked trunk, light crown", "birch", ()),
+    "child_tree": Drawing(child_tree, "a child's crayon tree", "oak", ("maple",)),
+    "phone_doodle": Drawing(phone_doodle, "a tree in four finger strokes", "maple", ("oak",)),
+    "fir_tiers": Drawing(fir_tiers, "a fir: three drooping tiers", "fir", ("pine",)),
+    "mouse_tree": Drawing(mouse_tree, "a tree drawn with a mouse", "maple", ("oak",)),
 }
 
 
@@ -231,12 +400,23 @@ def render_page(page: Page, rng: np.random.Generator) -> Image.Image:
     return im
 
 
+def species_table() -> dict[str, dict]:
+    """Per drawing: what it is, the species a person would name, the others they could."""
+    return {
+        name: {"what": d.what, "species": d.species, "also": list(d.also)}
+        for name, d in DRAWINGS.items()
+    }
+
+
 def make_inputs(out: Path) -> list[Path]:
-    """Write every drawing to ``out``/NAME.png (seeded: the same bytes every run)."""
+    """Write every drawing to ``out``/NAME.png (seeded: the same bytes every run) and the
+    species a person would name for each to ``out``/species.json (a benchmark scores them
+    on it)."""
+    atomic_write(out / "species.json", json.dumps(species_table(), indent=1) + "\n")
     paths = []
-    for k, (name, (make, _)) in enumerate(DRAWINGS.items()):
+    for k, (name, drawing) in enumerate(DRAWINGS.items()):
         rng = np.random.default_rng(1000 + k)
-        im = render_page(make(rng), rng)
+        im = render_page(drawing.make(rng), rng)
         if im.size[0] > 600:  # the big page stays big, but in grey to stay small on disk
             im = im.convert("L")
         path = out / f"{name}.png"
@@ -276,7 +456,7 @@ def make_figure(paths: list[Path], target: Path, budget: int) -> list[dict]:
         for c, img in enumerate(imgs):
             sheet.paste(_tile(np.asarray(img), tile), (c * tile, y))
         d.rectangle((0, y, 4 * tile - 1, y + tile + label_h - 1), outline=(180, 180, 180))
-        desc = DRAWINGS[path.stem][1]
+        desc = DRAWINGS[path.stem].what
         tried = ", ".join(f"{s} {v:.2f}" for s, v in res.extras.get("tried", {}).items())
         line1 = (
             f"{path.stem} ({desc}): {res.species}, distance {res.losses['before']:.3f} -> "

@@ -32,7 +32,10 @@ BLURB = {
     "pencil": "pencil, textured paper",
     "felt": "felt tip",
     "bare": "bare (winter) tree",
+    "doodle": "quick doodle",
 }
+# the doodle's modes (polyline, lollipop, zigzag, loops, strokes) vary by seed: two columns
+EXTRA = [("doodle", 5, "another doodle")]
 
 
 def make_grid(seed: int, tile: int, style_seed: int) -> Image.Image:
@@ -40,21 +43,22 @@ def make_grid(seed: int, tile: int, style_seed: int) -> Image.Image:
 
     build_mesh, _ = mesher_in_use()
     label_h, side_w = 18, 70
-    names = list(STYLES)
+    names = [(st, style_seed, f"{st}: {BLURB.get(st, '')}") for st in STYLES]
+    names += [(st, style_seed + k, text) for st, k, text in EXTRA]
     grid = Image.new(
         "RGB", (side_w + len(names) * tile, label_h + len(species.SPECIES) * tile), "white"
     )
     draw_ = ImageDraw.Draw(grid)
-    for c, st in enumerate(names):
-        draw_.text((side_w + c * tile + 4, 3), f"{st}: {BLURB.get(st, '')}", fill=(40, 40, 40))
+    for c, (_, _, text) in enumerate(names):
+        draw_.text((side_w + c * tile + 4, 3), text, fill=(40, 40, 40))
     for r, name in enumerate(species.SPECIES):
         tree = build_mesh(grow(species.sample(name, seed=seed)))
         parts = SketchRenderer(tree, species=name).parts("front", 256)
-        sil = Silhouettes.from_parts(parts)
+        sil = Silhouettes.from_parts(parts, species.doodle_foliage(name))
         y = label_h + r * tile
         draw_.text((4, y + tile // 2 - 6), name, fill=(40, 40, 40))
-        for c, st in enumerate(names):
-            img = draw(st, sil, np.random.default_rng(style_seed), 256)
+        for c, (st, st_seed, _) in enumerate(names):
+            img = draw(st, sil, np.random.default_rng(st_seed), 256)
             tile_im = Image.fromarray(img).resize((tile, tile), Image.Resampling.LANCZOS)
             grid.paste(tile_im.convert("RGB"), (side_w + c * tile, y))
             if c:
@@ -67,7 +71,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seed", type=int, default=1, help="tree seed of every species")
     ap.add_argument("--style-seed", type=int, default=0, help="seed of the styles' choices")
-    ap.add_argument("--tile", type=int, default=200)
+    ap.add_argument("--tile", type=int, default=150)
     ap.add_argument("--out", default=str(ROOT / "docs" / "styles.png"))
     args = ap.parse_args()
     grid = make_grid(args.seed, args.tile, args.style_seed)

@@ -1,10 +1,13 @@
-"""docs/web.png: a real screenshot of the page after a drawing was turned into a tree.
+"""docs/web.png: a real screenshot of the page after a drawing was turned into a tree;
+docs/edit.png: that tree in the 3D view, then after each of four edits with the sliders.
 
 Starts the service (the shipped TSN checkpoint, one worker) in this process, draws a tree
 with mouse strokes in headless Debian chromium (Playwright), submits it and waits for the
-3D view, then saves the screenshot.
+result, then saves the screenshot; then moves four controls one after the other (each on
+top of the last) and puts the 3D view after each side by side.
 
-    PYTHONPATH=$PWD .venv/bin/python scripts/make_web_png.py --budget 20 --out docs/web.png
+    PYTHONPATH=$PWD .venv/bin/python scripts/make_web_png.py --out docs/web.png \
+        --edit-out docs/edit.png
 """
 
 from __future__ import annotations
@@ -26,9 +29,10 @@ from weberpenn.fileio import atomic_target  # noqa: E402
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--budget", type=int, default=20)
+    ap.add_argument("--budget", type=int, default=None, help="default: the page's")
     ap.add_argument("--estimator", default="tsn")
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "web.png")
+    ap.add_argument("--edit-out", type=Path, default=ROOT / "docs" / "edit.png")
     args = ap.parse_args()
 
     from playwright.sync_api import sync_playwright
@@ -39,17 +43,66 @@ def main() -> None:
             browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
             page = browser.new_page(viewport={"width": 1200, "height": 1000})
             page.goto(url + "/")
+            page.wait_for_function("document.getElementById('budget').value !== ''")
             draw_with_mouse(page)
-            page.fill("#budget", str(args.budget))
+            if args.budget is not None:
+                page.fill("#budget", str(args.budget))
             page.click("#submit")
-            page.wait_for_selector("body[data-model=loaded]", timeout=600_000)
+            page.wait_for_selector("body[data-state=done]", timeout=600_000)
+            page.wait_for_selector("body[data-edit=ready]", timeout=60_000)
+            page.wait_for_selector("body[data-model=loaded]", timeout=60_000)
             page.wait_for_timeout(500)
             with atomic_target(args.out) as tmp:
                 page.screenshot(path=str(tmp), full_page=True, type="png")
             print(page.inner_text("#species"), page.inner_text("#confidence"))
             print(page.inner_text("#status"))
+            edits(page, args.edit_out)
             browser.close()
-    print(f"wrote {args.out}")
+    print(f"wrote {args.out} and {args.edit_out}")
+
+
+EDITS = (  # (control, value, caption): each on top of the ones before
+    ("crown_width", 1.6, "crown width 1.6x"),
+    ("branch_angle", 25, "branch angle +25 deg"),
+    ("leafy", False, "bare"),
+    ("seed", 12345, "another variant"),
+)
+
+
+def edits(page, out: Path) -> None:
+    import io
+
+    from PIL import Image, ImageDraw
+
+    def shot(caption: str) -> Image.Image:
+        page.wait_for_selector("body[data-model=loaded]")
+        page.click("#reset-view")  # an edit keeps the camera; the picture frames each tree
+        page.wait_for_timeout(300)
+        im = Image.open(io.BytesIO(page.locator("#view canvas").screenshot())).convert("RGB")
+        im = im.resize((320, round(320 * im.height / im.width)))
+        height = page.inner_text("#height-readout")
+        ImageDraw.Draw(im).text((6, 4), f"{caption} ({height})", fill=(20, 30, 20))
+        return im
+
+    panels = [shot(f"{page.inner_text('#species')} as drawn")]
+    for name, value, caption in EDITS:
+        n = int(page.get_attribute("body", "data-edits") or 0)
+        if isinstance(value, bool):
+            page.set_checked(f"#c-{name}", value)
+        else:
+            page.evaluate(
+                """([id, v]) => { const s = document.getElementById(id);
+                s.value = String(v); s.dispatchEvent(new Event('input')); }""",
+                [f"c-{name}", value],
+            )
+        page.wait_for_function(f"Number(document.body.dataset.edits || 0) > {n}", timeout=60_000)
+        panels.append(shot(caption))
+    w, h = panels[0].size
+    sheet = Image.new("RGB", (w * len(panels), h), "white")
+    for i, im in enumerate(panels):
+        sheet.paste(im, (i * w, 0))
+    with atomic_target(out) as tmp:
+        sheet.save(tmp, format="PNG", optimize=True)
 
 
 if __name__ == "__main__":

@@ -140,3 +140,244 @@ def test_post_predict_against_a_local_service(backend, tmp_path):
             backend.post_predict("http://127.0.0.1:1", image, tmp_path / "u.glb", timeout=5)
     finally:
         server.shutdown()
+
+
+# ------------------------------------------------------ issue 30, item 7: the service path
+@pytest.fixture()
+def service():
+    """A local stand-in for the service: ``routes[path] = (status, headers, body)``; the
+    requests it saw (path, headers) are in ``seen``.  Yields (base URL, routes, seen)."""
+    import threading
+    from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+
+    routes: dict = {}
+    seen: list = []
+
+    class Handler(BaseHTTPRequestHandler):
+        def _answer(self):
+            if self.command == "POST":
+                self.rfile.read(int(self.headers["Content-Length"]))
+            seen.append((self.path, dict(self.headers)))
+            status, headers, body = routes.get(self.path, (404, {}, b"{}"))
+            self.send_response(status)
+            for k, v in headers.items():
+                self.send_header(k, v)
+            self.end_headers()
+            for i in range(0, len(body), 65536):
+                try:
+                    self.wfile.write(body[i : i + 65536])
+                except OSError:  # the client stopped reading: what a cap does
+                    return
+
+        do_GET = do_POST = _answer  # noqa: N815 - http.server's names
+
+        def log_message(self, *args):
+            pass
+
+    server = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        yield f"http://127.0.0.1:{server.server_address[1]}", routes, seen
+    finally:
+        server.shutdown()
+
+
+def _reply(glb: str) -> tuple:
+    import json
+
+    return 200, {"Content-Type": "application/json"}, json.dumps({"glb": glb}).encode()
+
+
+def _image(tmp_path):
+    image = tmp_path / "d.png"
+    image.write_bytes(b"\x89PNG fake")
+    return image
+
+
+@pytest.mark.parametrize(
+    "glb",
+    [
+        "file:///etc/passwd",
+        "FILE:/etc/hostname",
+        "ftp://127.0.0.1/x.glb",
+        "http://127.0.0.2:{port}/x.glb",  # another host
+        "http://127.0.0.1:1/x.glb",  # another port
+        "https://127.0.0.1:{port}/x.glb",  # another scheme
+        "//example.com/x.glb",  # another host, relative to the scheme
+    ],
+)
+def test_post_predict_follows_only_the_configured_origin(backend, tmp_path, service, glb):
+    url, routes, seen = service
+    port = url.rsplit(":", 1)[1]
+    routes["/predict"] = _reply(glb.format(port=port))
+    with pytest.raises(backend.PredictError, match="not on the configured service"):
+        backend.post_predict(url, _image(tmp_path), tmp_path / "t.glb")
+    assert [p for p, _ in seen] == ["/predict"]  # nothing else was fetched
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.png"]
+
+
+def test_post_predict_redirects_only_within_the_origin(backend, tmp_path, service):
+    url, routes, seen = service
+    routes["/predict"] = _reply("/jobs/1/tree.glb")
+    routes["/jobs/1/tree.glb"] = (302, {"Location": "/files/1.glb"}, b"")
+    routes["/files/1.glb"] = (200, {}, b"glTF-bytes")
+    backend.post_predict(url, _image(tmp_path), tmp_path / "t.glb")
+    assert (tmp_path / "t.glb").read_bytes() == b"glTF-bytes"
+    for away in ("file:///etc/passwd", "http://127.0.0.2:9/x.glb"):
+        routes["/jobs/1/tree.glb"] = (302, {"Location": away}, b"")
+        # urllib itself refuses a non-http scheme; another host is ours to refuse
+        with pytest.raises(backend.PredictError, match="away from the configured|not allowed"):
+            backend.post_predict(url, _image(tmp_path), tmp_path / "u.glb")
+        assert not (tmp_path / "u.glb").exists()
+
+
+def test_post_predict_caps_the_download(backend, tmp_path, service):
+    url, routes, _ = service
+    routes["/predict"] = _reply("/big.glb")
+    big = b"g" * 300_000
+    for headers in ({"Content-Length": str(len(big))}, {}):  # declared, or found streaming
+        routes["/big.glb"] = (200, headers, big)
+        with pytest.raises(backend.PredictError, match="over the limit"):
+            backend.post_predict(url, _image(tmp_path), tmp_path / "t.glb", max_glb_bytes=100_000)
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["d.png"]  # no part left
+    routes["/predict"] = (200, {}, b"[" * (2 * 1024 * 1024))
+    with pytest.raises(backend.PredictError, match="answer is over the limit"):
+        backend.post_predict(url, _image(tmp_path), tmp_path / "t.glb")
+    routes["/predict"] = (200, {}, b'["not", "an object"]')
+    with pytest.raises(backend.PredictError, match="names no GLB"):
+        backend.post_predict(url, _image(tmp_path), tmp_path / "t.glb")
+
+
+def test_post_predict_sends_the_token_in_a_header(backend, tmp_path, service):
+    url, routes, seen = service
+    routes["/predict"] = _reply("/t.glb")
+    routes["/t.glb"] = (200, {}, b"glTF")
+    backend.post_predict(url, _image(tmp_path), tmp_path / "t.glb", token="s3cret")
+    assert [p for p, _ in seen] == ["/predict", "/t.glb"]  # no token in any URL
+    assert all(h.get("Authorization") == "Bearer s3cret" for _, h in seen)
+    routes["/predict"] = (401, {}, b'{"detail": "a token is needed"}')
+    with pytest.raises(backend.PredictError, match="401 a token is needed"):
+        backend.post_predict(url, _image(tmp_path), tmp_path / "t.glb")
+    with pytest.raises(backend.PredictError, match="one line"):
+        backend.post_predict(url, _image(tmp_path), tmp_path / "t.glb", token="a\r\nX-Evil: 1")
+
+
+@pytest.mark.parametrize("url", ["file:///tmp", "ftp://example.com", "127.0.0.1:8000", "http://"])
+def test_post_predict_refuses_a_service_url_that_is_not_http(backend, tmp_path, url):
+    with pytest.raises(backend.PredictError, match="http:// or https://"):
+        backend.post_predict(url, _image(tmp_path), tmp_path / "t.glb")
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "{'levels': 3,\n",  # cut short: SyntaxError
+        "{'levels': __import__('os')}\n",  # not a literal: ValueError
+        "# view yaw: 1.2.3 degrees\n{'levels': 3}\n",  # a bad yaw
+        b"\xff\xfe{'levels': 3}\n",  # not UTF-8
+        "{'a': " + "(" * 300 + ")" * 300 + "}\n",  # too deep for the parser
+        "# pad\n" * 200_000,  # too large
+    ],
+    ids=["syntax", "call", "yaw", "binary", "deep", "large"],
+)
+def test_read_preset_faults_are_predict_errors(backend, tmp_path, text):
+    path = tmp_path / "p.py"
+    if isinstance(text, bytes):
+        path.write_bytes(text)
+    else:
+        path.write_text(text)
+    with pytest.raises(backend.PredictError) as info:
+        backend.read_preset(path)
+    assert str(path) in str(info.value)
+
+
+def test_numpy_bool_alias(backend, monkeypatch):
+    """Debian Blender 3.4's glTF importer calls np.bool (removed in numpy 1.24): the
+    add-on puts it back itself, once."""
+    monkeypatch.delattr(np, "bool", raising=False)  # numpy 1.24..1.26 (numpy 2 has it back)
+    assert "bool" not in np.__dict__
+    assert backend.numpy_bool_alias() is True
+    assert np.bool is bool
+    assert backend.numpy_bool_alias() is False
+
+
+def test_plain_error(backend):
+    blender = RuntimeError(
+        "Error: Python: Traceback (most recent call last):\n"
+        '  File "/usr/share/blender/3.4/scripts/addons/io_scene_gltf2/__init__.py", line 1\n'
+        "    np.bool\n"
+        "AttributeError: module 'numpy' has no attribute 'bool'\n"
+    )
+    assert backend.plain_error(blender) == "module 'numpy' has no attribute 'bool'"
+    assert backend.plain_error(RuntimeError("Error: no image file at /x.png")) == (
+        "no image file at /x.png"
+    )
+    assert backend.plain_error(backend.PredictError("timed out")) == "timed out"
+    assert backend.plain_error(RuntimeError("")) == "RuntimeError"
+
+
+def test_species_and_unique_preset_names(backend):
+    lines = ["refining ...", "species: cherry (first estimate: tsn); view yaw 15", "wrote x"]
+    assert backend.species_of(lines) == "cherry"
+    assert backend.species_of(["nothing here"]) is None
+    taken = ["treesketch_cherry_1.py", "treesketch_cherry_2.py", "other.py"]
+    assert backend.preset_name("cherry", taken) == "treesketch_cherry_3.py"
+    assert backend.preset_name("maple", taken) == "treesketch_maple_1.py"
+    assert backend.preset_name(None, []) == "treesketch_tree_1.py"
+
+
+def test_controls_in_the_zip_and_the_grow_command(backend, tmp_path):
+    """The panel's controls are the project's table (shipped in the zip); only the ones
+    moved from their keep value go to `treesketch grow --set`."""
+    sys.path.insert(0, str(ROOT / "scripts"))
+    try:
+        from blender_addon_zip import main
+    finally:
+        sys.path.remove(str(ROOT / "scripts"))
+    assert main([str(tmp_path / "a.zip")]) == 0
+    (tmp_path / "controls.json").write_bytes(
+        zipfile.ZipFile(tmp_path / "a.zip").read("treesketch_addon/controls.json")
+    )
+    from refine.search import DEFAULT_BUDGET
+    from weberpenn.controls import CONTROLS
+
+    table = backend.load_controls(tmp_path / "controls.json")
+    assert [r["name"] for r in table["controls"]] == [c.name for c in CONTROLS]
+    assert table["default_budget"] == DEFAULT_BUDGET
+    assert backend.load_controls(tmp_path / "missing.json")["controls"] == []
+    rows = table["controls"]
+    keep = {r["name"]: backend.keep_value(r) for r in rows}
+    assert keep["crown_width"] == 1.0 and keep["height"] == 0.0 and keep["seed"] == -1
+    assert keep["crown_shape"] == "KEEP" and keep["leafy"] is True
+    assert backend.changed_controls(rows, keep) == {}
+    moved = {**keep, "crown_width": 1.3, "leafy": False, "seed": 7, "branch_angle": 0.2}
+    changed = backend.changed_controls(rows, moved)
+    assert changed == {"crown_width": 1.3, "leafy": False, "seed": 7}  # 0.2 deg: within a step
+    out = backend.Outputs.in_folder(tmp_path)
+    cmd = backend.grow_command("/v/bin/treesketch", tmp_path / "p.json", out, changed)
+    assert cmd[:4] == ["/v/bin/treesketch", "grow", "--params", str(tmp_path / "p.json")]
+    sets = [cmd[i + 1] for i, a in enumerate(cmd) if a == "--set"]
+    assert sets == ["crown_width=1.3", "leafy=false", "seed=7"]
+    assert cmd[cmd.index("--preset") + 1] == str(out.preset)
+
+
+def test_post_trees_against_the_service(backend, tmp_path):
+    """The service path of the panel's controls: the real ``POST /trees``."""
+    import json
+
+    from service_helpers import serve
+
+    from treesketch.service import ServiceConfig, create_app
+
+    config = ServiceConfig(
+        data=tmp_path / "data", workers=1, estimator="service_helpers:palm_estimator"
+    )
+    params = species.sample("palm", 4).to_dict()
+    out = backend.Outputs.in_folder(tmp_path)
+    with serve(create_app(config)) as url:
+        backend.post_trees(url, params, {"crown_width": 1.5, "seed": 3}, "palm", out)
+        with pytest.raises(backend.PredictError, match="crown_width"):
+            backend.post_trees(url, params, {"crown_width": 50}, "palm", out)
+    edited = json.loads(out.params.read_text())
+    assert edited["length"][1] == pytest.approx(1.5 * params["length"][1])
+    assert edited["seed"] == 3 and out.glb.read_bytes()[:4] == b"glTF"

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import json
 
+import pytest
 import trimesh
 from typer.testing import CliRunner
 
 from treesketch.cli import app
-from weberpenn import load_params, species
+from weberpenn import load_params, save_params, species
 
 runner = CliRunner()
 
@@ -89,3 +90,38 @@ def test_grow_light_turned_lods_and_bad_lods(tmp_path):
     assert "view yaw: 30.00" in (tmp_path / "c.py").read_text()
     res = runner.invoke(app, ["grow", "--species", "palm", "--out", str(out), "--lods", "5,x"])
     assert res.exit_code == 2 and "--lods" in res.output
+
+
+def test_grow_with_controls(tmp_path):
+    pj = tmp_path / "tree.json"
+    save_params(species.sample("maple", 2), pj)
+    out, saved = tmp_path / "edited.glb", tmp_path / "edited.json"
+    args = ["grow", "--params", str(pj), "--out", str(out), "--save-params", str(saved)]
+    res = runner.invoke(
+        app, [*args, "--set", "crown_width=1.3", "--set", "seed=7", "--set", "leafy=false"]
+    )
+    assert res.exit_code == 0, res.output
+    p, base = load_params(saved), species.sample("maple", 2)
+    assert p["length"][1] == pytest.approx(1.3 * base["length"][1])
+    assert p["seed"] == 7 and p["leaves"] == 0
+    assert out.read_bytes()[:4] == b"glTF"
+    res = runner.invoke(app, [*args, "--set", "height=9"])
+    assert res.exit_code == 0, res.output
+    lo, hi = trimesh.load(out, force="scene").bounds
+    assert hi[1] - lo[1] == pytest.approx(9.0, rel=0.02)  # glTF is Y-up
+    for bad, words in (
+        ("crown_width=9", "crown_width"),
+        ("wings=2", "wings"),
+        ("crown_width", "NAME=VALUE"),
+        ("leafy=maybe", "leafy"),
+    ):
+        res = runner.invoke(app, [*args, "--set", bad])
+        assert res.exit_code == 2 and words in res.output and "Traceback" not in res.output
+
+
+def test_controls_command():
+    res = runner.invoke(app, ["controls"])
+    assert res.exit_code == 0
+    for name in ("height", "crown_width", "trunk_lean", "leafy", "seed"):
+        assert name in res.output
+    assert "length[1]" in res.output

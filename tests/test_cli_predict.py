@@ -150,9 +150,3 @@ def test_embedding_option_is_checked_before_work(tmp_path, sketch_png) -> None:
     res = runner.invoke(app, _args(tmp_path, sketch_png, "--embedding", str(tmp_path / "e.pt")))
     assert res.exit_code == 2 and "embedding" in res.output
     assert not (tmp_path / "out").exists() or list((tmp_path / "out").iterdir()) == []
-
-
-def test_tree_seeds_option_is_checked_before_work(tmp_path, sketch_png) -> None:
-    res = runner.invoke(app, _args(tmp_path, sketch_png, "--tree-seeds", "0"))
-    assert res.exit_code == 2 and "tree_seeds" in res.output
-    assert not (tmp_path / "out").exists() or list((tmp_path / "out").iterdir()) == []

@@ -307,3 +307,45 @@ def test_every_style_per_view(tmp_path):
     picks = {tuple(view_styles(st, seed, v)) for seed in range(30) for v in range(4)}
     assert picks == {("pen",), ("felt",), ("cloud",)}
     assert view_styles(st, 7, 2) == view_styles(st, 7, 2)
+
+
+def test_only_one_split_builds_those_trees_with_the_full_builds_bytes(tmp_path):
+    cfg = DatasetConfig(
+        out=str(tmp_path / "full"), species=("palm",), trees_per_species=10,
+        views=("front",), size=48, seed=3,
+    )  # fmt: skip
+    build_dataset(cfg, progress=False)
+    part = DatasetConfig(**{**cfg.__dict__, "out": str(tmp_path / "test_only")})
+    build_dataset(part, progress=False, only_split="test")
+    rows = read_manifest(tmp_path / "test_only")
+    full = [r for r in read_manifest(tmp_path / "full") if r["split"] == "test"]
+    assert rows and [r["tree_id"] for r in rows] == [r["tree_id"] for r in full]
+    for a, b in zip(rows, full, strict=True):
+        assert (tmp_path / "test_only" / a["sketch"]).read_bytes() == (
+            tmp_path / "full" / b["sketch"]
+        ).read_bytes()
+    with pytest.raises(DatasetError, match="only_split"):
+        build_dataset(part, progress=False, only_split="holdout")
+
+
+def test_doodles_of_palms_draw_their_fronds_as_strokes(tmp_path):
+    """The species' fact reaches the style: palm doodles use the frond-stroke hint."""
+    seen = []
+
+    def spy(style, sil, rng, size):
+        seen.append(sil.foliage_strokes)
+        return np.full((size, size), 255, np.uint8)
+
+    cfg = DatasetConfig(
+        out=str(tmp_path / "d"), species=("palm", "maple"), trees_per_species=1,
+        views=("front",), size=48, seed=0, styles=("doodle",),
+    )  # fmt: skip
+    import render.styles as styles
+
+    saved = styles.draw
+    styles.draw = spy
+    try:
+        build_dataset(cfg, progress=False)
+    finally:
+        styles.draw = saved
+    assert seen == [True, False]  # palm first (species order), then maple

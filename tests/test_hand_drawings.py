@@ -1,9 +1,11 @@
 """The bundled hand-style drawings (examples/hand, made by scripts/make_hand_png.py): each
-reads and normalises to a framed drawing, and a plain lollipop tree passes the style-blind
-shape distance."""
+reads and normalises to a framed drawing, each has the species a person would name in
+examples/hand/species.json, and a plain lollipop tree passes the style-blind shape
+distance."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +14,7 @@ import pytest
 from render.reader import FRAME_BOTTOM
 from treesketch import Pipeline, RefineSettings
 from treesketch.pipeline import LOW_CONFIDENCE_LOSS, load_sketch, prepare_input
+from weberpenn.species import PEOPLE_SPECIES, SPECIES
 
 HAND = Path(__file__).resolve().parents[1] / "examples" / "hand"
 DRAWINGS = sorted(HAND.glob("*.png"))
@@ -29,6 +32,18 @@ def test_every_hand_drawing_normalises_to_a_framed_drawing() -> None:
         # the trunk base sits on the frame's bottom margin and the drawing fills the frame
         assert abs((rows[-1] + 1) / 256 - FRAME_BOTTOM) < 0.03, path.name
         assert rows[-1] - rows[0] > 0.5 * 256 or cols[-1] - cols[0] > 0.6 * 256, path.name
+
+
+def test_every_hand_drawing_has_the_species_a_person_would_name() -> None:
+    table = json.loads((HAND / "species.json").read_text(encoding="utf-8"))
+    assert sorted(table) == sorted(p.stem for p in DRAWINGS)
+    assert len(table) >= 24
+    for name, row in table.items():
+        assert row["species"] in SPECIES, name
+        assert set(row["also"]) <= set(SPECIES) - {row["species"]}, name
+        assert row["what"], name
+    # the trees people draw most are all there, not only the paper's five
+    assert set(PEOPLE_SPECIES) <= {row["species"] for row in table.values()}
 
 
 @pytest.mark.slow

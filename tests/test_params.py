@@ -253,3 +253,83 @@ def test_deeply_nested_json_is_refused_plainly(tmp_path) -> None:
     huge.write_text(" " * 2_000_000)
     with pytest.raises(ParamError, match="too large"):
         load_params(huge)
+
+
+# Loads each file given on the command line and prints how long it took and what came of
+# it; run in a child process so a slow (quadratic) scan fails the test in bounded time.
+_TIMED_LOAD = """
+import sys, time
+from weberpenn import ParamError, load_params
+for path in sys.argv[1:]:
+    t0 = time.perf_counter()
+    try:
+        outcome = 'loaded levels=%d' % load_params(path)['levels']
+    except ParamError as exc:
+        outcome = 'refused: ' + str(exc)[-80:].replace(chr(10), ' ')
+    print('%.3f %s' % (time.perf_counter() - t0, outcome))
+"""
+
+
+def test_a_1mb_hostile_preset_is_read_in_linear_time(tmp_path) -> None:
+    """Issue 30, item 6: unclosed escaped quotes made the bracket scan quadratic (a 120 KB
+    preset hung ``grow --params`` for over 20 s; the 1 MB cap would take ~50 minutes)."""
+    import os
+    import subprocess
+    import sys
+
+    from weberpenn import species
+    from weberpenn.params import MAX_PARAM_FILE_BYTES
+    from weberpenn.preset import save_sapling_preset
+
+    n = MAX_PARAM_FILE_BYTES // 2 - 64
+    hostile = {
+        "quotes.py": '"\\' * n,
+        "quotes.json": "'\\" * n,
+        "mixed.py": "{'a': \"\\'\\" + '"\\' * (n - 8),
+    }
+    files = []
+    for name, text in hostile.items():
+        files.append(tmp_path / name)
+        files[-1].write_text(text)
+    # a real preset with a comment of 1 MB of such quotes: read as usual, and fast
+    tree = species.sample("maple", 4)
+    preset = save_sapling_preset(tree, tmp_path / "padded.py")
+    preset.write_text(preset.read_text() + "# " + '"\\' * (n - 3000) + "\n")
+    files.append(preset)
+    assert all(f.stat().st_size <= MAX_PARAM_FILE_BYTES for f in files)
+    assert max(f.stat().st_size for f in files) > 0.99 * MAX_PARAM_FILE_BYTES
+
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    run = subprocess.run(
+        [sys.executable, "-c", _TIMED_LOAD, *map(str, files)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=env,
+    )
+    assert run.returncode == 0, run.stderr
+    lines = run.stdout.splitlines()
+    assert len(lines) == 4, run.stdout
+    for line in lines[:3]:
+        assert " refused: " in line, line
+    assert lines[3].endswith(f"loaded levels={tree.levels}"), lines[3]
+    assert load_params(preset) == tree
+    for line in lines:
+        assert float(line.split()[0]) < 3.0, line
+
+
+@pytest.mark.parametrize(
+    "key", ["seed", "levels", "scale", "shape", "useParentAngle", "choiceNegPos2", "attractUp"]
+)
+def test_huge_integers_are_refused_plainly(key, tmp_path) -> None:
+    """Issue 30, item 9: an int of 309+ digits raised OverflowError (math.isfinite/float)
+    instead of naming the key."""
+    huge = 10**400
+    value = [huge] * 4 if SPECS[key].is_vector else huge
+    with pytest.raises(ParamError, match=f"'{key}") as info:
+        default_params().replace(**{key: value})
+    assert len(str(info.value)) < 300 and "characters" in str(info.value)
+    f = tmp_path / "huge.json"
+    f.write_text(json.dumps({**default_params().to_dict(), key: value}))
+    with pytest.raises(ParamError, match=key):
+        load_params(f)

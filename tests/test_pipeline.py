@@ -67,7 +67,9 @@ def test_refine_improves_and_fields() -> None:
     assert len(r.tree_mesh.branches.faces) > 0
     assert {"prepare", "estimate", "refine", "total"} <= set(r.timings)
     assert 0.0 < r.confidence <= 1.0
-    assert [p.stage for p in seen][:3] == ["read", "estimate", "refine"]
+    # "estimate" is told as it starts and again with the first estimate's tree
+    assert [p.stage for p in seen][:4] == ["read", "estimate", "estimate", "refine"]
+    assert seen[1].params is None and seen[2].params is not None
     refining = [p for p in seen if p.stage == "refine" and p.evaluations]
     assert refining and refining[-1].evaluations == r.refinement.evaluations
     assert all(p.budget == 25 for p in seen)
@@ -95,28 +97,19 @@ def test_no_refine_and_height() -> None:
         rescale_height(species.sample("palm", 1), -2.0)
 
 
-def test_keep_height_gives_the_refined_tree_the_estimates_height() -> None:
+def test_the_refined_tree_keeps_the_searchs_own_size() -> None:
     # the estimate is a bonsai of another seed: the search changes the trunk's length and
     # bend, which a sketch framed to its tree cannot tell from the tree's size (the
     # hand-made distance alone: with the embedding's term these 25 evaluations find no
     # better point, and the rule under test needs a search that moves)
     img = _gt_sketch("bonsai", 3)
     start = tree_height(Fixed("bonsai", 9).tree)
-    cfg = RefineSettings(budget=25, embedding="none")
-    assert not cfg.keep_height  # the search's own size by default
-    kept = Pipeline(Fixed("bonsai", 9), cfg.replace(keep_height=True)).run(img)
-    free = Pipeline(Fixed("bonsai", 9), cfg).run(img)
+    free = Pipeline(Fixed("bonsai", 9), RefineSettings(budget=25, embedding="none")).run(img)
     assert abs(tree_height(free.params) - start) > 0.01 * start
-    # by default the size values are the estimate's; the height follows the proportions
+    # the size values are the estimate's; the height follows the proportions
     assert all(free.params[k] == Fixed("bonsai", 9).tree[k] for k in ("scale", "scaleV"))
-    lo, hi = kept.tree_mesh.bounds()
-    assert hi[2] - lo[2] == pytest.approx(start, rel=0.01)
-    # the same shape: only scale and scaleV differ, and the sketch is the refined one
-    differ = {k for k in kept.params.to_dict() if kept.params[k] != free.params[k]}
-    assert differ <= {"scale", "scaleV"}
-    assert kept.losses == free.losses
-    with pytest.raises(ValueError, match="keep_height"):
-        RefineSettings(keep_height=1).validate()
+    lo, hi = free.tree_mesh.bounds()
+    assert hi[2] - lo[2] == pytest.approx(tree_height(free.params), rel=1e-6)
 
 
 @pytest.mark.parametrize("height", [float("inf"), 1e308, float("nan"), 0.0, -1.0])
@@ -138,7 +131,8 @@ def test_bad_height_is_refused_before_any_work(height: float) -> None:
         ({"time_limit": float("inf")}, "time_limit"),
         ({"algorithm": "nope"}, "algorithm"),
         ({"hold": ("notakey",)}, "hold"),
-        ({"prior_weight": -1.0}, "prior_weight"),
+        ({"species_ratio": 1.5}, "species_ratio"),
+        ({"fast_sketch": 1}, "fast_sketch"),
     ],
 )
 def test_settings_are_validated(change: dict, match: str) -> None:
@@ -252,3 +246,124 @@ def test_species_by_synthesis_keeps_the_better_match() -> None:
     assert evals == sorted(evals)  # progress never runs backwards across candidates
     one = Pipeline(Unsure(), RefineSettings(budget=12, species_tries=1)).run(_gt_sketch("palm", 3))
     assert one.species == "maple" and set(one.extras["tried"]) == {"maple"}
+
+
+def test_candidates_list_three_species_with_trees_distances_and_probabilities() -> None:
+    r = Pipeline(Unsure(), RefineSettings(budget=12)).run(_gt_sketch("palm", 3))
+    names = [c.species for c in r.candidates]
+    assert len(names) >= 3 and names[0] == r.species and len(set(names)) == len(names)
+    assert abs(sum(c.probability for c in r.candidates) - 1.0) < 0.05
+    assert r.candidates[0].probability == max(c.probability for c in r.candidates)
+    refined = {c.species for c in r.candidates if c.distance is not None}
+    assert refined == {"maple", "palm"}
+    for c in r.candidates:
+        assert c.sketch is not None and c.sketch.dtype == np.uint8
+        assert c.params.seed >= 0 and species.canonical(c.species) == c.species
+    summary = r.summary()
+    assert [c["species"] for c in summary["candidates"]] == names
+    assert summary["candidates"][0]["params"] == r.params.to_dict()
+    assert summary["species_text"].startswith("a palm")
+    # the species' probability, lowered when the drawing may not be a tree at all
+    assert r.confidence <= r.candidates[0].probability + 1e-12
+    if r.warning is None:
+        assert r.confidence == pytest.approx(r.candidates[0].probability)
+
+
+def test_the_species_the_user_means_is_the_one_refined() -> None:
+    est = Unsure()  # it would say maple or palm; the user says pine
+    r = Pipeline(est, RefineSettings(budget=10)).run(_gt_sketch("palm", 3), species="Pine")
+    assert r.species == "pine" and set(r.extras["tried"]) == {"pine"}
+    assert r.params["levels"] == species.base("pine")["levels"]
+    assert r.candidates[0].species == "pine" and r.candidates[0].probability == 1.0
+    christmas = Pipeline(est, RefineSettings(refine=False)).run(
+        _gt_sketch("palm", 3), species="christmas tree"
+    )
+    assert (
+        christmas.species == "fir" and christmas.params["leaves"] == species.base("fir")["leaves"]
+    )
+    with pytest.raises(ValueError, match="unknown species 'baobab'"):
+        Pipeline(est, RefineSettings(budget=10)).run(_gt_sketch("palm", 3), species="baobab")
+
+
+def test_posterior_lets_a_confident_network_stand_against_a_small_distance_gap() -> None:
+    from treesketch.species_choice import posterior
+
+    # the network is sure of palm; the cherry's filled crown fits a little better
+    p = posterior({"palm": 0.95, "cherry": 0.05}, {"palm": 1.00, "cherry": 0.98})
+    assert max(p, key=p.get) == "palm"
+    # ...but a clearly better fit wins over a mild preference
+    p = posterior({"palm": 0.6, "cherry": 0.4}, {"palm": 1.5, "cherry": 0.5})
+    assert max(p, key=p.get) == "cherry"
+    assert abs(sum(p.values()) - 1) < 1e-9
+
+
+def test_describe_puts_the_species_in_words() -> None:
+    from treesketch.species_choice import Candidate, describe
+
+    t = species.sample("palm", 0)
+    text = describe(
+        [Candidate("palm", t, 0.7, 1.0, 0.7), Candidate("cherry", t, 0.2, 1.1, 0.25),
+         Candidate("oak", t, 0.1, None, 0.05)]
+    )  # fmt: skip
+    assert text == "a palm (70%); could also be a cherry"
+    assert describe([Candidate("oak", t, 1.0, 1.0, 1.0)]).startswith("an oak")
+
+
+def test_the_drawing_is_framed_and_prepared_once_per_run(monkeypatch) -> None:
+    # two species refined, the first estimate's distance and the line distance: every
+    # comparison with the drawing uses the one PreparedDrawing the run builds
+    from refine import objective, shape
+
+    made, prepared = [], []
+    create, from_image = objective.PreparedDrawing.create.__func__, shape.ShapeTarget.from_image
+
+    def counting_create(cls, img, *args, **kwargs):
+        made.append(np.asarray(img).copy())
+        return create(cls, img, *args, **kwargs)
+
+    def counting_from_image(img, *args, **kwargs):
+        prepared.append(np.asarray(img).copy())
+        return from_image(img, *args, **kwargs)
+
+    monkeypatch.setattr(objective.PreparedDrawing, "create", classmethod(counting_create))
+    monkeypatch.setattr(shape.ShapeTarget, "from_image", counting_from_image)
+    r = Pipeline(Unsure(), RefineSettings(budget=12, embedding="none")).run(_gt_sketch("palm", 3))
+    assert set(r.extras["tried"]) == {"maple", "palm"}
+    assert len(made) == 1 and np.array_equal(made[0], r.input_sketch)
+    framed_input = objective.framed(r.input_sketch, 128)
+    assert sum(np.array_equal(p, framed_input) for p in prepared) == 1
+
+
+def test_a_drawing_prepared_for_other_settings_is_refused() -> None:
+    from refine.objective import PreparedDrawing
+    from refine.search import refine
+
+    img = _gt_sketch("palm", 3)
+    drawing = PreparedDrawing.create(img, 64, "ink")
+    with pytest.raises(ValueError, match="prepared for size 64"):
+        refine(drawing, species.sample("palm", 9), RefineSettings(budget=2), species="palm")
+    with pytest.raises(ValueError, match="shape metric only"):
+        PreparedDrawing.create(img, 128, "ink", embedder=object())
+
+
+def test_progress_shows_the_current_best_tree_within_the_budget() -> None:
+    """The first estimate comes with the "estimate" stage; the refinement's best follows;
+    the count never passes the plan (both species' budgets) and the distance only falls."""
+    seen = []
+    r = Pipeline(Unsure(), RefineSettings(budget=12)).run(
+        _gt_sketch("palm", 3), progress=seen.append
+    )
+    assert set(r.extras["tried"]) == {"maple", "palm"}
+    # the plan is known once the candidates are: palm gets max(8, 12 // 2)
+    assert {p.budget for p in seen if p.params is not None} == {12 + 8}
+    assert all(p.evaluations <= p.budget for p in seen)
+    first = next(p for p in seen if p.params is not None)
+    assert first.stage == "estimate" and first.species == "maple" and first.version == 1
+    assert first.params.to_dict() == Unsure().estimate(None).params.to_dict()
+    losses = [p.best_loss for p in seen if not np.isnan(p.best_loss)]
+    assert losses and all(b <= a for a, b in zip(losses, losses[1:], strict=False))
+    versions = [p.version for p in seen]
+    assert versions == sorted(versions) and versions[-1] > 1
+    last = seen[-1]
+    assert last.species == r.species and last.params is not None
+    assert last.best_loss == pytest.approx(min(losses))

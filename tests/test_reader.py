@@ -100,3 +100,154 @@ def test_check_ink() -> None:
     page[10:50, 30:33] = 0
     assert 0 < check_ink(page) < 0.1
     assert MAX_PIXELS >= 4000 * 4000
+
+
+# --------------------------------------------------------------- issue 30: items 5, 8, 14
+def _encoded(im: Image.Image, fmt: str, **kw: object) -> bytes:
+    buf = io.BytesIO()
+    im.save(buf, format=fmt, **kw)
+    return buf.getvalue()
+
+
+@pytest.mark.parametrize("fmt", ["PNG", "JPEG"])
+def test_exif_orientation_is_applied(fmt: str) -> None:
+    from PIL import ImageOps
+
+    a = np.random.default_rng(0).integers(0, 256, (20, 33), dtype=np.uint8)
+    for orientation in range(1, 9):
+        im = Image.fromarray(a)
+        exif = im.getexif()
+        exif[0x0112] = orientation
+        data = _encoded(im, fmt, exif=exif.tobytes(), quality=100)
+        upright = np.asarray(ImageOps.exif_transpose(Image.open(io.BytesIO(data))).convert("L"))
+        got = read_sketch(data)
+        assert np.array_equal(got, upright), orientation
+        assert np.array_equal(read_sketch(Image.open(io.BytesIO(data))), upright), orientation
+
+
+def test_a_sideways_phone_photo_reads_upright() -> None:
+    # a tree drawn upright (trunk at the bottom), stored turned a quarter as a phone does
+    page = np.full((120, 80), 255, np.uint8)
+    page[60:115, 38:42] = 0  # trunk down to the bottom
+    page[10:60, 15:65] = np.where(np.add.outer(np.arange(50), np.arange(50)) % 7 == 0, 0, 255)
+    stored = Image.fromarray(page).transpose(Image.Transpose.ROTATE_90)  # on its side
+    exif = stored.getexif()
+    exif[0x0112] = 6  # "turn 90 degrees clockwise to view"
+    got = read_sketch(_encoded(stored, "JPEG", exif=exif.tobytes(), quality=95))
+    assert got.shape == page.shape
+    assert np.mean(np.abs(got.astype(int) - page)) < 8  # upright again, JPEG noise only
+
+
+@pytest.mark.filterwarnings("error")  # and quietly: no warning on stderr either
+def test_a_damaged_exif_block_is_read_as_stored() -> None:
+    a = np.full((16, 16), 255, np.uint8)
+    a[4:8, 4:8] = 0
+    data = _encoded(
+        Image.fromarray(a), "JPEG", exif=b"Exif\x00\x00MM\x00*\x00\x00\xff\xff", quality=100
+    )
+    assert read_sketch(data).shape == (16, 16)
+
+
+EPS = b"%!PS-Adobe-3.0 EPSF-3.0\n%%BoundingBox: 0 0 64 64\nnewpath 0 0 moveto 64 64 lineto stroke\n"
+
+
+@pytest.mark.parametrize(
+    ("data", "words"),
+    [
+        (EPS, "PostScript"),
+        (b"\xc5\xd0\xd3\xc6" + bytes(60), "PostScript"),
+        (b"%PDF-1.7\n" + bytes(60), "PDF"),
+        (b'<?xml version="1.0"?>\n<svg xmlns="http://www.w3.org/2000/svg"/>', "SVG"),
+        (b"\x00\x00\x00\x18ftypheic" + bytes(40), "HEIC"),
+    ],
+    ids=["eps", "eps-binary", "pdf", "svg", "heic"],
+)
+def test_formats_not_read_are_refused_by_content_before_decoding(
+    data: bytes, words: str, monkeypatch: pytest.MonkeyPatch, tmp_path
+) -> None:
+    from render.reader import FormatError
+
+    def no_decoding(*args: object, **kwargs: object) -> None:
+        raise AssertionError("handed to Pillow")
+
+    monkeypatch.setattr(Image, "open", no_decoding)
+    with pytest.raises(FormatError, match=words) as info:
+        read_sketch(data)
+    assert "PNG, JPEG" in str(info.value)
+    disguised = tmp_path / "drawing.png"  # the name does not matter, the content does
+    disguised.write_bytes(data)
+    with pytest.raises(FormatError, match=words):
+        read_sketch(disguised)
+
+
+def test_an_eps_opened_by_the_caller_is_refused_before_loading(monkeypatch) -> None:
+    from PIL import EpsImagePlugin
+
+    from render.reader import FormatError
+
+    im = Image.open(io.BytesIO(EPS))  # Pillow picks EPS by itself: header only so far
+    assert im.format == "EPS"
+    monkeypatch.setattr(EpsImagePlugin, "Ghostscript", lambda *a, **k: pytest.fail("ran gs"))
+    with pytest.raises(FormatError, match="EPS"):
+        read_sketch(im)
+
+
+@pytest.mark.parametrize("fmt", ["PNG", "JPEG", "WEBP", "GIF", "BMP", "TIFF"])
+def test_the_raster_formats_are_read(fmt: str) -> None:
+    a = np.full((24, 24), 255, np.uint8)
+    a[5:20, 10:14] = 0
+    got = read_sketch(
+        _encoded(Image.fromarray(a), fmt, **({"lossless": True} if fmt == "WEBP" else {}))
+    )
+    assert got.shape == a.shape
+    assert np.mean(np.abs(got.astype(int) - a)) < 6
+
+
+def test_unknown_bytes_name_the_formats_read() -> None:
+    from render.reader import FormatError
+
+    with pytest.raises(SketchError, match="PNG, JPEG, WebP, GIF, BMP or TIFF") as info:
+        read_sketch(b"P5\n24 24\n255\n" + bytes(576))  # PGM: a raster Pillow reads, not one of ours
+    assert not isinstance(info.value, FormatError)
+
+
+def _page() -> np.ndarray:
+    """A page (True = white) with a few strokes."""
+    page = np.ones((40, 40), bool)
+    page[5:35, 18:21] = False
+    page[10, 5:35] = False
+    return page
+
+
+def test_bool_arrays_read_like_a_one_bit_png() -> None:
+    page = _page()
+    got = read_sketch(page)
+    assert np.array_equal(got, read_sketch(_encoded(Image.fromarray(page), "PNG")))
+    assert got[0, 0] == 255 and got[20, 19] == 0
+    assert 0 < check_ink(got) < 0.2  # the strokes are ink, not the whole page
+
+
+def test_uint16_arrays_read_like_a_16_bit_png() -> None:
+    page = np.full((40, 40), 60000, np.uint16)  # light grey paper
+    page[5:35, 18:21] = 30000  # pencil
+    png16 = _encoded(Image.fromarray(page), "PNG")
+    assert Image.open(io.BytesIO(png16)).mode.startswith("I")
+    got = read_sketch(page)
+    assert np.array_equal(got, read_sketch(png16))
+    assert got[0, 0] == round(60000 / 65535 * 255) and got[20, 19] == round(30000 / 65535 * 255)
+    rgb = np.repeat(page[..., None], 3, axis=2)
+    assert np.array_equal(read_sketch(rgb), got)
+    assert check_ink(got) > 0  # the pencil strokes are still there
+
+
+def test_float_tiffs_non_finite_refused_fractions_read(recwarn: pytest.WarningsRecorder) -> None:
+    f = np.ones((20, 20), np.float32)
+    f[5:10, 5:10] = 0.0
+    assert np.array_equal(read_sketch(_encoded(Image.fromarray(f), "TIFF")), read_sketch(f))
+    for bad in (np.nan, np.inf):
+        f[0, 0] = bad
+        with pytest.raises(SketchError, match="NaN or infinite"):
+            read_sketch(_encoded(Image.fromarray(f), "TIFF"))
+        with pytest.raises(SketchError, match="NaN or infinite"):
+            read_sketch(f)
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]

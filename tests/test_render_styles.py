@@ -104,3 +104,77 @@ def test_bare_tree_draws_branches_and_no_foliage(sil):
     assert ink[near_branches].mean() > 0.2 and ink[~near_branches].mean() < 0.002
     pen = draw("pen", sil, 2, 256) < 128
     assert pen[leaves_only].mean() > 5 * ink[leaves_only].mean()  # the crown outline
+
+
+def _count_corners(pts: np.ndarray) -> int:
+    return len(pts) - 1
+
+
+def test_doodle_crowns_are_few_segment_polylines_and_zigzag_cones():
+    from render.styles import _crown_lines
+
+    yy, xx = np.mgrid[0:256, 0:256]
+    disc = (yy - 100) ** 2 + (xx - 128) ** 2 < 60**2
+    rng = np.random.default_rng(0)
+    for _ in range(10):
+        (poly,) = _crown_lines(disc, rng, 1.0, "polyline", 0.0)
+        assert 5 <= _count_corners(poly) <= 20
+        assert np.allclose(poly[0], poly[-1])  # closed when not asked to stay open
+        r = np.hypot(poly[:, 0] - 100, poly[:, 1] - 128)
+        assert np.all(np.abs(r - 60) < 10)  # on the crown's outline, a hand's jitter off
+    cone = (xx - 128) ** 2 * 4 < (yy - 40) ** 2 * 1.0  # widening towards the bottom
+    cone &= (yy > 40) & (yy < 200)
+    (zig,) = _crown_lines(cone, np.random.default_rng(1), 1.0, "zigzag", 0.0)
+    half = zig[:, 1] - 128
+    # tiers: the outline goes in and out on the left side (zig, zag) while descending
+    left = zig[half < 0]
+    steps = np.sign(np.diff(left[:, 1]))
+    assert (steps[:-1] != steps[1:]).sum() >= 3
+    assert zig[:, 0].min() < 45 and zig[:, 0].max() > 190  # apex to base
+
+
+def _palm_silhouettes(foliage_strokes: bool) -> Silhouettes:
+    """A trunk and six fronds radiating from its top, as the renderer's silhouettes."""
+    from skimage.draw import line
+
+    branches = np.ones((256, 256), np.float32)
+    branches[90:240, 124:132] = 0.0
+    fronds = np.zeros((256, 256), bool)
+    for angle in np.radians([10, 40, 75, 105, 140, 170]):
+        rr, cc = line(90, 128, int(90 - 70 * np.sin(angle)) + 40, int(128 + 90 * np.cos(angle)))
+        fronds[np.clip(rr, 0, 255), np.clip(cc, 0, 255)] = True
+    fronds = ndimage.binary_dilation(fronds, iterations=3)
+    leaves = np.where(fronds, 0.0, 1.0).astype(np.float32)
+    return Silhouettes(branches, leaves, foliage_strokes)
+
+
+def test_doodle_draws_palm_fronds_as_strokes_when_the_species_says_so():
+    fronds = np.asarray(_palm_silhouettes(False).leaves) < 0.9
+    near = ndimage.binary_dilation(fronds, iterations=2)
+    near[80:100, 115:141] = False  # not where the fronds meet the trunk
+
+    def along_fronds(foliage_strokes: bool) -> int:
+        """Of 12 doodles, how many put most of their ink along the fronds."""
+        sil = _palm_silhouettes(foliage_strokes)
+        n = 0
+        for seed in range(12):
+            a = draw("doodle", sil, seed) < 128
+            assert a.mean() < 0.25  # strokes, never a filled mass
+            n += a[near].sum() / max(a.sum(), 1) >= 0.45
+        return n
+
+    # strokes run along the fronds; an outline runs around the crown
+    assert along_fronds(True) >= 4 and along_fronds(False) <= 2
+
+
+def test_doodle_of_a_bare_tree_is_its_limbs():
+    from tests.render_helpers import simple_tree
+
+    r = SketchRenderer(simple_tree(side_branch=True))
+    p = r.parts("front", 256)
+    white = np.ones_like(np.asarray(p.leaf_silhouette))
+    bare_sil = Silhouettes(p.branch_silhouette, white)
+    a = draw("doodle", bare_sil, 0, 256) < 128
+    branches = np.asarray(p.branch_silhouette) < 0.5
+    near = ndimage.distance_transform_edt(~branches) <= 6
+    assert a.any() and a[~near].mean() < 0.003

@@ -323,3 +323,31 @@ def test_serve_warns_off_localhost(monkeypatch: pytest.MonkeyPatch, tmp_path: Pa
     assert config.cors == ("http://a.b",) and config.token is None
     r = CliRunner().invoke(app, ["serve", "--data", str(tmp_path), "--token", "t"])
     assert "warning" not in r.output and seen["app"].state.config.token == "t"
+
+
+def test_the_species_picker_list_and_a_job_for_the_species_meant(
+    client: TestClient, sketch: bytes
+) -> None:
+    listed = client.get("/species").json()["species"]
+    names = [s["name"] for s in listed]
+    assert names[:5] == ["maple", "pine", "bonsai", "palm", "cherry"] and "fir" in names
+    assert all(s["display"] for s in listed)
+    r = client.post(
+        "/jobs",
+        files={"sketch": ("s.png", sketch, "image/png")},
+        data={"budget": "3", "species": "Christmas tree"},
+    )
+    assert r.status_code == 202, r.text
+    job = _wait(client, r.json()["id"])
+    assert job["state"] == "done", job["error"]
+    res = job["result"]
+    assert res["species"] == "fir"
+    cands = res["candidates"]
+    assert len(cands) >= 3 and cands[0]["species"] == "fir" and cands[0]["probability"] == 1.0
+    assert len(cands[1]["params"]) == 70
+    thumb = client.get(job["links"]["candidate1.png"])
+    assert thumb.status_code == 200 and thumb.content[:8] == b"\x89PNG\r\n\x1a\n"
+    bad = client.post(
+        "/jobs", files={"sketch": ("s.png", sketch, "image/png")}, data={"species": "baobab"}
+    )
+    assert bad.status_code == 422 and "unknown species 'baobab'" in bad.json()["detail"]

@@ -65,7 +65,7 @@ def test_fixed_values_equal_base(name):
             assert p[key] == base[key], key
 
 
-@pytest.mark.parametrize("name", species.SPECIES)
+@pytest.mark.parametrize("name", species.PAPER_SPECIES)
 def test_fixed_values_match_reference_files(name):
     files = species.reference_files(name)
     assert len(files) == 3
@@ -101,10 +101,10 @@ def test_project_round_trip(name):
 
 
 def test_unknown_species():
+    with pytest.raises(ParamError, match="unknown species.*fir.*winter"):
+        species.sample("baobab", 0)
     with pytest.raises(ParamError, match="unknown species"):
-        species.sample("oak", 0)
-    with pytest.raises(ParamError, match="unknown species"):
-        species.unfixed("oak")
+        species.unfixed("baobab")
     with pytest.raises(ParamError, match="seed"):
         species.sample("maple", -1)
 
@@ -159,3 +159,49 @@ def test_a_conical_conifer_is_reachable_by_the_search() -> None:
     length = np.array([np.linalg.norm(pts[off[i + 1] - 1] - pts[off[i]]) for i in first])
     low, high = base_z < np.quantile(base_z, 1 / 3), base_z > np.quantile(base_z, 2 / 3)
     assert length[low].mean() > 2.0 * length[high].mean()
+
+
+def test_the_paper_five_come_first_and_people_species_follow():
+    assert (
+        species.SPECIES[:5]
+        == species.PAPER_SPECIES
+        == ("maple", "pine", "bonsai", "palm", "cherry")
+    )
+    assert set(species.PEOPLE_SPECIES) == {"fir", "willow", "oak", "birch", "poplar", "winter"}
+    for name in species.SPECIES:
+        assert species.display_name(name)
+        assert species.source(name)
+
+
+@pytest.mark.parametrize(
+    ("alias", "name"),
+    [
+        ("Christmas tree", "fir"),
+        ("spruce", "fir"),
+        ("weeping-willow", "willow"),
+        ("bare", "winter"),
+    ],
+)
+def test_names_people_use(alias, name):
+    assert species.canonical(alias) == name
+
+
+@pytest.mark.parametrize("name", species.PEOPLE_SPECIES)
+def test_people_species_have_variation_and_distinct_fixed_values(name):
+    rows = species.unfixed(name)
+    keys = {u.key for u in rows}
+    assert {"rLastAng", "rotate", "scaleV"} <= keys
+    a, b = species.sample(name, 1), species.sample(name, 2)
+    assert a["scaleV"] != b["scaleV"]
+    # no two species share a base dictionary: each is a tree of its own
+    for other in species.SPECIES:
+        if other != name:
+            assert species.base(other) != species.base(name)
+
+
+def test_the_winter_tree_is_bare_and_the_others_are_leafy():
+    assert species.sample("winter", 0)["leaves"] == 0
+    for name in ("fir", "willow", "oak", "birch", "poplar"):
+        assert species.sample(name, 0)["leaves"] > 0
+    assert species.doodle_foliage("palm") and species.doodle_foliage("willow")
+    assert not species.doodle_foliage("oak")

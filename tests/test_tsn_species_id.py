@@ -58,3 +58,36 @@ def test_save_load_plain_data(identifier: SpeciesIdentifier) -> None:
         identifier.shares(np.zeros((4, 10)))
     with pytest.raises(SpeciesIdError, match="maple"):
         SpeciesIdentifier.fit({"maple": np.zeros((0, 4, 62))}, np.ones(62))
+
+
+def test_classifier_is_accurate_calibrated_and_plain_data(identifier: SpeciesIdentifier) -> None:
+    from tsn.species_id import SpeciesClassifier
+
+    rng = np.random.default_rng(0)
+    mats = sampled_matrices(12)
+    names = list(mats)
+    x = np.concatenate([mats[s] for s in names])
+    y = [s for s in names for _ in range(len(mats[s]))]
+    # a network's outputs are the truth plus noise: fit on noisy copies, calibrate on others
+    scale = identifier.scale
+
+    def noisy(a: np.ndarray, k: float) -> np.ndarray:
+        return a + rng.normal(0, k, a.shape) * scale[None, None, :]
+
+    clf = SpeciesClassifier.fit(noisy(x, 0.05), y, scale, held_out=(noisy(x, 0.3), y))
+    assert clf.temperature > 0
+    p = clf.probabilities_many(noisy(x, 0.05))
+    assert p.shape == (len(y), len(names)) and np.allclose(p.sum(axis=1), 1.0)
+    assert np.mean([clf.species[i] == s for i, s in zip(p.argmax(1), y, strict=True)]) > 0.9
+    # calibrated on outputs as noisy as these: its confidence matches its accuracy
+    fresh = clf.probabilities_many(noisy(x, 0.3))
+    conf = fresh.max(axis=1)
+    right = np.array([clf.species[i] == s for i, s in zip(fresh.argmax(1), y, strict=True)])
+    assert abs(conf.mean() - right.mean()) < 0.1
+    with_clf = identifier.with_classifier(clf)
+    back = SpeciesIdentifier.from_dict(json.loads(json.dumps(with_clf.to_dict())))
+    assert back.classifier is not None and back.classifier.species == clf.species
+    m = x[0]
+    assert back.identify(m) == with_clf.identify(m) == y[0]
+    assert back.scores(m) == pytest.approx(clf.probabilities(m))
+    assert identifier.scores(m) == identifier.shares(m)  # no classifier: Algorithm 1's shares

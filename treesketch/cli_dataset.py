@@ -7,6 +7,8 @@ from pathlib import Path
 
 import typer
 
+from .cli_common import address_option, executor_option, workers_option
+
 dataset_app = typer.Typer(
     name="dataset",
     help="Synthetic sketch datasets (species x trees x views).",
@@ -41,27 +43,24 @@ def build(
         "sg",
         "--styles",
         help="Comma-separated drawing styles: sg (the paper's chain), pen, cloud, scribble, "
-        "pencil, felt. With sg and others, every view is drawn in sg and in "
+        "pencil, felt, bare, doodle. With sg and others, every view is drawn in sg and in "
         "--styles-per-view of the others (a seeded choice per view).",
     ),
     styles_per_view: int = typer.Option(
         1, "--styles-per-view", min=1, max=16, help="Other styles drawn per view besides sg."
     ),
-    workers: int = typer.Option(
-        1, "--workers", min=1, max=64, help="Worker processes (local) or CPUs of a local Ray."
-    ),
-    executor: str = typer.Option(
-        "local", "--executor", help="Where trees are built: local (this machine) or ray."
-    ),
-    address: str | None = typer.Option(
-        None,
-        "--address",
-        help="Ray cluster to use (auto, HOST:PORT, ray://HOST:PORT); "
-        "without it --executor ray starts a local Ray for the run.",
-    ),
+    workers: int = workers_option(),
+    executor: str = executor_option("the trees"),
+    address: str | None = address_option(),
     seed: int = typer.Option(0, "--seed", min=0, help="Dataset seed (same seed, same dataset)."),
     val_fraction: float = typer.Option(0.1, "--val-fraction", min=0.0, max=0.9),
     test_fraction: float = typer.Option(0.1, "--test-fraction", min=0.0, max=0.9),
+    only_split: str | None = typer.Option(
+        None,
+        "--only-split",
+        help="Build only this split's trees (train, val or test): the same files as the "
+        "full build, e.g. the paper's SG test split to score a network on.",
+    ),
     progress: bool | None = typer.Option(
         None, "--progress/--no-progress", help="Progress bar (default: on a terminal)."
     ),
@@ -97,7 +96,7 @@ def build(
     except ExecutorError as exc:
         raise typer.BadParameter(str(exc)) from None
     try:
-        summary = build_dataset(cfg, progress=progress, executor=runner)
+        summary = build_dataset(cfg, progress=progress, executor=runner, only_split=only_split)
     except DatasetError as exc:
         typer.echo(f"Error: {exc}", err=True)
         raise typer.Exit(2) from None

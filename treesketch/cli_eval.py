@@ -9,7 +9,7 @@ from pathlib import Path
 import typer
 
 from . import cli_eval_tsn
-from .cli_common import fail
+from .cli_common import address_option, executor_option, fail, workers_option
 
 eval_app = typer.Typer(
     help="Evaluate: 1-RMSE tables, Hausdorff distance, rotation sweep, reports.",
@@ -36,15 +36,9 @@ def rotation(
     size: int = typer.Option(256, "--size", help="Sketch size in pixels."),
     samples: int = typer.Option(10_000, "--samples", help="Hausdorff samples per direction."),
     seed: int = typer.Option(0, "--seed", help="Growth seed for both trees."),
-    executor: str = typer.Option(
-        "local", "--executor", help="Where the angles run: local (this machine) or ray."
-    ),
-    workers: int = typer.Option(
-        1, "--workers", min=1, max=64, help="Worker processes (local) or CPUs of a local Ray."
-    ),
-    address: str | None = typer.Option(
-        None, "--address", help="Ray cluster (auto, HOST:PORT); default: a local Ray."
-    ),
+    executor: str = executor_option("the angles"),
+    workers: int = workers_option(),
+    address: str | None = address_option(),
 ) -> None:
     """Turn a tree about its trunk, predict from each view's sketch, Hausdorff at each angle."""
     from tqdm.auto import tqdm
@@ -137,15 +131,9 @@ def all_(
     nns: bool = typer.Option(
         True, "--nns/--no-nns", help="With --model tsn: add the nearest-neighbour baseline row."
     ),
-    executor: str = typer.Option(
-        "local", "--executor", help="Where the rotation sweeps' angles run: local or ray."
-    ),
-    workers: int = typer.Option(
-        1, "--workers", min=1, max=64, help="Worker processes (local) or CPUs of a local Ray."
-    ),
-    address: str | None = typer.Option(
-        None, "--address", help="Ray cluster (auto, HOST:PORT); default: a local Ray."
-    ),
+    executor: str = executor_option("the rotation sweeps' angles"),
+    workers: int = workers_option(),
+    address: str | None = address_option(),
 ) -> None:
     """Write the full evaluation report (markdown + PNGs) to --out."""
     from eval.baseline import NNSIndex

@@ -79,16 +79,25 @@ def grow_command(
         help="Bark and leaf textures (made by the project, embedded in GLB, PNGs beside OBJ) "
         "or flat species colours.",
     ),
+    settings: list[str] = typer.Option(
+        [],
+        "--set",
+        help="Edit the tree with a control, NAME=VALUE (repeatable), e.g. --set "
+        "crown_width=1.3 --set seed=7 --set height=12; `treesketch controls` lists them.",
+    ),
 ) -> None:
     """Grow one Weber-Penn tree and write its mesh.
 
     Examples: `treesketch grow --species maple --seed 3 --out maple.glb`,
-    `treesketch grow --params tree.json --out tree.obj --max-faces 20000`.
+    `treesketch grow --params tree.json --out tree.obj --max-faces 20000`,
+    `treesketch grow --params tree.json --set crown_width=1.3 --set seed=7 --out tree.glb`.
     """
     from weberpenn import build_mesh, grow, load_params, species
-    from weberpenn.export import export_mesh, save_sapling_preset
+    from weberpenn.controls import check_controls, grow_with_controls
+    from weberpenn.export import mesh_files, mesh_paths, preset_text
+    from weberpenn.fileio import OutputError, check_targets, write_together
     from weberpenn.lod import MIN_FACES, lod
-    from weberpenn.params import ParamError, save_params
+    from weberpenn.params import ParamError, params_text
 
     if (species_name is None) == (params_path is None):
         _fail("give exactly one of --species NAME or --params FILE")
@@ -103,14 +112,37 @@ def grow_command(
             _fail(f"--lods {lods!r}: give triangle counts separated by commas, e.g. 50000,10000")
         if not budgets or min(budgets) < MIN_FACES:
             _fail(f"--lods {lods!r}: every triangle count must be at least {MIN_FACES}")
+    # every output before any work: a folder, a clash or a folder that takes no file
+    # fails now, not after the tree is grown and half the files are written
+    lod_outs = [out.with_name(f"{out.stem}_lod{i}{out.suffix}") for i in range(1, len(budgets) + 1)]
+    try:
+        check_targets(
+            {
+                "--out": mesh_paths(out, textures=textures),
+                **{
+                    f"--lods ({b})": mesh_paths(p, textures=textures)
+                    for b, p in zip(budgets, lod_outs, strict=True)
+                },
+                "--save-params": [] if save_params_path is None else [save_params_path],
+                "--preset": [] if preset_path is None else [preset_path],
+            }
+        )
+    except OutputError as exc:
+        _fail(str(exc))
+    controls: dict[str, str] = {}
+    for item in settings:
+        key, eq, value = item.partition("=")
+        if not eq or not key.strip():
+            _fail(f"--set {item!r}: give NAME=VALUE, e.g. --set crown_width=1.3")
+        controls[key.strip()] = value.strip()
+    try:
+        checked = check_controls(controls)
+    except ValueError as exc:
+        _fail(f"--set: {exc}")
     name: str | None = None
     try:
         if species_name is not None:
-            name = species_name.strip().lower()
-            if name not in species.SPECIES:
-                _fail(
-                    f"unknown species {species_name!r}; choose one of {', '.join(species.SPECIES)}"
-                )
+            name = species.canonical(species_name)
             params = species.sample(name, 0 if seed is None else seed)
         else:
             assert params_path is not None
@@ -118,19 +150,23 @@ def grow_command(
             if seed is not None:
                 params = params.replace(seed=seed)
         t0 = time.perf_counter()
-        full = build_mesh(grow(params), species=name)
+        if checked:
+            params, full = grow_with_controls(params, checked, name)
+        else:
+            full = build_mesh(grow(params), species=name)
         dt = time.perf_counter() - t0
         if full.is_empty:
             _fail("these parameters grow an empty tree (no branches and no leaves)")
         tree = full if max_faces is None else lod(full, max_faces)
-        export_mesh(tree, out, yaw=yaw, textures=textures)
-        for i, budget in enumerate(budgets, start=1):
-            lod_out = out.with_name(f"{out.stem}_lod{i}{out.suffix}")
-            export_mesh(full, lod_out, yaw=yaw, max_faces=budget, textures=textures)
+        # all the files or none (staged, then renamed together)
+        files = dict(mesh_files(tree, out, yaw=yaw, textures=textures))
+        for budget, lod_out in zip(budgets, lod_outs, strict=True):
+            files.update(mesh_files(full, lod_out, yaw=yaw, max_faces=budget, textures=textures))
         if save_params_path is not None:
-            save_params(params, save_params_path)
+            files[save_params_path] = params_text(params)
         if preset_path is not None:
-            save_sapling_preset(params, preset_path, yaw=yaw)
+            files[preset_path] = preset_text(params, yaw=yaw)
+        write_together(files)
     except (ParamError, ValueError) as exc:
         _fail(str(exc))
     except OSError as exc:
@@ -139,6 +175,22 @@ def grow_command(
         f"{out}: {len(tree.branches.faces)} branch faces, {len(tree.leaves.faces)} leaf faces "
         f"(grow+mesh {dt:.2f} s)"
     )
+
+
+def controls_command() -> None:
+    """Print the controls `grow --set`, the page and the add-on edit a tree with."""
+    from weberpenn.controls import CONTROLS
+
+    for c in CONTROLS:
+        if c.kind == "choice":
+            what = "one of " + ", ".join(f"{v} ({label})" for v, label in c.choices)
+        elif c.kind == "toggle":
+            what = "true or false"
+        else:
+            what = f"{c.lo:g}..{c.hi:g} {c.unit}".rstrip()
+            if c.relative:
+                what += f" (unchanged at {c.neutral:g})"
+        typer.echo(f"{c.name:13} {c.label}: {c.help}\n{'':13} {what}; moves {'; '.join(c.moves)}")
 
 
 def params_command() -> None:
@@ -152,3 +204,4 @@ def register(app: typer.Typer) -> None:
     """Add this module's commands to the main app."""
     app.command("grow")(grow_command)
     app.command("params")(params_command)
+    app.command("controls")(controls_command)

@@ -4,9 +4,12 @@ together or not at all (``treesketch.outputs.write_outputs``)."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import typer
+
+from refine.search import DEFAULT_BUDGET
 
 from .cli_common import fail
 
@@ -24,10 +27,20 @@ def predict_command(
         False, "--no-refine", help="Skip the refinement: TSN's estimate only."
     ),
     budget: int = typer.Option(
-        None, "--budget", help="Refinement: most trees to evaluate (default 100)."
+        None,
+        "--budget",
+        help=f"Refinement: most trees to evaluate for the first species (default "
+        f"{DEFAULT_BUDGET}; another candidate species gets half as many).",
     ),
     time_limit: float = typer.Option(
         None, "--time-limit", help="Refinement: most seconds (default 50)."
+    ),
+    species_name: str | None = typer.Option(
+        None,
+        "--species",
+        help="The species you mean (maple, pine, bonsai, palm, cherry, fir, willow, oak, "
+        "birch, poplar, winter; or a name people use: 'christmas tree', spruce, bare): "
+        "only it is refined.",
     ),
     height: float = typer.Option(
         None,
@@ -70,13 +83,6 @@ def predict_command(
         None, "--summary", help="Also write a JSON summary: species, scores, distances, yaw."
     ),
     algorithm: str = typer.Option("bobyqa", "--algorithm", help="bobyqa, sbplx or cobyla."),
-    seed: int = typer.Option(0, "--seed", help="Refinement seed (nlopt)."),
-    tree_seeds: int = typer.Option(
-        1,
-        "--tree-seeds",
-        help="Tree seeds the refinement tries at its start (a tree's random details: lean, "
-        "branch placement); 1 keeps the estimate's.",
-    ),
     embedding: str = typer.Option(
         "shipped",
         "--embedding",
@@ -91,9 +97,20 @@ def predict_command(
 
     Example: `treesketch predict examples/sketch_maple.png --out tree.glb --compare cmp.png`.
     """
+    from weberpenn import species as wp_species
+    from weberpenn.export import mesh_paths
+    from weberpenn.fileio import OutputError, check_targets
+
     from .estimators import ESTIMATORS, load_estimator
     from .outputs import ExportOptions, write_outputs
-    from .pipeline import Pipeline, RefineSettings, SketchError, check_height, load_sketch
+    from .pipeline import (
+        Pipeline,
+        Progress,
+        RefineSettings,
+        SketchError,
+        check_height,
+        load_sketch,
+    )
 
     # every option first: nothing is read, estimated or refined before they all pass
     outputs = {
@@ -103,19 +120,29 @@ def predict_command(
         "compare": compare_path,
         "summary": summary_path,
     }
-    for opt, p, exts in (
+    named = [
         ("--out", out, (".glb", ".obj")),
         ("--params", params_path, (".json",)),
         ("--preset", preset_path, (".py",)),
         ("--compare", compare_path, (".png",)),
         ("--summary", summary_path, (".json",)),
-    ):
+    ]
+    for opt, p, exts in named:
         if p is None:
             continue
-        if p.is_dir():
-            fail(f"{opt} {p} is a folder; give a file name")
         if p.suffix.lower() not in exts:
             fail(f"{opt} {p}: expected a {' or '.join(exts)} file")
+    # a folder, two outputs on one file, a folder that takes no file: now, not after
+    # minutes of refinement
+    try:
+        check_targets(
+            {
+                "--out": mesh_paths(out, textures=textures),
+                **{opt: [p] for opt, p, _ in named[1:] if p is not None},
+            }
+        )
+    except OutputError as exc:
+        fail(str(exc))
     if estimator not in ESTIMATORS:
         fail(f"--estimator {estimator!r}: choose one of {', '.join(ESTIMATORS)}")
     if checkpoint is not None and estimator != "tsn":
@@ -124,9 +151,7 @@ def predict_command(
         settings = RefineSettings(
             refine=not no_refine,
             algorithm=algorithm,
-            seed=seed,
             embedding=embedding,
-            tree_seeds=tree_seeds,
         )
         if budget is not None:
             settings = settings.replace(budget=budget)
@@ -134,6 +159,8 @@ def predict_command(
             settings = settings.replace(time_limit=time_limit)
         settings.validate()
         check_height(height)
+        if species_name is not None:
+            species_name = wp_species.canonical(species_name)
         export = ExportOptions(face_view, max_faces, textures).validate()
         image = load_sketch(sketch)
         pipeline = Pipeline(load_estimator(estimator, checkpoint=checkpoint, data=data), settings)
@@ -154,13 +181,14 @@ def predict_command(
     )
     task = bar.add_task("refine", total=settings.budget, loss="-")
 
-    def on_progress(p: object) -> None:
-        best = getattr(p, "best_loss", float("nan"))
-        bar.update(task, completed=getattr(p, "evaluations", 0), loss=f"{best:.4f}")
+    def on_progress(p: Progress) -> None:
+        # the run's whole plan (every candidate species) and a distance that only falls
+        loss = "-" if math.isnan(p.best_loss) else f"{p.best_loss:.4f}"
+        bar.update(task, total=max(1, p.budget), completed=p.evaluations, loss=loss)
 
     try:
         with bar:
-            result = pipeline.run(image, height=height, progress=on_progress)
+            result = pipeline.run(image, height=height, progress=on_progress, species=species_name)
         written = write_outputs(result, outputs, export)
     except (SketchError, ValueError) as exc:
         fail(str(exc))
@@ -175,12 +203,11 @@ def predict_command(
     if r is not None:
         line += f" ({r.evaluations} trees, {r.seconds:.1f} s, stopped by {r.stopped_by})"
     typer.echo(line)
-    tried = result.extras.get("tried", {})
-    if len(tried) > 1:
-        typer.echo(
-            "species tried: "
-            + ", ".join(f"{k} {v:.3f}" for k, v in sorted(tried.items(), key=lambda kv: kv[1]))
-        )
+    if result.candidates:
+        typer.echo(f"it is {result.species_text}")
+        for c in result.candidates:
+            dist = "not refined" if c.distance is None else f"distance {c.distance:.3f}"
+            typer.echo(f"  candidate {c.species:<7} {c.probability:6.1%}  {dist}")
     lo, hi = result.tree_mesh.bounds()
     typer.echo(
         f"tree: {hi[2] - lo[2]:.2f} m tall, {len(result.tree_mesh.branches.faces)} branch faces"
@@ -198,6 +225,7 @@ def _option_message(text: str) -> str:
         ("budget", "--budget"),
         ("height", "--height"),
         ("embedding", "--embedding"),
+        ("seed", "--seed"),
     ):
         if text.startswith(name + " "):
             return opt + text[len(name) :]

@@ -8,6 +8,8 @@ from typing import Any
 
 import typer
 
+from refine.search import DEFAULT_BUDGET
+
 LOCAL_HOSTS = ("127.0.0.1", "localhost", "::1")
 ANY_ADDRESS = ("0.0.0.0", "::", "")
 
@@ -44,7 +46,7 @@ def serve_command(
         "tsn", "--estimator", help="tsn, template, or a TSN checkpoint path."
     ),
     budget: int = typer.Option(
-        100, "--budget", min=1, max=1000, help="Default refinement budget of a job."
+        DEFAULT_BUDGET, "--budget", min=1, max=1000, help="Default refinement budget of a job."
     ),
     max_queue: int = typer.Option(64, "--max-queue", min=1, help="Most jobs waiting."),
     retention_days: float = typer.Option(

@@ -62,7 +62,7 @@ class TSNEstimator:
     def estimate(self, sketch: np.ndarray) -> Estimate:
         with _one_torch_thread():
             pred = self.model.predict(sketch)
-        scores = self.model.species_id.shares(pred.matrix)
+        scores = self.model.species_id.scores(pred.matrix)
         return Estimate(pred.params, pred.species, scores, None, decoded=pred.decoded)
 
 

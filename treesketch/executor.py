@@ -33,7 +33,7 @@ import time
 import traceback
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any, Generic, Protocol, TypeVar
+from typing import Any, Generic, Protocol, Self, TypeVar
 
 __all__ = [
     "EXECUTORS",
@@ -116,8 +116,39 @@ def _call(fn: Callable[[Any], Any], index: int, piece: Any, node: str) -> Outcom
     return Outcome(index, value, None, node, os.getpid(), time.perf_counter() - t0)
 
 
+class _Closing:
+    """``with executor:`` closes it at the end; :meth:`close` frees nothing by default."""
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class _Window:
+    """Pieces started a few at a time (a bounded queue keeps memory flat on long runs):
+    ``submit(k)`` starts the next ``k`` with ``start(index, piece)``; ``pending`` maps what
+    ``start`` returned (a future, a Ray reference) to the piece's index."""
+
+    def __init__(self, pieces: Sequence[Any], start: Callable[[int, Any], Any]) -> None:
+        self._todo = iter(enumerate(pieces))
+        self._start = start
+        self.pending: dict[Any, int] = {}
+
+    def submit(self, k: int) -> None:
+        for i, piece in self._todo:
+            self.pending[self._start(i, piece)] = i
+            k -= 1
+            if k <= 0:
+                return
+
+
 # --------------------------------------------------------------------------- local
-class InlineExecutor:
+class InlineExecutor(_Closing):
     """Every piece in this process, one after the other (the default; no dependency)."""
 
     name = "local"
@@ -133,15 +164,6 @@ class InlineExecutor:
         host = socket.gethostname()
         for i, piece in enumerate(pieces):
             yield _call(fn, i, piece, host)
-
-    def close(self) -> None:
-        pass
-
-    def __enter__(self) -> InlineExecutor:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 
 
 # The one worker of a pool process, built by the pool's initializer.  It is per process
@@ -179,7 +201,7 @@ def _pool_piece(index: int, piece: Any) -> Outcome[Any]:
     return _call(_POOL_WORKER["fn"], index, piece, socket.gethostname())
 
 
-class LocalExecutor:
+class LocalExecutor(_Closing):
     """``workers`` processes on this machine (spawned: mitsuba and torch start cleanly);
     ``workers=1`` runs in this process."""
 
@@ -204,17 +226,9 @@ class LocalExecutor:
             initializer=_pool_init,
             initargs=(os.getpid(), factory),
         ) as pool:
-            todo = iter(enumerate(pieces))
-            pending: dict[Future[Outcome[Any]], int] = {}
-
-            def submit(k: int) -> None:
-                for i, piece in todo:
-                    pending[pool.submit(_pool_piece, i, piece)] = i
-                    k -= 1
-                    if k <= 0:
-                        return
-
-            submit(4 * n)  # a bounded queue keeps memory flat on long runs
+            window = _Window(pieces, lambda i, piece: pool.submit(_pool_piece, i, piece))
+            window.submit(4 * n)
+            pending: dict[Future[Outcome[Any]], int] = window.pending
             while pending:
                 done, _ = wait(pending, return_when=FIRST_COMPLETED)
                 for fut in done:
@@ -223,16 +237,7 @@ class LocalExecutor:
                         yield fut.result()
                     except Exception as exc:  # the worker process died (killed, crashed)
                         yield Outcome(i, None, f"worker lost: {type(exc).__name__}: {exc}")
-                    submit(1)
-
-    def close(self) -> None:
-        pass
-
-    def __enter__(self) -> LocalExecutor:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+                    window.submit(1)
 
 
 # --------------------------------------------------------------------------- Ray
@@ -259,7 +264,7 @@ def _ray_piece(factory_box: list[Any], index: int, piece: Any) -> Outcome[Any]:
     return _call(_RAY_WORKER[key], index, piece, node)
 
 
-class RayExecutor:
+class RayExecutor(_Closing):
     """Pieces as Ray tasks.  ``address``: an existing cluster (``"auto"``, ``"HOST:PORT"``,
     ``"ray://HOST:PORT"``); None starts a local Ray for this run with ``num_cpus`` CPUs
     (default: all) and stops it at :meth:`close`.
@@ -320,17 +325,9 @@ class RayExecutor:
             retry_exceptions=False,  # the pieces catch their own errors; never retried
         )
         limit = self.in_flight or max(2, int(2 * self.workers / self.cpus_per_piece))
-        todo = iter(enumerate(pieces))
-        pending: dict[Any, int] = {}
-
-        def submit(k: int) -> None:
-            for i, piece in todo:
-                pending[task.remote(box, i, piece)] = i
-                k -= 1
-                if k <= 0:
-                    return
-
-        submit(limit)
+        window = _Window(pieces, lambda i, piece: task.remote(box, i, piece))
+        window.submit(limit)
+        pending = window.pending
         try:
             while pending:
                 done, _ = ray.wait(list(pending), num_returns=1)
@@ -341,7 +338,7 @@ class RayExecutor:
                     except ray.exceptions.RayError as exc:  # lost max_retries + 1 times
                         msg = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
                         yield Outcome(i, None, f"lost: {type(exc).__name__}: {msg}")
-                    submit(1)
+                    window.submit(1)
         finally:
             for ref in pending:  # an abandoned run (Ctrl-C, an error) stops its tasks
                 ray.cancel(ref, force=True)
@@ -350,12 +347,6 @@ class RayExecutor:
         if self._started and self._ray.is_initialized():
             self._ray.shutdown()
         self._started = False
-
-    def __enter__(self) -> RayExecutor:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 
 
 def start_ray(address: str | None = None, num_cpus: int | None = None) -> bool:

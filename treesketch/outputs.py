@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from weberpenn.fileio import write_together
+from weberpenn.fileio import check_targets, write_together
 
 __all__ = [
     "KINDS",
@@ -117,6 +117,7 @@ def result_files(
     """The bytes of each artefact kind asked for (see the module text); an OBJ comes with
     its material library and texture pictures, named ``tree.obj``, ``tree.mtl``, ...."""
     from weberpenn.export import glb_bytes, obj_files
+    from weberpenn.params import params_text
     from weberpenn.preset import preset_text
 
     opts = (options or ExportOptions()).validate()
@@ -134,7 +135,7 @@ def result_files(
                 key = "obj" if path.suffix == ".obj" else path.name
                 out[key] = content.encode() if isinstance(content, str) else content
         elif kind == "json":
-            out[kind] = (json.dumps(result.params.to_dict(), indent=1) + "\n").encode()
+            out[kind] = params_text(result.params).encode()
         elif kind == "preset":
             yaw = float(result.yaw) if opts.face_view else None
             out[kind] = preset_text(result.params, yaw=yaw).encode()
@@ -157,7 +158,7 @@ def write_outputs(
 
     ``kind`` "mesh" picks GLB or OBJ from the path's suffix; an OBJ's material library and
     texture pictures are written beside it, in the same all-or-nothing set."""
-    from weberpenn.export import mesh_files
+    from weberpenn.export import mesh_files, mesh_paths
 
     opts = (options or ExportOptions()).validate()
     paths: dict[str, Path] = {}
@@ -170,9 +171,16 @@ def write_outputs(
             if kind not in ("glb", "obj"):
                 raise ValueError(f"{path}: unknown mesh format; use .glb or .obj")
         paths[kind] = path
-    for kind, path in paths.items():
-        if path.is_dir():
-            raise ValueError(f"{path} is a folder; give a file name for the {kind} output")
+    # before any bytes are made: a folder, two outputs on one file, a folder that takes
+    # no file (an OutputError, a ValueError)
+    check_targets(
+        {
+            f"the {kind} output": mesh_paths(path, textures=opts.textures)
+            if kind in ("glb", "obj")
+            else [path]
+            for kind, path in paths.items()
+        }
+    )
     files: dict[Path, Any] = {}
     for kind in ("glb", "obj"):
         if kind in paths:

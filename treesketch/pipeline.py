@@ -24,15 +24,17 @@ from typing import Any
 
 import numpy as np
 
-from refine.objective import framed, metric_distance
+from refine.objective import PreparedDrawing, framed
 from refine.search import Cancelled, RefineResult, RefineSettings
 from refine.search import refine as refine_search
 from refine.shape import ShapeTarget, line_distance
 from render.reader import DRAWING_SIDE, SketchError, normalise_drawing, read_sketch
 from weberpenn import TreeParams, build_mesh, grow
+from weberpenn import species as wp_species
 
 from .estimate import Estimate, Estimator
 from .estimators import load_estimator
+from .species_choice import Candidate, describe, posterior
 
 __all__ = [
     "LOW_CONFIDENCE_INK",
@@ -47,12 +49,15 @@ __all__ = [
     "SketchError",
     "check_height",
     "load_sketch",
+    "planned_evaluations",
     "predict_then_refine",
     "prepare_input",
     "rescale_height",
     "tree_line_distance",
 ]
 
+CANDIDATES = 3  # species a result lists (the page shows them to switch to)
+THUMB_SIZE = 128  # pixels of a candidate's sketch
 SKETCH_SIZE = DRAWING_SIDE  # the size sketches are prepared at (TSN crops and resizes from it)
 # the result is flagged when the best tree's sketch is this far from the input, by the
 # style-blind shape distance the refinement minimises (with the learned embedding's term
@@ -70,13 +75,58 @@ MAX_HEIGHT = 200.0  # metres: taller than any tree that grows
 
 @dataclass(frozen=True)
 class Progress:
-    """Where a run is: ``stage`` is "read", "estimate", "refine" or "render"."""
+    """Where a run is: ``stage`` is "read", "estimate", "refine" or "render".
+
+    ``evaluations`` counts the trees of every species tried and never passes ``budget``,
+    the run's whole plan (the estimator's species' budget plus the other candidates');
+    ``best_loss`` (the best tree's sketch distance, NaN before the refinement's first
+    tree) only falls.  ``params`` is the current best tree (the first estimate from the
+    "estimate" stage's end, then the refinement's best), of ``species`` seen from ``yaw``;
+    ``version`` grows by one each time it changes (0: no tree yet)."""
 
     stage: str
     evaluations: int
     budget: int
     best_loss: float
     elapsed: float
+    params: TreeParams | None = None
+    species: str | None = None
+    yaw: float = 0.0
+    version: int = 0
+
+
+class _CurrentBest:
+    """The tree a run would return if it stopped now, by the rule the run picks its result
+    with (the species of highest posterior, ``species_choice.posterior``, from the
+    estimator's scores and each species' best distance so far; only the species the user
+    means when there is one); the shown distance only falls."""
+
+    def __init__(self, scores: dict[str, float]) -> None:
+        self.scores = scores
+        self.best: dict[str, tuple[TreeParams, float, float]] = {}  # species -> tree
+        self.params: TreeParams | None = None
+        self.species: str | None = None
+        self.yaw = 0.0
+        self.shown = math.nan
+        self.version = 0
+
+    def estimate(self, params: TreeParams, species: str, yaw: float) -> None:
+        self.params, self.species, self.yaw = params, species, yaw
+        self.version += 1
+
+    def offer(self, params: TreeParams, yaw: float, loss: float, species: str) -> None:
+        """A candidate's new best tree."""
+        if species in self.best and not loss < self.best[species][2]:
+            return
+        self.best[species] = (params, yaw, loss)
+        post = posterior(self.scores, {s: v[2] for s, v in self.best.items()})
+        pick = max(self.best, key=lambda s: post.get(s, 0.0))
+        p, y, d = self.best[pick]
+        if p is self.params and pick == self.species:
+            return
+        self.params, self.species, self.yaw = p, pick, y
+        self.shown = d if math.isnan(self.shown) else min(self.shown, d)
+        self.version += 1
 
 
 @dataclass(frozen=True)
@@ -96,6 +146,12 @@ class Result:
     confidence: float = 1.0
     warning: str | None = None
     extras: dict[str, Any] = field(default_factory=dict)
+    candidates: tuple[Candidate, ...] = ()  # best first: the species it could be
+
+    @property
+    def species_text(self) -> str:
+        """The species in words, with the others it could be ("a palm; could also be...")."""
+        return describe(list(self.candidates))
 
     @property
     def low_confidence(self) -> bool:
@@ -116,6 +172,8 @@ class Result:
             "losses": dict(self.losses),
             "yaw": float(self.yaw),
             "confidence": float(self.confidence),
+            "species_text": self.species_text,
+            "candidates": [c.summary() for c in self.candidates],
             "warning": self.warning,
             "timings": dict(self.timings),
             "evaluations": 0 if r is None else int(r.evaluations),
@@ -160,12 +218,6 @@ def tree_height(params: TreeParams) -> float:
     return mesh_height(build_mesh(grow(params)))
 
 
-def estimate_height(est: Estimate, name: str, mesh0: Any) -> float:
-    """The height of the estimator's tree of species ``name`` (``mesh0``: the mesh of its
-    tree of its own species, already built)."""
-    return mesh_height(mesh0) if name == est.species else tree_height(est.params_for(name))
-
-
 def rescale_height(params: TreeParams, height: float, current: float | None = None) -> TreeParams:
     """Scale ``scale`` and ``scaleV`` so the grown tree is ``height`` tall (metres);
     ``current``: the tree's height when already known (saves growing it once)."""
@@ -189,11 +241,17 @@ def rescale_height(params: TreeParams, height: float, current: float | None = No
 def tree_line_distance(drawing: Any, tree_sketch: Any, size: int) -> float:
     """``refine.shape.line_distance`` of a drawing and a tree's sketch, both framed as the
     refinement frames them (a tree too small to draw anything is as far as can be)."""
+    return _line_distance(ShapeTarget.from_image(framed(drawing, size), size), tree_sketch)
+
+
+def _line_distance(drawing: ShapeTarget, tree_sketch: Any) -> float:
+    """:func:`tree_line_distance` from the drawing's shape features, already prepared."""
+    size = drawing.size
     try:
         tree = ShapeTarget.from_image(framed(tree_sketch, size), size)
     except SketchError:
         return 1.0
-    return line_distance(ShapeTarget.from_image(framed(drawing, size), size), tree)
+    return line_distance(drawing, tree)
 
 
 def _confidence(loss: float, ink: float, limit: float) -> tuple[float, str | None]:
@@ -209,6 +267,11 @@ def _confidence(loss: float, ink: float, limit: float) -> tuple[float, str | Non
         f"{loss:.3f}, limit {limit}; line distance {ink:.3f}, limit "
         f"{LOW_CONFIDENCE_INK}); is this a sketch of a tree?"
     )
+
+
+def planned_evaluations(cfg: RefineSettings, n: int) -> int:
+    """The most trees a run refining ``n`` species evaluates (see :func:`_share`)."""
+    return sum(_share(cfg, i, n).budget for i in range(n)) if cfg.refine else 0
 
 
 def _share(cfg: RefineSettings, i: int, n: int) -> RefineSettings:
@@ -252,27 +315,53 @@ class Pipeline:
         height: float | None = None,
         progress: Callable[[Progress], None] | None = None,
         cancel: Callable[[], bool] | None = None,
+        species: str | None = None,
     ) -> Result:
         """Sketch (path, bytes, image or array) -> :class:`Result` (see the module text).
 
         ``height`` (metres) rescales the tree; ``progress`` is told of each stage and each
-        refinement evaluation; ``cancel()`` returning True stops the run with
-        :class:`Cancelled` within one tree evaluation."""
+        refinement evaluation, with the current best tree (:class:`Progress`: the first
+        estimate as soon as it exists, then the refinement's best); ``cancel()``
+        returning True stops the run with :class:`Cancelled` within one tree
+        evaluation; ``species`` (a name of ``weberpenn.species.SPECIES`` or one people
+        use, "christmas tree") is the species the user means: only it is refined, and
+        the result is of it."""
         height = check_height(height)
+        chosen = None if species is None else wp_species.canonical(species)
         cfg = self.settings
         t_start = time.perf_counter()
+        plan = cfg.budget if cfg.refine else 0  # until the candidates are known
+        best: _CurrentBest | None = None
 
-        def tell(stage: str, evaluations: int = 0, best: float = math.nan) -> None:
+        def tell(stage: str, evaluations: int = 0) -> None:
             if cancel is not None and cancel():
                 raise Cancelled(f"cancelled during {stage}")
             if progress is not None:
                 elapsed = time.perf_counter() - t_start
-                progress(Progress(stage, evaluations, cfg.budget, best, elapsed))
+                if best is None:
+                    progress(Progress(stage, 0, plan, math.nan, elapsed))
+                    return
+                progress(
+                    Progress(
+                        stage,
+                        min(evaluations, plan),
+                        plan,
+                        best.shown,
+                        elapsed,
+                        best.params,
+                        best.species,
+                        best.yaw,
+                        best.version,
+                    )
+                )
 
         timings: dict[str, float] = {}
         t = time.perf_counter()
         tell("read")
         img = prepare_input(load_sketch(sketch))
+        # the drawing as every comparison of this run sees it (each species' search, the
+        # first estimate's distance, the line distance): framed and prepared once
+        drawing = PreparedDrawing.create(img, cfg.size, cfg.metric, self.embedder)
         timings["prepare"] = time.perf_counter() - t
 
         t = time.perf_counter()
@@ -280,52 +369,63 @@ class Pipeline:
         est = self.estimator.estimate(img)
         yaw0 = 0.0 if est.yaw is None else float(est.yaw)
         timings["estimate"] = time.perf_counter() - t
+        best = _CurrentBest(est.species_scores or {est.species: 1.0})
+        if chosen is None:
+            best.estimate(est.params, est.species, yaw0)
+        else:
+            best.estimate(est.params_for(chosen), chosen, yaw0)
+        names = ([chosen] if chosen is not None else self.candidates(est)) if cfg.refine else []
+        plan = planned_evaluations(cfg, len(names))
+        tell("estimate")  # the first tree, at once
 
         t = time.perf_counter()
         result_refine: RefineResult | None = None
         tried: dict[str, float] = {}
         name = est.species
         done = 0  # evaluations of all candidates so far, so progress only grows
+        refined: dict[str, RefineResult] = {}
+        if chosen is not None:
+            name = chosen
         if cfg.refine:
-            names = self.candidates(est)
             for i, candidate in enumerate(names):
                 run_cfg = _share(cfg, i, len(names))
                 tell("refine", done)
                 rr = refine_search(
-                    img,
+                    drawing,
                     est.params_for(candidate),
                     run_cfg,
                     species=candidate,
                     yaw=None if cfg.search_yaw else yaw0,
-                    progress=lambda n, best, done=done: tell("refine", done + n, best),
+                    progress=lambda n, _loss, done=done: tell("refine", done + n),
                     cancel=cancel,
                     embedder=self.embedder,
+                    on_best=lambda p, y, loss, c=candidate: best.offer(p, y, loss, c),
                 )
                 done += rr.evaluations
                 tried[candidate] = rr.loss_after
+                refined[candidate] = rr
                 if i == 0:
                     yaw0, loss0 = rr.start_yaw, rr.loss_before
-                if result_refine is None:
-                    result_refine, name = rr, candidate
-                else:
-                    # the estimator's species (refined first) keeps its place unless another
-                    # fits clearly better (RefineSettings.species_margin)
-                    keep = 1.0 - cfg.species_margin if name == est.species else 1.0
-                    if rr.loss_after < keep * result_refine.loss_after:
-                        result_refine, name = rr, candidate
-            assert result_refine is not None
+            # the network's scores and the synthesis distances decide together
+            post = posterior(est.species_scores or {est.species: 1.0}, tried)
+            if chosen is None:
+                name = max(tried, key=lambda s: post.get(s, 0.0))
+            result_refine = refined[name]
             params1, yaw1 = result_refine.params, result_refine.yaw
         else:
-            params1, yaw1 = est.params, yaw0
+            post = posterior(est.species_scores or {est.species: 1.0}, {})
+            params1 = est.params if chosen is None else est.params_for(chosen)
+            yaw1 = yaw0
         timings["refine"] = time.perf_counter() - t
 
         t = time.perf_counter()
         tell("render", done)
         from render.sketch import SketchRenderer
 
-        mesh0 = build_mesh(grow(est.params), species=est.species)
+        start = est.params if chosen is None else est.params_for(chosen)
+        mesh0 = build_mesh(grow(start), species=est.species if chosen is None else chosen)
         before = SketchRenderer(mesh0).sketch(yaw0, SKETCH_SIZE)
-        if params1 is est.params:
+        if params1 is start:
             mesh1, after = mesh0, before
         else:
             mesh1 = build_mesh(grow(params1), species=name)
@@ -333,15 +433,9 @@ class Pipeline:
         if result_refine is not None:
             loss_before, loss_after = loss0, result_refine.loss_after
         else:
-            loss_before = loss_after = metric_distance(
-                img, before, cfg.size, cfg.metric, self.embedder
-            )
+            loss_before = loss_after = drawing.distance(before)
         timings["render"] = time.perf_counter() - t
 
-        if height is None and cfg.keep_height and params1 is not est.params:
-            # asked for: the estimator's height for this species instead of the one the
-            # searched proportions give its size values
-            height = estimate_height(est, name, mesh0)
         current = mesh_height(mesh1)
         if height is not None and abs(current - height) > 1e-6 * height:
             t = time.perf_counter()
@@ -349,9 +443,17 @@ class Pipeline:
             mesh1 = build_mesh(grow(params1), species=name)
             timings["height"] = time.perf_counter() - t
 
-        ink_after = tree_line_distance(img, after, cfg.size)
+        ink_after = _line_distance(drawing.shape, after)
         limit = LOW_CONFIDENCE_LOSS if self.embedder is not None else LOW_CONFIDENCE_LOSS_SHAPE
-        confidence, warning = _confidence(loss_after, ink_after, limit)
+        tree_like, warning = _confidence(loss_after, ink_after, limit)
+        t = time.perf_counter()
+        candidates = self._candidates(est, name, params1, after, refined, post, chosen)
+        timings["candidates"] = time.perf_counter() - t
+        # how sure the result is the kind of tree drawn (the species' probability); a
+        # drawing that is not a tree cannot be sure of its kind either
+        confidence = candidates[0].probability if candidates else tree_like
+        if warning is not None:
+            confidence = min(confidence, tree_like)
         timings["total"] = sum(timings.values())
         return Result(
             params=params1,
@@ -373,7 +475,50 @@ class Pipeline:
             confidence=confidence,
             warning=warning,
             extras={"tried": tried} if tried else {},
+            candidates=tuple(candidates),
         )
+
+    def _candidates(
+        self,
+        est: Estimate,
+        name: str,
+        params: TreeParams,
+        sketch: np.ndarray,
+        refined: dict[str, RefineResult],
+        post: dict[str, float],
+        chosen: str | None,
+    ) -> list[Candidate]:
+        """The result's species and the next most probable, at least ``CANDIDATES`` in
+        all: each with its tree (refined, else the estimate for it), its distance (refined
+        ones), its probability and a small sketch to pick it by."""
+        from render.sketch import SketchRenderer
+
+        # by probability, then (an estimator that scores few species) the species' order
+        ranked = sorted(wp_species.SPECIES, key=lambda s: -post.get(s, 0.0))
+        names = [name, *[s for s in ranked if s != name]][: max(CANDIDATES, len(refined))]
+        scores = est.species_scores or {est.species: 1.0}
+        out = []
+        for s in names:
+            if s == name:
+                p, img = params, sketch
+            else:
+                rr = refined.get(s)
+                p = rr.params if rr is not None else est.params_for(s)
+                mesh = build_mesh(grow(p), species=s)
+                img = SketchRenderer(mesh).sketch(rr.yaw if rr is not None else 0.0, THUMB_SIZE)
+            rr = refined.get(s)
+            prob = 1.0 if chosen is not None and s == chosen else post.get(s, 0.0)
+            out.append(
+                Candidate(
+                    s,
+                    p,
+                    float(scores.get(s, 0.0)),
+                    None if rr is None else float(rr.loss_after),
+                    0.0 if chosen is not None and s != chosen else float(prob),
+                    img,
+                )
+            )
+        return out
 
     def candidates(self, est: Estimate) -> list[str]:
         """The species to refine: the estimator's, then up to ``species_tries - 1`` others
@@ -393,6 +538,7 @@ def predict_then_refine(
     height: float | None = None,
     progress: Callable[[Progress], None] | None = None,
     cancel: Callable[[], bool] | None = None,
+    species: str | None = None,
     **settings: Any,
 ) -> Result:
     """``Pipeline(estimator, RefineSettings(**settings)).run(sketch, height, ...)``.
@@ -400,4 +546,6 @@ def predict_then_refine(
     Example: ``predict_then_refine("sketch.png", budget=40).params``.
     """
     cfg = RefineSettings(**settings)
-    return Pipeline(estimator, cfg).run(sketch, height=height, progress=progress, cancel=cancel)
+    return Pipeline(estimator, cfg).run(
+        sketch, height=height, progress=progress, cancel=cancel, species=species
+    )

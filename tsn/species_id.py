@@ -12,6 +12,12 @@ every species, how many of that species' cps satisfy ``|x - value| <= eps``; the
 with the highest *share* of matching cps wins (ties: the smaller mean normalised distance
 over the species' cps).  Everything is plain data (``to_dict``/``from_dict``) so it lives
 inside the checkpoint.
+
+A checkpoint may also carry a :class:`SpeciesClassifier`: a multinomial logistic
+regression over the same output cells, fitted on the network's own outputs for its
+training drawings and temperature-scaled on held-out ones, so its probabilities mean what
+they say.  When present it decides the species and gives the scores (Algorithm 1's shares
+are counts, not probabilities, and over eleven species they tie often).
 """
 
 from __future__ import annotations
@@ -41,6 +47,113 @@ class SpeciesIdError(ValueError):
 
 
 @dataclass(frozen=True)
+class SpeciesClassifier:
+    """Calibrated species probabilities from an un-normalised ``(4, 62)`` output."""
+
+    species: tuple[str, ...]
+    mean: np.ndarray  # (m,) of the standardised features
+    std: np.ndarray  # (m,)
+    weight: np.ndarray  # (k, m)
+    bias: np.ndarray  # (k,)
+    temperature: float
+    scale: np.ndarray  # (62,) normaliser divisors
+
+    @staticmethod
+    def features(mats: np.ndarray, scale: np.ndarray) -> np.ndarray:
+        """``(N, m)`` informative cells of ``(N, 4, 62)`` outputs, in normalised units."""
+        a = np.asarray(mats, dtype=np.float64).reshape(-1, 4, len(PREDICTED_KEYS))
+        return a[:, _CELLS[:, 0], _CELLS[:, 1]] / np.asarray(scale, np.float64)[_CELLS[:, 1]]
+
+    @classmethod
+    def fit(
+        cls,
+        mats: np.ndarray,
+        labels: Sequence[str],
+        scale: np.ndarray,
+        held_out: tuple[np.ndarray, Sequence[str]] | None = None,
+        l2: float = 1e-3,
+    ) -> SpeciesClassifier:
+        """Fit on ``(N, 4, 62)`` outputs and their species; the temperature on
+        ``held_out`` (outputs, species) when given (else 1)."""
+        import torch
+        from scipy.optimize import minimize_scalar
+
+        names = tuple(sorted(set(labels), key=list(labels).index))
+        x = cls.features(mats, scale)
+        mean, std = x.mean(axis=0), np.maximum(x.std(axis=0), 1e-6)
+        y = np.array([names.index(s) for s in labels])
+        xt = torch.from_numpy((x - mean) / std)
+        yt = torch.from_numpy(y)
+        w = torch.zeros((len(names), x.shape[1]), dtype=torch.float64, requires_grad=True)
+        b = torch.zeros(len(names), dtype=torch.float64, requires_grad=True)
+        opt = torch.optim.LBFGS([w, b], max_iter=500, line_search_fn="strong_wolfe")
+
+        def closure() -> torch.Tensor:
+            opt.zero_grad()
+            loss = torch.nn.functional.cross_entropy(xt @ w.T + b, yt) + l2 * (w**2).sum()
+            loss.backward()
+            return loss
+
+        opt.step(closure)
+        out = cls(
+            names, mean, std, w.detach().numpy(), b.detach().numpy(), 1.0,
+            np.asarray(scale, np.float64),
+        )  # fmt: skip
+        if held_out is not None and len(held_out[1]):
+            logits = out.logits(held_out[0])
+            known = [i for i, s in enumerate(held_out[1]) if s in names]
+            yh = np.array([names.index(held_out[1][i]) for i in known])
+
+            def nll(t: float) -> float:
+                z = logits[known] / t
+                z = z - z.max(axis=1, keepdims=True)
+                logp = z - np.log(np.exp(z).sum(axis=1, keepdims=True))
+                return float(-logp[np.arange(len(yh)), yh].mean())
+
+            t = minimize_scalar(nll, bounds=(0.05, 20.0), method="bounded").x
+            out = cls(names, mean, std, out.weight, out.bias, float(t), out.scale)
+        return out
+
+    def logits(self, mats: np.ndarray) -> np.ndarray:
+        x = (self.features(mats, self.scale) - self.mean) / self.std
+        return x @ self.weight.T + self.bias
+
+    def probabilities_many(self, mats: np.ndarray) -> np.ndarray:
+        """``(N, k)`` calibrated probabilities, columns in ``species`` order."""
+        z = self.logits(mats) / self.temperature
+        z = z - z.max(axis=1, keepdims=True)
+        e = np.exp(z)
+        return e / e.sum(axis=1, keepdims=True)
+
+    def probabilities(self, mat: np.ndarray) -> dict[str, float]:
+        p = self.probabilities_many(np.asarray(mat)[None])[0]
+        return {s: float(v) for s, v in zip(self.species, p, strict=True)}
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "species": list(self.species),
+            "mean": self.mean.tolist(),
+            "std": self.std.tolist(),
+            "weight": self.weight.tolist(),
+            "bias": self.bias.tolist(),
+            "temperature": float(self.temperature),
+            "scale": self.scale.tolist(),
+        }
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> SpeciesClassifier:
+        return cls(
+            tuple(d["species"]),
+            np.asarray(d["mean"], np.float64),
+            np.asarray(d["std"], np.float64),
+            np.asarray(d["weight"], np.float64),
+            np.asarray(d["bias"], np.float64),
+            float(d["temperature"]),
+            np.asarray(d["scale"], np.float64),
+        )
+
+
+@dataclass(frozen=True)
 class SpeciesIdentifier:
     species: tuple[str, ...]
     rows: dict[str, np.ndarray]  # species -> (m,) row index of each cp
@@ -48,6 +161,7 @@ class SpeciesIdentifier:
     value: dict[str, np.ndarray]  # species -> (m,) centre (un-normalised)
     eps: dict[str, np.ndarray]  # species -> (m,) acceptance half-width (un-normalised)
     scale: np.ndarray  # (62,) normaliser divisors, for the tie-break distance
+    classifier: SpeciesClassifier | None = None  # calibrated probabilities, when fitted
 
     @classmethod
     def fit(
@@ -93,6 +207,9 @@ class SpeciesIdentifier:
             if isinstance(params_or_matrix, Mapping)
             else np.asarray(params_or_matrix, dtype=np.float64)
         )
+        if self.classifier is not None:
+            p = self.classifier.probabilities(m)
+            return max(p, key=lambda s: p[s])
         sh = self.shares(m)
 
         def dist(s: str) -> float:
@@ -103,6 +220,18 @@ class SpeciesIdentifier:
 
     def identify_many(self, mats: Sequence[np.ndarray] | np.ndarray) -> list[str]:
         return [self.identify(np.asarray(m)) for m in mats]
+
+    def scores(self, mat: np.ndarray) -> dict[str, float]:
+        """Species scores of an un-normalised ``(4, 62)`` output: the classifier's
+        calibrated probabilities when there is one, else Algorithm 1's shares."""
+        if self.classifier is not None:
+            return self.classifier.probabilities(mat)
+        return self.shares(mat)
+
+    def with_classifier(self, classifier: SpeciesClassifier) -> SpeciesIdentifier:
+        return SpeciesIdentifier(
+            self.species, self.rows, self.cols, self.value, self.eps, self.scale, classifier
+        )
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -118,6 +247,7 @@ class SpeciesIdentifier:
                 }
                 for s in self.species
             },
+            **({"classifier": self.classifier.to_dict()} if self.classifier is not None else {}),
         }
 
     @classmethod
@@ -132,6 +262,7 @@ class SpeciesIdentifier:
                 {s: np.asarray(cps[s]["value"], dtype=np.float64) for s in species},
                 {s: np.asarray(cps[s]["eps"], dtype=np.float64) for s in species},
                 np.asarray(d["scale"], dtype=np.float64),
+                SpeciesClassifier.from_dict(d["classifier"]) if d.get("classifier") else None,
             )
         except (KeyError, TypeError, ValueError) as e:
             raise SpeciesIdError(f"not a saved species identifier: {e}") from None

@@ -44,7 +44,7 @@ from . import encoding
 from .checkpoint import atomic_torch_save, save_checkpoint
 from .metrics import one_minus_rmse
 from .model import BACKBONES, TSN, ModelError
-from .species_id import SpeciesIdentifier
+from .species_id import SpeciesClassifier, SpeciesIdentifier
 
 
 class TrainError(ValueError):
@@ -448,6 +448,45 @@ def _load_init(cfg: TrainConfig) -> Any:
     return start
 
 
+def add_species_classifier(
+    cfg: TrainConfig,
+    f_trn: torch.Tensor,
+    f_val: torch.Tensor,
+    cut: int,
+    device: str,
+    trn: Split,
+    val: Split,
+    log: Callable[[str], None] = print,
+) -> float:
+    """Fit the kept network's species classifier (``tsn.species_id.SpeciesClassifier``)
+    on its outputs for the clean training sketches, its temperature on the validation
+    ones, and store it in the checkpoint; returns its validation accuracy."""
+    from .checkpoint import load_checkpoint
+
+    best = load_checkpoint(cfg.out, device)
+    best.model.eval()
+    norm = best.normaliser
+    out_trn = norm.denormalise(predict_cached(best.model, f_trn, cut, device))
+    out_val = norm.denormalise(predict_cached(best.model, f_val, cut, device))
+    clf = SpeciesClassifier.fit(
+        out_trn, list(trn.species), norm.scale, held_out=(out_val, list(val.species))
+    )
+    acc = float(
+        np.mean(
+            [
+                clf.species[i] == s
+                for i, s in zip(clf.probabilities_many(out_val).argmax(1), val.species, strict=True)
+            ]
+        )
+    )
+    save_checkpoint(
+        cfg.out, best.model, best.size, cut, norm, best.species_id.with_classifier(clf),
+        {**best.info, "val_classifier_species_acc": acc, "classifier_temperature": clf.temperature},
+    )  # fmt: skip
+    log(f"[train] species classifier: val accuracy {acc:.3f}, temperature {clf.temperature:.2f}")
+    return acc
+
+
 def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any]:
     """Train (or resume) and return a summary; the best checkpoint is at ``cfg.out``."""
     cfg.check()
@@ -614,7 +653,9 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
             f"val 1-RMSE {scores['overall']:.4f} species {sp_acc:.3f} "
             f"({row['seconds']:.0f} s){' *' if improved else ''}"
         )
+    classifier_acc = add_species_classifier(cfg, f_trn[0], f_val, cut, device, trn, val, log)
     return {
+        "val_classifier_species_acc": classifier_acc,
         "best_val_overall": best,
         "best_epoch": best_epoch,
         "epochs": len(rows),

@@ -19,6 +19,7 @@ from __future__ import annotations
 import io
 import os
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -49,6 +50,7 @@ __all__ = [
     "export_mesh",
     "glb_bytes",
     "mesh_files",
+    "mesh_paths",
     "obj_files",
     "preset_text",
     "sapling_preset_text",
@@ -90,7 +92,10 @@ def _parts(tm: TreeMesh, yaw: float, max_faces: int | None) -> list[_Part]:
     return out
 
 
+@lru_cache(maxsize=32)
 def _textures(species: str | None) -> dict[str, Image.Image]:
+    # a pure function of the species, made per export before: an edit's light GLB paid
+    # for drawing both pictures every time (read-only for the callers)
     return {
         "bark": bark_texture(species, TEXTURE_SIZE),
         "leaf": leaf_texture(species, TEXTURE_SIZE),
@@ -188,7 +193,7 @@ def obj_files(
     for name, rgb in (("bark", bark), ("leaf", leaf)):
         block = f"newmtl {name}\nKd {rgb[0]:.4f} {rgb[1]:.4f} {rgb[2]:.4f}\nKa 0 0 0\nd 1\n"
         if name in images:
-            png = path.with_name(f"{path.stem}_{name}.png")
+            png = _texture_path(path, name)
             files[png] = _png(images[name])
             block = f"newmtl {name}\nKd 1 1 1\nKa 0 0 0\nd 1\nmap_Kd {png.name}\n"
             if name == "leaf":
@@ -196,6 +201,23 @@ def obj_files(
         mtl.append(block)
     files[mtl_path] = "\n".join(mtl)
     return files
+
+
+def mesh_paths(path: str | os.PathLike[str], *, textures: bool = True) -> list[Path]:
+    """The files a mesh export to ``path`` writes (:func:`mesh_files`), known before the
+    tree is grown: for checking outputs first (``weberpenn.fileio.check_targets``)."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix in (".glb", ".gltf"):
+        return [path.with_suffix(".glb")]
+    if suffix == ".obj":
+        extra = [_texture_path(path, name) for name in ("bark", "leaf")] if textures else []
+        return [path, path.with_suffix(".mtl"), *extra]
+    raise ValueError(f"{path}: unknown mesh format {suffix!r} (use .glb or .obj)")
+
+
+def _texture_path(obj: Path, name: str) -> Path:
+    return obj.with_name(f"{obj.stem}_{name}.png")
 
 
 def mesh_files(

@@ -12,7 +12,7 @@ What stays random in Sapling and has no realised key (whether a segment splits,
 tree's structure (:mod:`weberpenn._grow_random`): the trunk's key comes from ``seed`` and
 ``params['seed']``, every other stem's from its parent's and its place on the parent,
 so a small change of one value changes the stems it touches, not every later draw of
-the level (``benchmarks/step_curve.py`` measures it).  Each split draw is shifted by
+the level (``benchmarks/probes/step_curve.py`` measures it).  Each split draw is shifted by
 ``rSplits2`` (modulo 1), so it stays uniform (Sapling's statistics) while ``rSplits2`` still changes the tree.  (The
 third-party Render Tree code compares *every* split draw with ``rSplits2``, so a level
 splits at every segment or never; that loses Sapling's stem counts, which the project
@@ -31,7 +31,7 @@ autoTaper on, closeTip off, splitByLen off).  A dictionary whose tree would exce
 :mod:`weberpenn.limits` (stems, control points, leaves, or the vertices and triangles of
 its mesh) is refused with a :class:`~weberpenn.params.ParamError` naming the keys
 responsible, as soon as growing reaches the limit.  The trunk-split rule is checked draw for
-draw against Sapling's own statistics by ``benchmarks/compare_sapling.py``.
+draw against Sapling's own statistics by ``benchmarks/probes/compare_sapling.py``.
 
 The implementation is vectorised: all stems of a level grow together, one Bezier
 segment at a time, with local frames as rotation matrices (Sapling's quaternions from

@@ -31,6 +31,7 @@ import numpy as np
 import trimesh
 from trimesh.visual import TextureVisuals
 
+from .limits import MAX_MESH_FACES
 from .mesh import build_mesh
 from .skeleton import Skeleton
 from .treemesh import TreeMesh
@@ -54,10 +55,17 @@ def _leaf_faces(n_leaves: int, shape: str) -> int:
 
 
 def check_budget(max_faces: int) -> int:
+    """``max_faces`` as an int in ``MIN_FACES..MAX_MESH_FACES`` (no tree has more: a
+    larger budget is a mistake); ValueError otherwise."""
     if isinstance(max_faces, bool) or not isinstance(max_faces, int | np.integer):
         raise ValueError(f"max_faces must be an integer, got {max_faces!r}")
-    if max_faces < MIN_FACES:
-        raise ValueError(f"max_faces={max_faces} is too small: at least {MIN_FACES} triangles")
+    if not MIN_FACES <= max_faces <= MAX_MESH_FACES:
+        # str() of an int of 5000 digits fails, and one of 400 says nothing more
+        digits = int(int(max_faces).bit_length() * 0.30103) + 1
+        shown = str(max_faces) if digits < 30 else f"a number of about {digits} digits"
+        raise ValueError(
+            f"max_faces={shown} is out of range: from {MIN_FACES} to {MAX_MESH_FACES:,} triangles"
+        )
     return int(max_faces)
 
 

@@ -35,4 +35,10 @@ def to_export_frame(vertices: np.ndarray, yaw: float = 0.0) -> np.ndarray:
     """Z-up generator vertices (n, 3) -> Y-up export vertices, turned to face the view
     drawn at ``yaw`` degrees."""
     m = Y_UP @ face_view_matrix(yaw)
-    return np.asarray(vertices, dtype=np.float64).reshape(-1, 3) @ m.T
+    v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+    # column by column rather than ``v @ m.T``: that product goes through BLAS, whose
+    # threads spin on a busy machine (0.1-0.2 s for 150k vertices against 2 ms)
+    out = np.empty_like(v)
+    for i in range(3):
+        out[:, i] = v[:, 0] * m[i, 0] + v[:, 1] * m[i, 1] + v[:, 2] * m[i, 2]
+    return out

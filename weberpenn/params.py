@@ -18,6 +18,7 @@ import hashlib
 import json
 import math
 import os
+import re
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -223,7 +224,10 @@ class ParamError(ValueError):
 def _bad(key: str, value: Any, why: str) -> ParamError:
     spec = SPECS.get(key.split("[", 1)[0])  # per-level values are named like 'taper[2]'
     allowed = f" (allowed: {spec.range_text()})" if spec else ""
-    return ParamError(f"parameter {key!r}: {why}, got {value!r}{allowed}", key.split("[", 1)[0])
+    shown = repr(value)
+    if len(shown) > 60:  # a number of 400 digits or a long string: its start says enough
+        shown = f"{shown[:40]}... ({len(shown)} characters)"
+    return ParamError(f"parameter {key!r}: {why}, got {shown}{allowed}", key.split("[", 1)[0])
 
 
 def _coerce_scalar(spec: ParamSpec, value: Any, key: str) -> Any:
@@ -231,7 +235,8 @@ def _coerce_scalar(spec: ParamSpec, value: Any, key: str) -> Any:
         if isinstance(value, bool):
             raise _bad(key, value, "expected one of the allowed names")
         if isinstance(value, int | float) and not isinstance(value, bool):
-            if not math.isfinite(value) or not float(value).is_integer():
+            # an int is exact however large; math.isfinite and float() overflow on it
+            if isinstance(value, float) and not (math.isfinite(value) and value.is_integer()):
                 raise _bad(key, value, "not an allowed value")
             value = str(int(value))
         if not isinstance(value, str) or value not in spec.choices:
@@ -245,19 +250,23 @@ def _coerce_scalar(spec: ParamSpec, value: Any, key: str) -> Any:
         raise _bad(key, value, "expected a boolean")
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise _bad(key, value, f"expected a number ({spec.kind})")
-    if not math.isfinite(value):
+    # an int is compared as it is, however large (math.isfinite and float() overflow on
+    # one of 309 digits or more); a float must be finite
+    if isinstance(value, float) and not math.isfinite(value):
         raise _bad(key, value, "not a finite number")
     if spec.kind == "sign":
         if value not in (-1, 1):
             raise _bad(key, value, "expected -1 or 1")
         return int(value)
+    if not spec.lo <= value <= spec.hi:
+        raise _bad(key, value, "out of range")
     if spec.kind == "int":
-        if not float(value).is_integer():
+        if isinstance(value, float) and not value.is_integer():
             raise _bad(key, value, "expected an integer")
         value = int(value)
     else:
         value = float(value)
-    if not spec.lo <= value <= spec.hi:
+    if not spec.lo <= value <= spec.hi:  # again: a float rounded onto a bound's far side
         raise _bad(key, value, "out of range")
     return value
 
@@ -496,17 +505,39 @@ MAX_PARAM_FILE_BYTES = 1_000_000
 MAX_NESTING = 8  # {"key": [v, ...]} nests 2 deep; anything far deeper is not parameters
 
 
+# A string is a quote, then characters that are not that quote nor a backslash or a
+# backslash and any character but a newline; the closing quote follows (as a preset or
+# JSON writes it).  Matched from a given position only: see _max_nesting.
+_STRING_BODY = {q: re.compile(q + r"(?:[^" + q + r"\\]|\\.)*") for q in "\"'"}
+_TOKEN = re.compile(r"[\"'\[\]{}()]")
+
+
 def _max_nesting(text: str) -> int:
     """Deepest bracket nesting in ``text`` (strings ignored), without recursion: parsers
-    recurse per level and a file of 100000 '[' would blow the interpreter's stack."""
-    import re
+    recurse per level and a file of 100000 '[' would blow the interpreter's stack.
 
-    depth = best = 0
-    for tok in re.findall(r'"(?:[^"\\]|\\.)*"|\'(?:[^\'\\]|\\.)*\'|[\[\]{}()]', text):
-        if tok in "[{(":
+    Linear in the text's length: a quote that opens no string (it is never closed) is
+    skipped, and so is every later quote of its kind up to where its string stopped,
+    since each of those would be read as the same unclosed string (``findall`` over one
+    pattern of strings and brackets tried again from every such quote: quadratic, 50
+    minutes for 1 MB of ``"\\"``)."""
+    depth = best = pos = 0
+    dead = {'"': 0, "'": 0}  # a quote of this kind before this position opens no string
+    while (m := _TOKEN.search(text, pos)) is not None:
+        ch, at = m.group(), m.start()
+        pos = at + 1
+        if ch in dead:
+            if at < dead[ch]:
+                continue
+            end = _STRING_BODY[ch].match(text, at).end()  # type: ignore[union-attr]
+            if end < len(text) and text[end] == ch:
+                pos = end + 1  # a whole string: its brackets do not count
+            else:
+                dead[ch] = end
+        elif ch in "[{(":
             depth += 1
             best = max(best, depth)
-        elif tok in "]})":
+        else:
             depth -= 1
     return best
 
@@ -558,11 +589,15 @@ def load_params(path: str | os.PathLike[str]) -> TreeParams:
         raise ParamError(f"{path}: {exc}") from None
 
 
+def params_text(params: TreeParams | Mapping[str, Any]) -> str:
+    """The JSON text of a parameter file (validated), as :func:`save_params` writes it."""
+    return json.dumps(validate(params).to_dict(), indent=1) + "\n"
+
+
 def save_params(params: TreeParams | Mapping[str, Any], path: str | os.PathLike[str]) -> Path:
     """Save as JSON (atomically).  Use ``weberpenn.export.save_sapling_preset`` for Sapling."""
-    params = validate(params)
     path = Path(path)
-    atomic_write(path, json.dumps(params.to_dict(), indent=1) + "\n")
+    atomic_write(path, params_text(params))
     return path
 
 

@@ -1,9 +1,13 @@
-"""The five species: fixed values from the published ground truth, unfixed values drawn.
+"""The species: the paper's five and the trees people draw, as data.
 
-``species_data.json`` is derived from the 15 published TreeSketchNet ground-truth files by
-``scripts/make_species_data.py``: a key (or one level of a per-level key) is *fixed* when
-it is equal in a species' three files; otherwise it is *unfixed* and drawn by the rule of
-TreeSketchNet's ``set_variation`` with an amplitude covering every observed value.
+``species_data.json`` is made by ``scripts/make_species_data.py``.  The paper's five
+(:data:`PAPER_SPECIES`) come from the 15 published TreeSketchNet ground-truth files: a key
+(or one level of a per-level key) is *fixed* when it is equal in a species' three files;
+otherwise it is *unfixed* and drawn by the rule of TreeSketchNet's ``set_variation`` with
+an amplitude covering every observed value.  The species people draw (a conical fir, a
+weeping willow, a round-crowned oak, a slender birch, a columnar poplar and a bare winter
+tree) start from Blender's bundled Sapling presets; their unfixed values are the presets'
+own variation amplitudes, realised the same way.
 
 ``sample(species, seed)`` draws a dictionary with a numpy ``Generator``;
 ``unfixed(species)`` lists exactly what varies (what the refinement searches).
@@ -21,8 +25,15 @@ import numpy as np
 
 from .params import SPECS, ParamError, TreeParams
 
-#: Species names, in the project's order.
-SPECIES: tuple[str, ...] = ("maple", "pine", "bonsai", "palm", "cherry")
+#: The paper's five species, in the project's order (its benchmarks compare on these).
+PAPER_SPECIES: tuple[str, ...] = ("maple", "pine", "bonsai", "palm", "cherry")
+
+#: The species people draw most that the paper's five cannot be.
+PEOPLE_SPECIES: tuple[str, ...] = ("fir", "willow", "oak", "birch", "poplar", "winter")
+
+#: Every species, in the project's order (the paper's five first, so their dataset seeds
+#: and indices never move).
+SPECIES: tuple[str, ...] = PAPER_SPECIES + PEOPLE_SPECIES
 
 #: Name of each species in the TreeSketchNet files.
 PAPER_NAMES: dict[str, str] = {
@@ -36,6 +47,13 @@ PAPER_NAMES: dict[str, str] = {
 _ALIASES: dict[str, str] = {v: k for k, v in PAPER_NAMES.items()} | {
     "acer": "maple",
     "cherry_blossom": "cherry",
+    "spruce": "fir",
+    "conifer": "fir",
+    "christmas_tree": "fir",
+    "weeping_willow": "willow",
+    "aspen": "birch",
+    "bare": "winter",
+    "winter_tree": "winter",
 }
 
 
@@ -70,7 +88,7 @@ class Unfixed:
 
 def canonical(name: str) -> str:
     """The species' canonical name (accepts the paper's names); raises for unknown ones."""
-    key = str(name).strip().lower()
+    key = str(name).strip().lower().replace(" ", "_").replace("-", "_")
     key = _ALIASES.get(key, key)
     if key not in SPECIES:
         raise ParamError(f"unknown species {name!r}; choose one of {', '.join(SPECIES)}")
@@ -81,6 +99,22 @@ def canonical(name: str) -> str:
 def _data() -> dict[str, Any]:
     text = resources.files("weberpenn").joinpath("species_data.json").read_text("utf-8")
     return json.loads(text)["species"]
+
+
+def display_name(name: str) -> str:
+    """What a person calls the species ("fir (conical conifer)")."""
+    return str(_data()[canonical(name)].get("display", canonical(name)))
+
+
+def doodle_foliage(name: str) -> bool:
+    """Whether people draw the species' foliage as single strokes (palm fronds, a weeping
+    willow's hanging twigs) rather than as a crown outline."""
+    return bool(_data()[canonical(name)].get("foliage_strokes", False))
+
+
+def source(name: str) -> str:
+    """Where the species' numbers come from (the paper's files or a Sapling preset)."""
+    return str(_data()[canonical(name)].get("source", ""))
 
 
 def reference_files(name: str) -> tuple[str, ...]:

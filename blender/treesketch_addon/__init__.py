@@ -1,15 +1,18 @@
 """TreeSketch for Blender: draw a tree (an image file or a Grease Pencil drawing), get a
 3D tree back, as a native Sapling tree (editable in Sapling's redo panel) or as the
-imported GLB.  Install the zip (``make blender-addon``) in Edit > Preferences > Add-ons,
+imported GLB, then shape it with the project's controls (height, crown width, ..., another
+variant: the table the zip carries as ``controls.json``).  Install the zip (``make blender-addon``) in Edit > Preferences > Add-ons,
 then set where the project's ``treesketch`` program lives (or the service's URL) in the
 add-on's preferences.  Panel: 3D view > sidebar (N) > TreeSketch.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import queue
+import random
 import shutil
 import tempfile
 import threading
@@ -32,6 +35,8 @@ bl_info = {
 
 BUNDLED_DRAWING = Path(__file__).with_name("drawing_maple.png")
 SAPLING = "add_curve_sapling"
+COLLECTION = "TreeSketch"  # where every predicted tree goes
+CONTROLS = backend.load_controls(Path(__file__).with_name("controls.json"))["controls"]
 
 
 def _prefs(context) -> bpy.types.AddonPreferences:
@@ -56,7 +61,17 @@ class TREESKETCH_Preferences(bpy.types.AddonPreferences):
         default=os.environ.get("TREESKETCH_CLI", ""),
     )
     service_url: StringProperty(
-        name="Service URL", default=os.environ.get("TREESKETCH_URL", "http://127.0.0.1:8000")
+        name="Service URL",
+        description="http:// or https:// address of a running 'treesketch serve'; the add-on "
+        "fetches nothing from any other address",
+        default=os.environ.get("TREESKETCH_URL", "http://127.0.0.1:8000"),
+    )
+    service_token: StringProperty(
+        name="Service token",
+        description="The service's --token, sent as an Authorization header (never in a URL); "
+        "kept in Blender's preferences: set TREESKETCH_TOKEN instead to keep it out of them",
+        subtype="PASSWORD",
+        default="",
     )
     copy_presets: BoolProperty(
         name="Add presets to Sapling's menu",
@@ -69,6 +84,7 @@ class TREESKETCH_Preferences(bpy.types.AddonPreferences):
         col.prop(self, "backend")
         col.prop(self, "cli_path")
         col.prop(self, "service_url")
+        col.prop(self, "service_token")
         col.prop(self, "copy_presets")
 
 
@@ -92,11 +108,72 @@ class TREESKETCH_Settings(bpy.types.PropertyGroup):
     )
     refine: BoolProperty(name="Refine", description="Refine the network's estimate", default=True)
     budget: IntProperty(
-        name="Budget", description="Trees the refinement may try", default=40, min=1
+        name="Budget",
+        description="Trees the refinement may try (0: TreeSketch's own default, the same "
+        "as the page's and the CLI's)",
+        default=0,
+        min=0,
     )
     status: StringProperty(name="Status", default="")
+    # the last prediction, which the controls edit (JSON parameters, species, view yaw)
+    last_params: StringProperty(default="")
+    last_species: StringProperty(default="")
+    last_yaw: FloatProperty(default=0.0)
+    last_tree: StringProperty(default="")  # the parent empty of the tree on show
     progress: FloatProperty(name="Progress", default=0.0, min=0.0, max=1.0, subtype="FACTOR")
     running: BoolProperty(default=False)
+
+
+def _control_group(rows: list) -> type:
+    """A PropertyGroup with one property per control of the table; each starts at its
+    keep value (``backend.keep_value``: the predicted tree as it is)."""
+    ann = {}
+    for r in rows:
+        name, label, text = r["name"], r["label"], r["help"]
+        keep = backend.keep_value(r)
+        if r["kind"] == "toggle":
+            ann[name] = BoolProperty(name=label, description=text, default=True)
+        elif r["kind"] == "choice":
+            items = [("KEEP", "as predicted", "The predicted tree's own")]
+            items += [(c["value"], c["label"], "") for c in r["choices"]]
+            ann[name] = EnumProperty(name=label, description=text, items=items, default="KEEP")
+        elif r["kind"] == "integer":
+            ann[name] = IntProperty(
+                name=label,
+                description=f"{text} (-1: as predicted)",
+                default=-1,
+                min=-1,
+                max=int(r["max"]),
+            )
+        else:
+            relative = r.get("neutral") is not None
+            ann[name] = FloatProperty(
+                name=label,
+                description=text if relative else f"{text} (0: as predicted)",
+                default=float(keep),
+                min=float(r["min"]) if relative else 0.0,
+                max=float(r["max"]),
+                step=max(1, min(100, round(100 * float(r["step"])))),
+            )
+    return type("TREESKETCH_Controls", (bpy.types.PropertyGroup,), {"__annotations__": ann})
+
+
+TREESKETCH_Controls = _control_group(CONTROLS)
+
+
+def _reset_controls(context) -> None:
+    ctl = context.scene.treesketch_controls
+    for r in CONTROLS:
+        setattr(ctl, r["name"], backend.keep_value(r))
+
+
+def _remove_tree(name: str) -> None:
+    """The tree on show (its parent empty and everything under it)."""
+    parent = bpy.data.objects.get(name)
+    if parent is None:
+        return
+    for o in [parent, *parent.children_recursive]:
+        bpy.data.objects.remove(o, do_unlink=True)
 
 
 GPENCIL_TYPES = ("GPENCIL", "GREASEPENCIL")  # Blender < 4.3, Blender 4.3+ (GPv3)
@@ -143,7 +220,8 @@ def prediction_job(context, image: Path, out: backend.Outputs):
     chosen in the preferences; it reads every setting now, so it can run in a thread
     without touching Blender's data."""
     prefs, settings = _prefs(context), context.scene.treesketch
-    refine, budget = bool(settings.refine), int(settings.budget)
+    refine = bool(settings.refine)
+    budget = int(settings.budget) or None  # 0: the project's one default
     if prefs.backend == "CLI":
         cmd = backend.cli_command(
             bpy.path.abspath(prefs.cli_path) or "treesketch",
@@ -152,15 +230,36 @@ def prediction_job(context, image: Path, out: backend.Outputs):
             refine=refine,
             budget=budget,
         )
-        return lambda on_line=None, cancel=None: backend.run_cli(cmd, on_line, cancel)
+
+        def run(on_line=None, cancel=None):
+            lines: list[str] = []
+
+            def seen(line: str) -> None:
+                lines.append(line)
+                if on_line is not None:
+                    on_line(line)
+
+            backend.run_cli(cmd, seen, cancel)
+            return backend.species_of(lines)
+
+        return run
     url = str(prefs.service_url)
-    return lambda on_line=None, cancel=None: backend.post_predict(
-        url, image, out.glb, refine=refine, budget=budget
-    )
+    token = str(prefs.service_token) or os.environ.get("TREESKETCH_TOKEN") or None
+
+    def ask(on_line=None, cancel=None):
+        reply = backend.post_predict(url, image, out.glb, refine=refine, budget=budget, token=token)
+        out.params.write_text(json.dumps(reply.get("params", {})), encoding="utf-8")
+        return reply.get("species")
+
+    return ask
 
 
-def add_result(context, out: backend.Outputs, yaw: float | None = None) -> list:
-    """Add the predicted tree to the scene; returns the new objects."""
+def add_result(
+    context, out: backend.Outputs, yaw: float | None = None, species: str | None = None
+) -> list:
+    """Add the predicted tree to the scene, as one hierarchy (an empty named after the
+    species, the tree's objects under it) in the ``TreeSketch`` collection; returns the
+    new objects, the parent first."""
     settings = context.scene.treesketch
     before = set(bpy.data.objects)
     use_sapling = settings.result == "SAPLING" and out.preset.is_file()
@@ -173,19 +272,45 @@ def add_result(context, out: backend.Outputs, yaw: float | None = None) -> list:
             raise backend.PredictError("Sapling did not build the tree from the preset")
         turn = preset_yaw if yaw is None else yaw
         if _prefs(context).copy_presets:
-            _copy_to_sapling_menu(out.preset)
+            _copy_to_sapling_menu(out.preset, species)
     else:
         images = set(bpy.data.images)
-        bpy.ops.import_scene.gltf(filepath=str(out.glb))
+        backend.numpy_bool_alias()  # Blender 3.4's importer calls np.bool
+        try:
+            bpy.ops.import_scene.gltf(filepath=str(out.glb))
+        except RuntimeError as exc:
+            raise backend.PredictError(
+                f"Blender's glTF importer could not read the tree: {backend.plain_error(exc)}"
+            ) from None
         for img in set(bpy.data.images) - images:
             if img.source == "FILE" and not img.packed_file:
                 img.pack()  # the prediction's folder is removed afterwards
-        turn = 0.0  # the GLB already faces the drawn view
+        # a predicted GLB already faces the drawn view; an edit's from the service does not
+        turn = 0.0 if yaw is None else yaw
     new = [o for o in bpy.data.objects if o not in before]
-    for o in new:
-        if o.parent is None and turn:
-            o.rotation_euler.z -= math.radians(turn)
-    return new
+    parent = _collect(context, new, species or "tree")
+    parent.rotation_euler.z -= math.radians(turn)
+    return [parent, *new]
+
+
+def _collect(context, objects: list, name: str):
+    """Move ``objects`` into the ``TreeSketch`` collection under a new empty ``name``
+    (Blender makes the name unique: maple, maple.001, ...); returns the empty."""
+    coll = bpy.data.collections.get(COLLECTION)
+    if coll is None:
+        coll = bpy.data.collections.new(COLLECTION)
+    if coll.name not in context.scene.collection.children:
+        context.scene.collection.children.link(coll)
+    parent = bpy.data.objects.new(name, None)
+    parent.empty_display_type = "PLAIN_AXES"
+    coll.objects.link(parent)
+    for o in objects:
+        for c in list(o.users_collection):
+            c.objects.unlink(o)
+        coll.objects.link(o)
+        if o.parent is None:
+            o.parent = parent
+    return parent
 
 
 def _enable_sapling() -> None:
@@ -209,10 +334,15 @@ def _enable_sapling() -> None:
     )
 
 
-def _copy_to_sapling_menu(preset: Path) -> None:
-    folder = bpy.utils.user_resource("SCRIPTS", path=f"presets/operator/{SAPLING}", create=True)
-    target = Path(folder) / f"treesketch_{preset.stem}.py"
+def _copy_to_sapling_menu(preset: Path, species: str | None) -> Path:
+    """The preset in Sapling's Import Preset menu, under a name of its own (an earlier
+    prediction's is never overwritten)."""
+    folder = Path(
+        bpy.utils.user_resource("SCRIPTS", path=f"presets/operator/{SAPLING}", create=True)
+    )
+    target = folder / backend.preset_name(species, (p.name for p in folder.iterdir()))
     target.write_bytes(preset.read_bytes())
+    return target
 
 
 class TREESKETCH_OT_predict(bpy.types.Operator):
@@ -232,6 +362,7 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
     _thread = None
     _lines: queue.Queue
     _cancel = False
+    _species = None
 
     def execute(self, context):
         settings = context.scene.treesketch
@@ -250,7 +381,7 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
         if self.wait or bpy.app.background:
             try:
                 job = prediction_job(context, image, self._out)
-                job(on_line=lambda s: print("treesketch:", s))
+                self._species = job(on_line=lambda s: print("treesketch:", s))
             except (backend.PredictError, RuntimeError) as exc:
                 shutil.rmtree(folder, ignore_errors=True)
                 return self._failed(settings, exc)
@@ -261,7 +392,7 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
 
         def work():
             try:
-                job(on_line=self._lines.put, cancel=lambda: self._cancel)
+                self._species = job(on_line=self._lines.put, cancel=lambda: self._cancel)
             except Exception as exc:  # shown in the panel, never lost in a thread
                 self._error = exc
 
@@ -297,8 +428,11 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
         return self._finish(context)
 
     def _failed(self, settings, exc: BaseException) -> set:
-        settings.status = str(exc).splitlines()[0]
-        self.report({"ERROR"}, str(exc))
+        # plain words, never Blender's "Error: Python: Traceback ..." (a failing CLI's
+        # message keeps its last lines below the first)
+        text = backend.plain_error(exc)
+        settings.status = text[:120]
+        self.report({"ERROR"}, text if "Traceback" in str(exc) else str(exc))
         return {"CANCELLED"}
 
     def _finish(self, context) -> set:
@@ -306,13 +440,108 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
         into the .blend by the importer; the preset was copied to Sapling's menu)."""
         settings = context.scene.treesketch
         try:
-            new = add_result(context, self._out)
+            new = add_result(context, self._out, species=self._species)
+            _remember(context, self._out, self._species, new[0].name)  # before the files go
         except (backend.PredictError, RuntimeError, OSError) as exc:
             return self._failed(settings, exc)
         finally:
             shutil.rmtree(self._folder, ignore_errors=True)
-        settings.progress, settings.status = 1.0, f"added {len(new)} object(s)"
+        settings.progress, settings.status = 1.0, f"added {new[0].name} ({len(new) - 1} object(s))"
         return {"FINISHED"}
+
+
+def _remember(context, out: backend.Outputs, species, tree: str) -> None:
+    """Keep what the controls edit: the prediction's parameters, species and view."""
+    settings = context.scene.treesketch
+    if not out.params.is_file():
+        return
+    settings.last_params = out.params.read_text(encoding="utf-8")
+    settings.last_species = species or ""
+    settings.last_yaw = backend.read_preset(out.preset)[1] if out.preset.is_file() else 0.0
+    settings.last_tree = tree
+    _reset_controls(context)
+
+
+class TREESKETCH_OT_apply_controls(bpy.types.Operator):
+    """Grow the predicted tree again with the panel's controls (it replaces the tree on
+    show)"""
+
+    bl_idname = "treesketch.apply_controls"
+    bl_label = "Apply"
+    bl_options = {"UNDO"}
+
+    def execute(self, context):
+        settings, prefs = context.scene.treesketch, _prefs(context)
+        if not settings.last_params:
+            return self._failed(settings, "make a tree first (Sketch to Tree)")
+        ctl = context.scene.treesketch_controls
+        changed = backend.changed_controls(
+            CONTROLS, {r["name"]: getattr(ctl, r["name"]) for r in CONTROLS}
+        )
+        species = settings.last_species or None
+        folder = Path(tempfile.mkdtemp(prefix="treesketch-edit-"))
+        out = backend.Outputs.in_folder(folder)
+        try:
+            if prefs.backend == "CLI":
+                params = folder / "predicted.json"
+                params.write_text(settings.last_params, encoding="utf-8")
+                cmd = backend.grow_command(
+                    bpy.path.abspath(prefs.cli_path) or "treesketch", params, out, changed
+                )
+                cmd += ["--yaw", f"{settings.last_yaw:g}"]
+                backend.run_cli(cmd, lambda s: print("treesketch:", s))
+                yaw = None  # the GLB and the preset carry the view
+            else:
+                backend.post_trees(
+                    str(prefs.service_url),
+                    json.loads(settings.last_params),
+                    changed,
+                    species,
+                    out,
+                )
+                out.preset.unlink(missing_ok=True)  # (none: the service makes no preset)
+                yaw = settings.last_yaw
+            _remove_tree(settings.last_tree)
+            new = add_result(context, out, yaw=yaw, species=species)
+        except (backend.PredictError, RuntimeError, OSError, ValueError) as exc:
+            return self._failed(settings, backend.plain_error(exc))
+        finally:
+            shutil.rmtree(folder, ignore_errors=True)
+        settings.last_tree = new[0].name
+        what = ", ".join(f"{k}={v}" for k, v in changed.items()) or "as predicted"
+        settings.status = f"{new[0].name}: {what}"[:120]
+        return {"FINISHED"}
+
+    def _failed(self, settings, text: str) -> set:
+        settings.status = text[:120]
+        self.report({"ERROR"}, text)
+        return {"CANCELLED"}
+
+
+class TREESKETCH_OT_variant(bpy.types.Operator):
+    """Another tree of the same kind (a new seed), then apply"""
+
+    bl_idname = "treesketch.variant"
+    bl_label = "Another variant"
+    bl_options = {"UNDO"}
+
+    def execute(self, context):
+        seed = next((r for r in CONTROLS if r["name"] == "seed"), None)
+        if seed is not None:
+            context.scene.treesketch_controls.seed = random.randrange(int(seed["max"]))
+        return bpy.ops.treesketch.apply_controls()
+
+
+class TREESKETCH_OT_reset_controls(bpy.types.Operator):
+    """Every control back to the predicted tree's own, then apply"""
+
+    bl_idname = "treesketch.reset_controls"
+    bl_label = "Reset"
+    bl_options = {"UNDO"}
+
+    def execute(self, context):
+        _reset_controls(context)
+        return bpy.ops.treesketch.apply_controls()
 
 
 class TREESKETCH_PT_panel(bpy.types.Panel):
@@ -347,18 +576,41 @@ class TREESKETCH_PT_panel(bpy.types.Panel):
             layout.prop(settings, "progress", text="Progress (Esc cancels)")
         if settings.status:
             layout.label(text=settings.status)
+        if settings.last_params and CONTROLS:
+            box = layout.box()
+            box.label(text=f"Shape the {settings.last_species or 'tree'}")
+            ctl = context.scene.treesketch_controls
+            for r in CONTROLS:
+                box.prop(ctl, r["name"])
+            row = box.row()
+            row.operator(TREESKETCH_OT_apply_controls.bl_idname)
+            row.operator(TREESKETCH_OT_variant.bl_idname)
+            row.operator(TREESKETCH_OT_reset_controls.bl_idname)
 
 
-CLASSES = (TREESKETCH_Preferences, TREESKETCH_Settings, TREESKETCH_OT_predict, TREESKETCH_PT_panel)
+CLASSES = (
+    TREESKETCH_Preferences,
+    TREESKETCH_Settings,
+    TREESKETCH_Controls,
+    TREESKETCH_OT_predict,
+    TREESKETCH_OT_apply_controls,
+    TREESKETCH_OT_variant,
+    TREESKETCH_OT_reset_controls,
+    TREESKETCH_PT_panel,
+)
 
 
 def register() -> None:
+    # while the add-on is on, Blender 3.4's own glTF import works too (it calls np.bool)
+    backend.numpy_bool_alias()
     for cls in CLASSES:
         bpy.utils.register_class(cls)
     bpy.types.Scene.treesketch = bpy.props.PointerProperty(type=TREESKETCH_Settings)
+    bpy.types.Scene.treesketch_controls = bpy.props.PointerProperty(type=TREESKETCH_Controls)
 
 
 def unregister() -> None:
+    del bpy.types.Scene.treesketch_controls
     del bpy.types.Scene.treesketch
     for cls in reversed(CLASSES):
         bpy.utils.unregister_class(cls)

@@ -5,22 +5,37 @@ both), so the project's test suite checks it without Blender.
 - :func:`cli_command` / :func:`run_cli`: ``treesketch predict IMAGE --out X.glb --params
   X.json --preset X.py`` in the project's venv, its output lines handed to a callback.
 - :func:`post_predict`: the service's ``POST /predict`` (multipart ``sketch``), then the
-  GLB it names is downloaded.
+  GLB it names is downloaded.  Only from the configured service: plain http(s), the same
+  origin (scheme, host, port) for the GLB and any redirect, never ``file://`` or another
+  host; the reply and the GLB have size caps; a token goes in an ``Authorization:
+  Bearer`` header, never in a URL.
 - :func:`read_preset`: the Sapling dict and the view yaw from a TreeSketch preset.
 - :func:`strokes_png`: pen strokes (lists of 2-D points) drawn black on white as a PNG,
   framed the way the project's reader expects (tree filling the canvas, base at the
   bottom).
+- :func:`numpy_bool_alias`: puts back ``numpy.bool``, which the glTF importer of Blender
+  3.4 (Debian's) still calls though numpy 1.24 removed it.
+- :func:`plain_error`: one line a person can read from an exception (an operator's
+  ``RuntimeError`` carries Blender's whole "Error: Python: Traceback ..." text).
+- :func:`species_of` / :func:`preset_name`: the predicted species from the CLI's output,
+  and a preset file name of its own for every prediction.
+- :func:`load_controls`, :func:`keep_value`, :func:`changed_controls`,
+  :func:`grow_command`, :func:`post_trees`: the controls a person edits the predicted tree
+  with (the project's table, shipped in the zip as ``controls.json``), and the tree grown
+  again from them (``treesketch grow --params --set`` or the service's ``POST /trees``).
 """
 
 from __future__ import annotations
 
 import ast
+import contextlib
 import json
 import os
 import re
 import struct
 import subprocess
 import time
+import urllib.error
 import urllib.parse
 import urllib.request
 import uuid
@@ -32,7 +47,17 @@ from pathlib import Path
 import numpy as np
 
 __all__ = [
+    "MAX_GLB_BYTES",
     "Outputs",
+    "changed_controls",
+    "grow_command",
+    "keep_value",
+    "load_controls",
+    "post_trees",
+    "numpy_bool_alias",
+    "plain_error",
+    "preset_name",
+    "species_of",
     "PredictError",
     "cli_command",
     "multipart_body",
@@ -44,6 +69,8 @@ __all__ = [
 ]
 
 _ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
+_SPECIES = re.compile(r"^species: ([A-Za-z0-9_]+)")
+_ERROR_LINE = re.compile(r"^[A-Za-z_][\w.]*(Error|Exception|Exit)\b.*?: ")
 _YAW = re.compile(r"^# view yaw: (-?[0-9.]+) degrees")
 
 
@@ -158,6 +185,86 @@ def multipart_body(
     return b"".join(parts), f"multipart/form-data; boundary={boundary}"
 
 
+MAX_REPLY_BYTES = 1024 * 1024  # the service's JSON answer
+MAX_GLB_BYTES = 512 * 1024 * 1024  # the biggest tree (6 M triangles, textured) is far less
+MAX_PRESET_BYTES = 1_000_000  # as the project's own parameter reader
+_CHUNK = 1024 * 1024
+
+
+def _origin(url: str) -> tuple[str, str, int]:
+    """(scheme, host, port) of an http(s) URL; PredictError for any other URL."""
+    parts = urllib.parse.urlsplit(url)
+    scheme = parts.scheme.lower()
+    if scheme not in ("http", "https") or not parts.hostname:
+        raise PredictError(f"the service URL must be http:// or https:// and a host, got {url!r}")
+    try:
+        port = parts.port or (443 if scheme == "https" else 80)
+    except ValueError:
+        raise PredictError(f"the service URL has a bad port: {url!r}") from None
+    return scheme, parts.hostname.lower(), port
+
+
+def _opener(origin: tuple[str, str, int]) -> urllib.request.OpenerDirector:
+    """An opener that speaks http(s) only (no ``file:``, ``ftp:`` or ``data:`` handler,
+    unlike ``urlopen``'s) and follows a redirect only within ``origin``."""
+
+    class SameOrigin(urllib.request.HTTPRedirectHandler):
+        def redirect_request(self, req, fp, code, msg, headers, newurl):  # noqa: ANN001
+            target = urllib.parse.urljoin(req.full_url, newurl)
+            if _safe_origin(target) != origin:
+                raise PredictError(
+                    f"the service redirected to {target!r}, away from the configured service"
+                )
+            return super().redirect_request(req, fp, code, msg, headers, newurl)
+
+    opener = urllib.request.OpenerDirector()
+    for handler in (
+        urllib.request.ProxyHandler(),
+        urllib.request.HTTPHandler(),
+        urllib.request.HTTPSHandler(),
+        urllib.request.HTTPDefaultErrorHandler(),
+        SameOrigin(),
+        urllib.request.HTTPErrorProcessor(),
+    ):
+        opener.add_handler(handler)
+    return opener
+
+
+def _safe_origin(url: str) -> tuple[str, str, int] | None:
+    try:
+        return _origin(url)
+    except PredictError:
+        return None
+
+
+def _read_capped(resp, limit: int, what: str, sink=None) -> bytes:  # noqa: ANN001
+    """The body of ``resp``, refused past ``limit`` bytes (by its Content-Length at once,
+    else while it streams); written to ``sink`` chunk by chunk when one is given."""
+    declared = resp.headers.get("Content-Length")
+    if declared is not None and declared.strip().isdigit() and int(declared) > limit:
+        raise PredictError(f"{what} is {int(declared):,} bytes, over the limit of {limit:,}")
+    chunks, total = [], 0
+    while chunk := resp.read(_CHUNK):
+        total += len(chunk)
+        if total > limit:
+            raise PredictError(f"{what} is over the limit of {limit:,} bytes")
+        if sink is None:
+            chunks.append(chunk)
+        else:
+            sink.write(chunk)
+    return b"".join(chunks)
+
+
+def _http_error(exc: urllib.error.HTTPError) -> str:
+    """``STATUS detail`` from the service's JSON error body (read capped)."""
+    try:
+        body = json.loads(exc.read(64 * 1024) or b"{}")
+        detail = body.get("detail") if isinstance(body, dict) else None
+    except (OSError, ValueError):
+        detail = None
+    return f"{exc.code} {detail or exc.reason}"
+
+
 def post_predict(
     url: str,
     image: str | os.PathLike[str],
@@ -166,40 +273,77 @@ def post_predict(
     refine: bool = True,
     budget: int | None = None,
     timeout: float = 600.0,
+    token: str | None = None,
+    max_glb_bytes: int = MAX_GLB_BYTES,
 ) -> dict:
     """``POST {url}/predict`` with the drawing; writes the returned GLB to ``glb_path``
-    and returns the service's JSON."""
+    (whole or not at all) and returns the service's JSON.  ``token``: the service's
+    token, sent as ``Authorization: Bearer``."""
+    origin = _origin(url)
+    headers = {}
+    if token:
+        if any(c in token for c in "\r\n") or token != token.strip():
+            raise PredictError("the service token must be one line without spaces around it")
+        headers["Authorization"] = f"Bearer {token}"
     fields = {"refine": "true" if refine else "false"}
     if budget is not None:
         fields["budget"] = str(int(budget))
     body, ctype = multipart_body("sketch", Path(image).name, Path(image).read_bytes(), fields)
     base = url.rstrip("/") + "/"
+    opener = _opener(origin)
     req = urllib.request.Request(
-        urllib.parse.urljoin(base, "predict"), data=body, headers={"Content-Type": ctype}
+        urllib.parse.urljoin(base, "predict"),
+        data=body,
+        headers={"Content-Type": ctype, **headers},
     )
+    glb_path = Path(glb_path)
+    part = glb_path.with_name(glb_path.name + ".part")
     try:
-        with urllib.request.urlopen(req, timeout=timeout) as resp:
-            reply = json.loads(resp.read())
-        glb_url = urllib.parse.urljoin(base, str(reply["glb"]))
-        with urllib.request.urlopen(glb_url, timeout=timeout) as resp:
-            Path(glb_path).write_bytes(resp.read())
-    except (OSError, ValueError, KeyError) as exc:
+        with opener.open(req, timeout=timeout) as resp:
+            reply = json.loads(_read_capped(resp, MAX_REPLY_BYTES, "the service's answer"))
+        if not isinstance(reply, dict) or not isinstance(reply.get("glb"), str):
+            raise PredictError(f"TreeSketch service at {url}: its answer names no GLB")
+        glb_url = urllib.parse.urljoin(base, reply["glb"])
+        if _safe_origin(glb_url) != origin:
+            raise PredictError(
+                f"TreeSketch service at {url}: the GLB's address {glb_url!r} is not on the "
+                "configured service; not followed"
+            )
+        glb_req = urllib.request.Request(glb_url, headers=headers)
+        with opener.open(glb_req, timeout=timeout) as resp, open(part, "wb") as sink:
+            _read_capped(resp, max_glb_bytes, "the GLB", sink)
+        os.replace(part, glb_path)
+    except urllib.error.HTTPError as exc:
+        raise PredictError(f"TreeSketch service at {url}: {_http_error(exc)}") from None
+    except (OSError, ValueError) as exc:
         raise PredictError(f"TreeSketch service at {url}: {exc}") from None
+    finally:
+        part.unlink(missing_ok=True)
     return reply
 
 
 def read_preset(path: str | os.PathLike[str]) -> tuple[dict, float]:
     """(Sapling's keyword arguments, view yaw in degrees) from a TreeSketch preset: the
-    first line not starting with '#', read as Sapling reads it."""
+    first line not starting with '#', read as Sapling reads it (a literal, never run).
+    Any fault (too large, not text, not a literal, not a dict) is a PredictError, which
+    the operator reports; nothing else escapes."""
     yaw = 0.0
     settings = None
-    with open(path, encoding="utf-8") as fh:
-        for line in fh:
-            m = _YAW.match(line)
-            if m:
-                yaw = float(m.group(1))
-            if settings is None and line.strip() and not line.startswith("#"):
-                settings = ast.literal_eval(line.strip())
+    try:
+        size = os.path.getsize(path)
+        if size > MAX_PRESET_BYTES:
+            raise PredictError(f"{path}: {size:,} bytes is too large for a preset")
+        with open(path, encoding="utf-8") as fh:
+            for line in fh:
+                m = _YAW.match(line)
+                if m:
+                    yaw = float(m.group(1))
+                if settings is None and line.strip() and not line.startswith("#"):
+                    settings = ast.literal_eval(line.strip())
+    except (OSError, ValueError, SyntaxError, MemoryError, RecursionError) as exc:
+        # SyntaxError: not a literal; ValueError: not only literals, a bad yaw, not UTF-8
+        reason = exc.msg if isinstance(exc, SyntaxError) else (str(exc) or type(exc).__name__)
+        raise PredictError(f"{path}: not a Sapling preset TreeSketch can read ({reason})") from None
     if not isinstance(settings, dict):
         raise PredictError(f"{path}: no Sapling dictionary in the preset")
     return settings, yaw
@@ -273,3 +417,146 @@ def progress_fraction(line: str) -> float | None:
     if not m or int(m.group(2)) == 0:
         return None
     return min(int(m.group(1)) / int(m.group(2)), 1.0)
+
+
+def numpy_bool_alias() -> bool:
+    """Give numpy its old ``bool`` alias back when it lacks it (Blender 3.4's glTF importer
+    uses ``np.bool``, removed in numpy 1.24); True when it was added now."""
+    if "bool" in np.__dict__:
+        return False
+    np.bool = bool  # type: ignore[attr-defined]
+    return True
+
+
+def plain_error(exc: BaseException) -> str:
+    """One line for a person: an operator's "Error: Python: Traceback ..." becomes its last
+    line ("AttributeError: module 'numpy' has no attribute 'bool'" -> that sentence
+    without the exception's class name)."""
+    lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+    if not lines:
+        return type(exc).__name__
+    if any("Traceback" in ln for ln in lines):
+        last = lines[-1]
+        for prefix in ("Error: ", "Python: "):
+            last = last.removeprefix(prefix)
+        return _ERROR_LINE.sub("", last) or last
+    first = lines[0]
+    for prefix in ("Error: ", "Python: "):
+        first = first.removeprefix(prefix)
+    return first
+
+
+def species_of(lines: Iterable[str]) -> str | None:
+    """The species ``treesketch predict`` printed ("species: maple (first estimate: ...)")."""
+    for line in lines:
+        m = _SPECIES.match(line)
+        if m:
+            return m.group(1)
+    return None
+
+
+def preset_name(species: str | None, taken: Iterable[str]) -> str:
+    """A Sapling preset file name no earlier prediction has: treesketch_<species>_<n>.py
+    with the first free n."""
+    stem = f"treesketch_{species or 'tree'}"
+    used = set(taken)
+    n = 1
+    while f"{stem}_{n}.py" in used:
+        n += 1
+    return f"{stem}_{n}.py"
+
+
+def load_controls(path: str | os.PathLike[str]) -> dict:
+    """The controls table the zip carries (``{"controls": [...], "default_budget": n}``);
+    an empty table when the file is missing (an add-on run from the source folder)."""
+    p = Path(path)
+    if not p.is_file():
+        return {"controls": [], "default_budget": None}
+    return json.loads(p.read_text(encoding="utf-8"))
+
+
+def keep_value(row: dict):
+    """The panel's value of a control that leaves the predicted tree as it is: a relative
+    control's neutral value; for the others a sentinel (height 0, seed -1, a choice
+    "KEEP", a toggle on)."""
+    if row.get("neutral") is not None:
+        return row["neutral"]
+    if row["kind"] == "toggle":
+        return True
+    if row["kind"] == "choice":
+        return "KEEP"
+    return -1 if row["kind"] == "integer" else 0.0
+
+
+def changed_controls(rows: Iterable[dict], values: dict) -> dict:
+    """The controls whose panel value is not their keep value (numbers within half a
+    step of it count as kept)."""
+    out = {}
+    for row in rows:
+        v, keep = values[row["name"]], keep_value(row)
+        if row["kind"] in ("toggle", "choice") or row.get("neutral") is None:
+            if v != keep:
+                out[row["name"]] = v
+        elif abs(float(v) - float(keep)) > float(row["step"]) / 2:
+            out[row["name"]] = v
+    return out
+
+
+def _text(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    return str(v)
+
+
+def grow_command(
+    treesketch: str | os.PathLike[str],
+    params: str | os.PathLike[str],
+    outputs: Outputs,
+    controls: dict,
+) -> list[str]:
+    """``treesketch grow --params P --set NAME=VALUE ...`` writing the GLB, the parameters
+    and the Sapling preset of the edited tree."""
+    cmd = [str(treesketch), "grow", "--params", str(params), "--out", str(outputs.glb)]
+    cmd += ["--save-params", str(outputs.params), "--preset", str(outputs.preset)]
+    for name, value in controls.items():
+        cmd += ["--set", f"{name}={_text(value)}"]
+    return cmd
+
+
+def post_trees(
+    url: str,
+    params: dict,
+    controls: dict,
+    species: str | None,
+    outputs: Outputs,
+    timeout: float = 120.0,
+) -> None:
+    """The service's ``POST /trees``: the edited tree's parameters (JSON) and its GLB at
+    full detail written to ``outputs``."""
+    body = {"params": params, "controls": controls, "species": species, "max_faces": None}
+    endpoint = urllib.parse.urljoin(url.rstrip("/") + "/", "trees")
+    data = json.dumps(body).encode()
+    try:
+        for accept, path in (
+            ("application/json", outputs.params),
+            ("model/gltf-binary", outputs.glb),
+        ):
+            req = urllib.request.Request(
+                endpoint,
+                data=data,
+                headers={"Content-Type": "application/json", "Accept": accept},
+            )
+            with urllib.request.urlopen(req, timeout=timeout) as resp:
+                reply = resp.read()
+            if accept == "application/json":
+                reply = json.dumps(json.loads(reply)["params"]).encode()
+            Path(path).write_bytes(reply)
+    except urllib.error.HTTPError as exc:
+        detail = exc.read().decode(errors="replace")
+        with contextlib.suppress(ValueError, KeyError, TypeError):
+            detail = json.loads(detail)["detail"]
+        raise PredictError(f"TreeSketch service at {url} refused the edit: {detail}") from None
+    except (OSError, ValueError, KeyError) as exc:
+        raise PredictError(f"TreeSketch service at {url}: {exc}") from None

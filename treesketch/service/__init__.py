@@ -10,6 +10,11 @@
   ``sketch_before.png``, ``sketch_after.png``); 410 once expired.
 - ``GET /jobs?limit=``, ``GET /health``, ``GET /status``; ``POST /predict`` submits and
   waits (and cancels if the client leaves); ``GET /`` is the drawing page.
+- The interactive loop (``interactive``): ``GET /controls``, ``POST /trees`` (a tree
+  grown from parameters and a person's controls, as a light GLB or JSON), a running job's
+  current best tree at ``GET /jobs/{id}/preview/tree.glb`` (and ``sketch.png``; the
+  job's progress says which ``preview`` is there), ``GET /examples``; ``tree_view.glb``
+  is a finished job's light tree for the viewer (``tree.glb`` keeps full detail).
 
 Jobs live in SQLite (WAL) under the data folder with their artefacts; on restart, jobs
 that were running are marked failed and queued ones run.  Modules: ``store`` (the

@@ -22,10 +22,14 @@ from fastapi import FastAPI, HTTPException, Request
 from fastapi.responses import FileResponse, JSONResponse, Response, StreamingResponse
 from starlette.concurrency import run_in_threadpool
 
+from refine.search import DEFAULT_BUDGET
+
 from .guards import LOOPBACK_HOSTS, AccessGuard, RedactTokens
+from .interactive import add_interactive_routes
 from .limits import LimitError, Limits, check_image, parse_options, read_form
 from .owner import DataOwner
 from .pool import WorkerPool, default_workers
+from .preview import PREVIEW_FILES
 from .ray_pool import RayWorkerPool
 from .runner import ARTEFACTS
 from .store import Job, JobStore, StorageFull
@@ -46,7 +50,7 @@ class ServiceConfig:
     estimators: tuple[str, ...] = ("template",)  # what a job may ask for besides the default
     max_queue: int = 64
     limits: Limits = Limits()
-    default_budget: int = 100
+    default_budget: int = DEFAULT_BUDGET
     default_time_limit: float = 50.0
     retention_days: float | None = 30.0
     retention_bytes: int | None = 2 * 1024**3
@@ -70,6 +74,8 @@ def _links(job_id: str) -> dict[str, str]:
     base = f"/jobs/{job_id}"
     links = {"self": base, "events": f"{base}/events"}
     links.update({name: f"{base}/{name}" for name in ARTEFACTS})
+    # the current best tree while the job runs (interactive.py)
+    links.update({f"preview/{name}": f"{base}/preview/{name}" for name in PREVIEW_FILES})
     return links
 
 
@@ -264,12 +270,27 @@ def create_app(config: ServiceConfig) -> FastAPI:
         pool.wakeup()
         return job
 
+    add_interactive_routes(app, store)
+
     @app.get("/", include_in_schema=False)
     async def index() -> Response:
         page = STATIC / "index.html"
         if not page.is_file():
             raise HTTPException(404, "the page is not installed")
         return FileResponse(page, media_type="text/html")
+
+    @app.get("/species")
+    async def species_list() -> dict[str, Any]:
+        """The species a job may be asked for (the page's picker): name and what people
+        call it, the paper's five first."""
+        from weberpenn import species
+
+        return {
+            "species": [
+                {"name": s, "display": species.display_name(s), "paper": s in species.PAPER_SPECIES}
+                for s in species.SPECIES
+            ]
+        }
 
     @app.get("/health")
     async def health() -> dict[str, Any]:

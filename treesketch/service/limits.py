@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from python_multipart.multipart import MultipartParser, parse_options_header
 from starlette.concurrency import run_in_threadpool
 
+from refine.search import DEFAULT_BUDGET
 from render import reader
 from treesketch.pipeline import MAX_HEIGHT
 
@@ -206,11 +207,18 @@ def check_image(data: bytes, limits: Limits) -> tuple[int, int]:
 
     if not data:
         raise LimitError(400, "the uploaded sketch is empty")
+    try:  # the reader's own format rule, by content: an EPS never reaches Pillow
+        fmt = reader.image_format(data, "the uploaded sketch")
+    except reader.FormatError as exc:
+        raise LimitError(415, str(exc)) from None
+    except reader.SketchError as exc:
+        raise LimitError(400, str(exc)) from None
     # closed at the end: a refused image's traceback may live on (until a full garbage
     # collection) and must not keep a copy of the upload
     buffer = io.BytesIO(data)
     try:
-        with Image.open(buffer) as im:  # lazy: reads the header, decodes nothing
+        # lazy: reads the header, decodes nothing
+        with Image.open(buffer, formats=[fmt]) as im:
             w, h = im.size
     except Image.DecompressionBombError as exc:
         raise LimitError(413, f"the image is a decompression bomb: {exc}") from exc
@@ -239,12 +247,14 @@ def _number(fields: Mapping[str, str], name: str, kind: type) -> float | int | N
     text = fields.get(name, "").strip()
     if text == "" or text.lower() in ("none", "null"):
         return None
+    if kind is int and len(text.lstrip("+-")) > 18:  # past int64: no option is that large
+        raise LimitError(422, f"{name} is out of range ({len(text)} digits)")
     try:
         value = kind(text)
     except ValueError:
-        raise LimitError(422, f"{name} must be a number, got {text!r}") from None
-    if not math.isfinite(value):
-        raise LimitError(422, f"{name} must be finite, got {text!r}")
+        raise LimitError(422, f"{name} must be a number, got {text[:40]!r}") from None
+    if kind is float and not math.isfinite(value):  # (an int is finite; isfinite overflows)
+        raise LimitError(422, f"{name} must be finite, got {text[:40]!r}")
     return value
 
 
@@ -264,11 +274,11 @@ def parse_options(
     limits: Limits,
     estimators: Collection[str],
     default_estimator: str,
-    default_budget: int = 100,
+    default_budget: int = DEFAULT_BUDGET,
     default_time_limit: float = 50.0,
 ) -> JobOptions:
     """Validated job options from form fields; LimitError(422) naming the first bad one."""
-    known = {"refine", "budget", "time_limit", "height", "estimator", "max_faces"}
+    known = {"refine", "budget", "time_limit", "height", "estimator", "max_faces", "species"}
     unknown = sorted(set(fields) - known)
     if unknown:
         raise LimitError(
@@ -293,6 +303,14 @@ def parse_options(
             422, f"estimator must be one of {', '.join(sorted(estimators))}, got {estimator!r}"
         )
     max_faces = _number(fields, "max_faces", int)
+    species_name = fields.get("species", "").strip()[:64] or None
+    if species_name is not None:
+        from weberpenn import ParamError, species
+
+        try:
+            species_name = species.canonical(species_name)
+        except ParamError as exc:
+            raise LimitError(422, str(exc)) from exc
     options = JobOptions(
         refine=_flag(fields, "refine", True),
         budget=budget,
@@ -300,6 +318,7 @@ def parse_options(
         height=None if height is None else float(height),
         estimator=estimator,
         max_faces=None if max_faces is None else int(max_faces),
+        species=species_name,
     )
     try:
         options.settings()  # the pipeline's own check, before the job is queued

@@ -52,9 +52,9 @@ class LiveProgress:
             due = now - self._saved[job_id] > self.save_every
             if due:
                 self._saved[job_id] = now
-            budget = row["budget"]
+            snapshot = dict(row)
         if due:
-            self.store.set_progress(job_id, {**info, "budget": budget})
+            self.store.set_progress(job_id, snapshot)
 
     def get(self, job_id: str) -> dict[str, Any] | None:
         with self._lock:

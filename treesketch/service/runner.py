@@ -20,7 +20,9 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-__all__ = ["ARTEFACTS", "JobOptions", "Runner", "load_estimator_spec"]
+from refine.search import DEFAULT_BUDGET
+
+__all__ = ["ARTEFACTS", "VIEW_GLB", "JobOptions", "Runner", "load_estimator_spec"]
 
 # file name -> (output kind of treesketch.result_files, media type), in the page's order
 ARTEFACT_KINDS: dict[str, tuple[str, str]] = {
@@ -30,8 +32,16 @@ ARTEFACT_KINDS: dict[str, tuple[str, str]] = {
     "compare.png": ("compare", "image/png"),
     "sketch_before.png": ("sketch_before", "image/png"),
     "sketch_after.png": ("sketch_after", "image/png"),
+    # the result's candidate species as sketches to pick from, best first (the summary's
+    # "candidates" holds their species, probabilities and parameters)
+    **{f"candidate{i}.png": (f"candidate{i}", "image/png") for i in (1, 2, 3)},
 }
-ARTEFACTS: dict[str, str] = {name: media for name, (_, media) in ARTEFACT_KINDS.items()}
+# the viewer's tree: at most ``treesketch.trees.VIEW_FACES`` triangles (tree.glb is the
+# download, at the job's own max_faces)
+VIEW_GLB = "tree_view.glb"
+ARTEFACTS: dict[str, str] = {name: media for name, (_, media) in ARTEFACT_KINDS.items()} | {
+    VIEW_GLB: "model/gltf-binary"
+}
 
 
 @dataclass(frozen=True)
@@ -39,11 +49,12 @@ class JobOptions:
     """A job's options, validated (see ``limits.parse_options``)."""
 
     refine: bool = True
-    budget: int = 100
+    budget: int = DEFAULT_BUDGET
     time_limit: float | None = 50.0
     height: float | None = None
     estimator: str = "tsn"  # a spec the server allows
     max_faces: int | None = None  # the exported tree's triangle budget (weberpenn.lod)
+    species: str | None = None  # the species the user means (None: the drawing decides)
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -108,9 +119,32 @@ class Runner:
         within one evaluation of ``cancel()`` turning True, ``ValueError``
         (``SketchError``) for a sketch or option the pipeline rejects."""
         from treesketch import Pipeline, result_files
+        from treesketch.trees import VIEW_FACES, light_glb
 
         pipeline = Pipeline(self.estimator(options.estimator), options.settings())
-        result = pipeline.run(sketch, height=options.height, progress=progress, cancel=cancel)
-        kinds = {kind: name for name, (kind, _) in ARTEFACT_KINDS.items()}
-        files = result_files(result, kinds, options.export())
-        return {kinds[k]: data for k, data in files.items() if k in kinds}, result.summary()
+        result = pipeline.run(
+            sketch,
+            height=options.height,
+            progress=progress,
+            cancel=cancel,
+            species=options.species,
+        )
+        from treesketch.outputs import png_bytes
+
+        kinds = {
+            kind: name
+            for name, (kind, _) in ARTEFACT_KINDS.items()
+            if not kind.startswith("candidate")
+        }
+        export = options.export()
+        files = result_files(result, kinds, export)
+        out = {kinds[k]: data for k, data in files.items() if k in kinds}
+        out[VIEW_GLB] = light_glb(
+            result.tree_mesh,
+            yaw=float(result.yaw) if export.face_view else 0.0,
+            max_faces=min(VIEW_FACES, options.max_faces or VIEW_FACES),
+        )
+        for i, c in enumerate(result.candidates[:3], 1):
+            if c.sketch is not None:
+                out[f"candidate{i}.png"] = png_bytes(c.sketch)
+        return out, result.summary()

@@ -13,6 +13,7 @@ artefacts itself (``results/<id>/``, all or nothing) so that no big bytes cross 
 
 from __future__ import annotations
 
+import contextlib
 import gc
 import json
 import math
@@ -23,6 +24,8 @@ from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import Any
 
+from .preview import PreviewWriter
+
 __all__ = ["progress_info", "worker_main"]
 
 WORKER_NICE = 5
@@ -30,24 +33,39 @@ PROGRESS_EVERY = 0.1  # seconds between progress messages (the pipe is cheap, th
 
 
 class _Reporter:
-    """The progress callback of one job: at most one message per PROGRESS_EVERY."""
+    """The progress callback of one job: at most one message per PROGRESS_EVERY, and the
+    current best tree written for the page (``preview.PreviewWriter``)."""
 
-    def __init__(self, conn: Connection, job_id: str, t0: float) -> None:
-        self.conn, self.job_id, self.t0 = conn, job_id, t0
+    def __init__(
+        self, conn: Connection, job_id: str, t0: float, preview: PreviewWriter | None = None
+    ) -> None:
+        self.conn, self.job_id, self.t0, self.preview = conn, job_id, t0, preview
         self.last, self.stage = 0.0, ""
 
     def __call__(self, p: Any) -> None:
-        """``p``: a ``treesketch.Progress``; a new stage is always told."""
+        """``p``: a ``treesketch.Progress``; a new stage and a new preview are always
+        told."""
+        shown = None if self.preview is None else self.preview.offer(p)
         now = time.perf_counter()
-        if p.stage != self.stage or now - self.last >= PROGRESS_EVERY:
+        if shown is not None or p.stage != self.stage or now - self.last >= PROGRESS_EVERY:
             self.last, self.stage = now, p.stage
-            self.conn.send(("progress", self.job_id, progress_info(p, now - self.t0)))
+            info = progress_info(p, now - self.t0)
+            if shown is not None:
+                info["preview"] = shown
+            self.conn.send(("progress", self.job_id, info))
 
 
 def progress_info(p: Any, elapsed: float) -> dict[str, Any]:
-    """A ``treesketch.Progress`` as the plain dict the pool keeps and the API shows."""
+    """A ``treesketch.Progress`` as the plain dict the pool keeps and the API shows
+    (``budget``: the run's whole plan, which ``evaluations`` never passes)."""
     best = p.best_loss if math.isfinite(p.best_loss) else None
-    return {"stage": p.stage, "evaluations": p.evaluations, "best_loss": best, "elapsed": elapsed}
+    return {
+        "stage": p.stage,
+        "evaluations": p.evaluations,
+        "budget": p.budget,
+        "best_loss": best,
+        "elapsed": elapsed,
+    }
 
 
 def worker_main(spec: str, conn: Connection, cancel: Any, root: str) -> None:
@@ -79,9 +97,10 @@ def worker_main(spec: str, conn: Connection, cancel: Any, root: str) -> None:
             return
         job_id, options = msg
         t0 = time.perf_counter()
-        progress = _Reporter(conn, job_id, t0)
         out = results / job_id
+        progress = _Reporter(conn, job_id, t0, PreviewWriter(out / "preview"))
         reply: tuple[str, str, Any]
+        full = False
         try:
             opts = JobOptions.from_dict(options)
             sketch = (uploads / f"{job_id}.img").read_bytes()
@@ -95,14 +114,18 @@ def worker_main(spec: str, conn: Connection, cancel: Any, root: str) -> None:
         except ValueError as exc:  # SketchError and option errors: the input's fault
             reply = ("failed", job_id, {"message": str(exc), "input": True})
         except Exception as exc:  # noqa: BLE001 - one bad job must not end the worker
-            if is_full(exc):
+            full = is_full(exc)
+            if full:
                 message = f"storage full: the results could not be saved ({exc})"
             else:
                 traceback.print_exc()
                 message = f"{type(exc).__name__}: {exc}"
             reply = ("failed", job_id, {"message": message, "input": False})
-        if reply[0] != "done":
-            # a job that did not finish leaves no folder (write_together made it, empty)
+        if full:  # the disk is full: its previews go too
             shutil.rmtree(out, ignore_errors=True)
+        elif reply[0] != "done":  # no empty folder left (its previews stay on show)
+            for folder in (out / "preview", out):
+                with contextlib.suppress(OSError):
+                    folder.rmdir()
         conn.send(reply)
         gc.collect()

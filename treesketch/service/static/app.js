@@ -7,13 +7,15 @@ import { OrbitControls } from "three/addons/controls/OrbitControls.js";
 const $ = (id) => document.getElementById(id);
 const pad = $("pad");
 const ctx = pad.getContext("2d");
-// Training sketches have lines about 3-5 px wide at 256 px; the pad is 512 px.
-const PEN_WIDTH = 8;
-const ERASER_WIDTH = 28;
+// Training sketches have lines about 3-5 px wide at 256 px; the pad is 512 px: the
+// brush starts at 8 px (its slider: 2 to 40); the eraser is 3.5 times as wide.
+let penWidth = 8;
+const eraserWidth = () => Math.max(12, Math.round(penWidth * 3.5));
 // A token given as /#token=TOKEN (the fragment never reaches the server) is traded once
 // for an HttpOnly, same-site session cookie (POST /session) and taken out of the address
 // bar: it never goes into a URL (logs, history, shared links); the cookie goes with every
 // request of the page (fetch, the event stream, images, downloads, the 3D view).
+// Every API call waits for it (api()).
 const session = (async () => {
   const token = new URLSearchParams(location.hash.slice(1)).get("token");
   if (!token) return;
@@ -21,11 +23,15 @@ const session = (async () => {
   const r = await fetch("/session", { method: "POST", headers: { Authorization: `Bearer ${token}` } });
   if (!r.ok) say(`The token was refused (${r.status}).`);
 })();
+const api = async (url, options) => { await session; return fetch(url, options); };
 
 // ---- drawing -------------------------------------------------------------------------
-let strokes = []; // {erase, width, points: [[x, y], ...]} or {image}
+let strokes = []; // {erase, width, points: [[x, y], ...]}, {image} or {clear}
+let undone = []; // what Undo took, for Redo
 let current = null;
 let erasing = false;
+// the page is empty when nothing was drawn since the last Clear
+const drawn = () => strokes.length > 0 && !strokes[strokes.length - 1].clear;
 
 function clearPad() {
   ctx.fillStyle = "#fff";
@@ -33,6 +39,7 @@ function clearPad() {
 }
 
 function drawStroke(s) {
+  if (s.clear) { clearPad(); return; }
   if (s.image) {
     const { image: im } = s;
     const k = Math.min(pad.width / im.width, pad.height / im.height);
@@ -73,8 +80,8 @@ pad.addEventListener("pointerdown", (ev) => {
   pad.setPointerCapture(ev.pointerId);
   // a pen's eraser end (button 5) erases too
   const erase = erasing || ev.button === 5;
-  current = { erase, width: erase ? ERASER_WIDTH : PEN_WIDTH, points: [padPoint(ev)] };
-  strokes.push(current);
+  current = { erase, width: erase ? eraserWidth() : penWidth, points: [padPoint(ev)] };
+  addStroke(current);
   drawStroke(current);
   ev.preventDefault();
 });
@@ -98,14 +105,29 @@ function setTool(erase) {
 }
 $("pen").onclick = () => setTool(false);
 $("eraser").onclick = () => setTool(true);
-$("undo").onclick = () => { strokes.pop(); redraw(); };
-$("clear").onclick = () => { strokes = []; redraw(); };
+function addStroke(s) { strokes.push(s); undone = []; }
+function undo() { if (strokes.length) { undone.push(strokes.pop()); redraw(); } }
+function redo() { if (undone.length) { strokes.push(undone.pop()); redraw(); } }
+$("undo").onclick = undo;
+$("redo").onclick = redo;
+// Clear is a step of its own, so Undo brings the drawing back
+$("clear").onclick = () => { if (drawn()) { addStroke({ clear: true }); redraw(); } };
+document.addEventListener("keydown", (ev) => {
+  if (!(ev.ctrlKey || ev.metaKey) || ev.altKey) return;
+  const t = ev.target;
+  if (t && (t.tagName === "INPUT" || t.tagName === "TEXTAREA" || t.tagName === "SELECT" || t.isContentEditable)) return;
+  const key = ev.key.toLowerCase();
+  if (key === "z" && !ev.shiftKey) { undo(); ev.preventDefault(); }
+  else if ((key === "z" && ev.shiftKey) || key === "y") { redo(); ev.preventDefault(); }
+});
+$("brush").oninput = () => { penWidth = Number($("brush").value); $("brush-size").textContent = String(penWidth); };
+$("upload").onclick = () => $("file").click();
 
 function loadImageFile(file) {
   if (!file || !file.type.startsWith("image/")) { say("That is not an image."); return; }
   const url = URL.createObjectURL(file);
   const im = new Image();
-  im.onload = () => { strokes = [{ image: im }]; redraw(); say("Picture loaded: draw over it or press \"Make the tree\"."); };
+  im.onload = () => { addStroke({ clear: true }); addStroke({ image: im }); redraw(); say("Picture loaded: draw over it or press \"Make the tree\"."); };
   im.onerror = () => say("The browser cannot read that image.");
   im.src = url;
 }
@@ -122,6 +144,10 @@ clearPad();
 // ---- the job -------------------------------------------------------------------------
 let jobId = null;
 let events = null;
+let shownPreview = 0; // the version of the job's current best tree on show
+let defaultBudget = null; // the server's one default budget (GET /controls)
+const MINE = "treesketch.jobs"; // this browser's job ids, newest first
+const phone = () => window.matchMedia("(max-width: 700px)").matches;
 
 function say(text) { $("status").textContent = text; }
 function setState(state) {
@@ -133,11 +159,11 @@ function setState(state) {
 
 async function submit(ev) {
   ev.preventDefault();
-  if (!strokes.length) { say("The page is empty: draw a tree first."); return; }
+  if (!drawn()) { say("The page is empty: draw a tree first."); return; }
   const blob = await new Promise((ok) => pad.toBlob(ok, "image/png"));
   const form = new FormData();
   form.append("sketch", blob, "sketch.png");
-  form.append("budget", $("budget").value || "20");
+  if ($("budget").value) form.append("budget", $("budget").value);
   form.append("refine", $("refine").checked ? "true" : "false");
   if ($("height").value) form.append("height", $("height").value);
   if ($("max_faces").value) form.append("max_faces", $("max_faces").value);
@@ -147,8 +173,7 @@ async function submit(ev) {
   $("progress").removeAttribute("value");
   let r;
   try {
-    await session;
-    r = await fetch("/jobs", { method: "POST", body: form });
+    r = await api("/jobs", { method: "POST", body: form });
   } catch (err) {
     setState("failed");
     say(`The server cannot be reached: ${err}`);
@@ -161,13 +186,25 @@ async function submit(ev) {
     say(`Refused (${r.status}): ${body.detail || r.statusText}`);
     return;
   }
-  jobId = body.id;
-  document.body.dataset.job = jobId;
-  setState(body.state);
-  show(body);
-  follow(jobId);
+  startJob(body);
+  remember(body.id);
 }
 $("options").addEventListener("submit", submit);
+
+// a job on show: its id in the address (reload and share bring it back)
+function startJob(body) {
+  jobId = body.id;
+  shownPreview = 0;
+  framedJob = null;
+  endEdit();
+  document.body.dataset.job = jobId;
+  const url = new URL(location.href);
+  url.searchParams.set("job", jobId);
+  history.replaceState(null, "", url);
+  setState(body.state);
+  show(body);
+  if (!["done", "failed", "cancelled", "expired"].includes(body.state)) follow(jobId);
+}
 
 function follow(id) {
   if (events) events.close();
@@ -176,7 +213,7 @@ function follow(id) {
     const body = JSON.parse(e.data);
     if (body.id !== jobId) return;
     show(body);
-    if (["done", "failed", "cancelled", "expired"].includes(body.state)) events.close();
+    if (["done", "failed", "cancelled", "expired"].includes(body.state)) { events.close(); refreshRecent(); }
   };
   for (const kind of ["progress", "done", "failed", "cancelled", "expired"]) events.addEventListener(kind, onEvent);
   events.onerror = () => { if (document.body.dataset.state === "running") say("Connection lost; retrying..."); };
@@ -191,11 +228,13 @@ function show(job) {
     say(job.position ? `Waiting: ${job.position} job(s) ahead.` : "Waiting for a worker...");
   } else if (job.state === "running") {
     const secs = `${(p.elapsed || 0).toFixed(0)} s`;
+    const tree = p.preview ? " (the best tree so far is shown)" : "";
     if (p.stage === "refine" && p.evaluations > 0 && p.budget) {
+      const n = Math.min(p.evaluations, p.budget); // never past the plan
       bar.max = p.budget;
-      bar.value = Math.min(p.evaluations, p.budget);
+      bar.value = n;
       const best = p.best_loss == null ? "" : `, best distance ${p.best_loss.toFixed(3)}`;
-      say(`Refining: ${p.evaluations} of ${p.budget} trees${best}, ${secs}`);
+      say(`Refining: ${n} of ${p.budget} trees${best}, ${secs}${tree}`);
     } else if (p.stage === "render") {
       bar.max = 1; bar.value = 1;
       say(`Making the 3D tree and its pictures... ${secs}`);
@@ -203,6 +242,7 @@ function show(job) {
       bar.removeAttribute("value");
       say(`First estimate... ${secs}`);
     }
+    if (p.preview && p.preview > shownPreview) showPreview(job, p.preview);
   } else if (job.state === "done") {
     bar.max = 1; bar.value = 1;
     say(`Done in ${(job.result.timings.job || job.result.timings.total).toFixed(1)} s.`);
@@ -216,10 +256,21 @@ function show(job) {
   }
 }
 
+// the job's current best tree while the refinement runs (the first estimate at once)
+function showPreview(job, version) {
+  shownPreview = version;
+  document.body.dataset.preview = String(version);
+  $("before").src = `${job.links["preview/sketch.png"]}?v=${version}`;
+  loadModel(`${job.links["preview/tree.glb"]}?v=${version}`, framedJob !== job.id);
+  framedJob = job.id;
+  $("view-note").textContent = "best so far; refining...";
+  if (version === 1 && phone()) $("result-panel").scrollIntoView({ behavior: "smooth" });
+}
+
 $("cancel").onclick = async () => {
   if (!jobId) return;
   say("Cancelling...");
-  await fetch(`/jobs/${jobId}`, { method: "DELETE" });
+  await api(`/jobs/${jobId}`, { method: "DELETE" });
 };
 
 function showResult(job) {
@@ -236,12 +287,257 @@ function showResult(job) {
     $(id).href = links[name];
     $(id).classList.remove("disabled");
   }
-  loadModel(links["tree.glb"]);
+  $("view-note").textContent = "";
+  // the viewer's light tree; the GLB download keeps full detail
+  loadModel(links["tree_view.glb"], framedJob !== job.id);
+  framedJob = job.id;
+  if (phone()) $("result-panel").scrollIntoView({ behavior: "smooth" });
+  startEdit(r);
 }
+
+// ---- examples, recent jobs, a job from the address -----------------------------------
+async function loadGallery() {
+  const r = await api("/examples").catch(() => null);
+  if (!r || !r.ok) { $("examples").hidden = true; return; }
+  const { examples } = await r.json();
+  const box = $("gallery");
+  for (const ex of examples) {
+    const b = document.createElement("button");
+    b.type = "button";
+    b.className = "example";
+    b.setAttribute("role", "listitem");
+    b.title = `Start from the example drawing "${ex.name}"`;
+    const im = document.createElement("img");
+    im.src = ex.url;
+    im.alt = ex.name;
+    b.append(im, document.createTextNode(ex.name));
+    b.onclick = () => {
+      const pic = new Image();
+      pic.onload = () => { addStroke({ clear: true }); addStroke({ image: pic }); redraw(); say(`Example "${ex.name}" loaded: press "Make the tree".`); };
+      pic.src = ex.url;
+    };
+    box.append(b);
+  }
+}
+
+function mine() {
+  try { return JSON.parse(localStorage.getItem(MINE) || "[]"); } catch { return []; }
+}
+function remember(id) {
+  const ids = [id, ...mine().filter((x) => x !== id)].slice(0, 20);
+  localStorage.setItem(MINE, JSON.stringify(ids));
+  refreshRecent();
+}
+
+async function refreshRecent() {
+  const ids = mine();
+  const list = $("recent");
+  if (!ids.length) return;
+  const r = await api("/jobs?limit=200").catch(() => null);
+  if (!r || !r.ok) return;
+  const byId = new Map((await r.json()).jobs.map((j) => [j.id, j]));
+  list.replaceChildren();
+  for (const id of ids) {
+    const j = byId.get(id);
+    if (!j) continue;
+    const li = document.createElement("li");
+    const a = document.createElement("a");
+    a.href = `?job=${id}`;
+    const what = j.state === "done" ? j.result.species : j.state;
+    a.textContent = `${new Date(j.created * 1000).toLocaleString()}: ${what}`;
+    if (id === jobId) a.setAttribute("aria-current", "true");
+    li.append(a);
+    list.append(li);
+  }
+}
+
+async function restoreFromUrl() {
+  const id = new URLSearchParams(location.search).get("job");
+  if (!id) return;
+  const r = await api(`/jobs/${encodeURIComponent(id)}`).catch(() => null);
+  if (!r || !r.ok) { say(`Job ${id} is not on this server.`); return; }
+  startJob(await r.json());
+}
+
+// ---- shaping the tree: the controls (GET /controls, POST /trees) ---------------------
+let table = null; // GET /controls
+let edit = null; // {params, species, initial: {name: value}, busy, again, edited}
+let editTimer = null;
+
+async function loadControls() {
+  const r = await api("/controls").catch(() => null);
+  if (!r || !r.ok) return;
+  table = await r.json();
+  defaultBudget = table.default_budget;
+  if (!$("budget").value) $("budget").value = String(defaultBudget);
+  const box = $("controls");
+  for (const c of table.controls) {
+    const row = document.createElement("div");
+    row.className = "control";
+    row.title = c.help;
+    const id = `c-${c.name}`;
+    const label = document.createElement("label");
+    label.htmlFor = id;
+    label.textContent = c.label;
+    let input;
+    if (c.kind === "choice") {
+      input = document.createElement("select");
+      for (const ch of c.choices) input.append(new Option(ch.label, ch.value));
+    } else if (c.kind === "toggle") {
+      input = document.createElement("input");
+      input.type = "checkbox";
+    } else if (c.name === "seed") {
+      input = document.createElement("input");
+      input.type = "number";
+      Object.assign(input, { min: c.min, max: c.max, step: 1 });
+    } else {
+      input = document.createElement("input");
+      input.type = "range";
+      Object.assign(input, { min: c.min, max: c.max, step: c.step });
+    }
+    input.id = id;
+    input.dataset.control = c.name;
+    input.setAttribute("aria-describedby", `${id}-help`);
+    const out = document.createElement("output");
+    out.id = `${id}-out`;
+    out.htmlFor = id;
+    const help = document.createElement("span");
+    help.id = `${id}-help`;
+    help.className = "sr-only";
+    help.textContent = `${c.help} Moves: ${c.moves.join("; ")}.`;
+    input.addEventListener(c.kind === "toggle" || c.kind === "choice" ? "change" : "input", () => { showValue(c, input, out); scheduleEdit(); });
+    row.append(label, input, out, help);
+    box.append(row);
+  }
+}
+
+function controlValue(c) {
+  const input = $(`c-${c.name}`);
+  if (c.kind === "toggle") return input.checked;
+  if (c.kind === "choice") return input.value;
+  return Number(input.value);
+}
+function setControl(c, v) {
+  const input = $(`c-${c.name}`);
+  if (c.kind === "toggle") input.checked = Boolean(v);
+  else if (c.name === "height") {
+    // the range reaches past the tree's own height both ways
+    input.max = String(Math.max(c.max, 3 * v).toFixed(1));
+    input.value = String(v);
+  } else input.value = String(v);
+  showValue(c, input, $(`c-${c.name}-out`));
+}
+function showValue(c, input, out) {
+  if (c.kind === "toggle") out.textContent = input.checked ? "on" : "off";
+  else if (c.kind === "choice") out.textContent = "";
+  else if (c.name === "seed") out.textContent = "";
+  else out.textContent = `${Number(input.value).toFixed(c.step < 1 ? 2 : 0)}${c.unit === "x" ? "×" : ` ${c.unit}`}`;
+}
+
+async function treeRequest(controls, accept, maxFaces) {
+  const body = { params: edit.params, species: edit.species, controls, max_faces: maxFaces };
+  return api("/trees", {
+    method: "POST",
+    body: JSON.stringify(body),
+    headers: { "Content-Type": "application/json", Accept: accept },
+  });
+}
+
+async function startEdit(result) {
+  if (!table) return;
+  edit = { params: result.params, species: result.species, initial: null, busy: false, again: false, edited: false, count: 0 };
+  const r = await treeRequest({}, "application/json", table.view_faces);
+  if (!r.ok || !edit) return;
+  const body = await r.json();
+  edit.initial = body.controls;
+  for (const c of table.controls) setControl(c, edit.initial[c.name]);
+  $("edit-panel").hidden = false;
+  document.body.dataset.edit = "ready";
+}
+
+function endEdit() {
+  edit = null;
+  $("edit-panel").hidden = true;
+  delete document.body.dataset.edit;
+}
+
+// the controls that differ from the tree the drawing gave
+function changedControls() {
+  const out = {};
+  for (const c of table.controls) {
+    const v = controlValue(c);
+    const was = edit.initial[c.name];
+    // a slider snaps to its step: within half a step it still shows the tree's own value
+    if (c.kind === "toggle" || c.kind === "choice" || c.name === "seed" ? v !== was : Math.abs(v - was) > c.step / 2) out[c.name] = v;
+  }
+  return out;
+}
+
+// at most one request in flight; the latest slider position wins
+function scheduleEdit() {
+  if (!edit || !edit.initial) return;
+  clearTimeout(editTimer);
+  editTimer = setTimeout(runEdit, 60);
+}
+async function runEdit() {
+  if (edit.busy) { edit.again = true; return; }
+  edit.busy = true;
+  const t0 = performance.now();
+  const controls = changedControls();
+  try {
+    const r = await treeRequest(controls, "model/gltf-binary", table.view_faces);
+    if (!r.ok) {
+      const body = await r.json().catch(() => ({}));
+      $("edit-status").textContent = `Refused: ${body.detail || r.statusText}`;
+    } else {
+      const buffer = await r.arrayBuffer();
+      loadModel(buffer, false);
+      edit.edited = Object.keys(controls).length > 0;
+      edit.count += 1;
+      document.body.dataset.edits = String(edit.count);
+      $("edit-status").textContent = `${Math.round(performance.now() - t0)} ms`;
+      $("view-note").textContent = edit.edited ? "edited" : "";
+    }
+  } finally {
+    edit.busy = false;
+    if (edit.again) { edit.again = false; runEdit(); }
+  }
+}
+
+$("variant").onclick = () => {
+  if (!edit || !table) return;
+  const seed = table.controls.find((c) => c.name === "seed");
+  setControl(seed, Math.floor(Math.random() * seed.max));
+  scheduleEdit();
+};
+$("reset-controls").onclick = () => {
+  if (!edit || !edit.initial) return;
+  for (const c of table.controls) setControl(c, edit.initial[c.name]);
+  scheduleEdit();
+};
+
+// the downloads of an edited tree: asked for when clicked (full detail for the GLB)
+async function downloadEdited(ev, accept, name) {
+  if (!edit || !edit.edited) return; // the job's own file
+  ev.preventDefault();
+  const r = await treeRequest(changedControls(), accept, null);
+  if (!r.ok) { $("edit-status").textContent = `Download failed (${r.status})`; return; }
+  const blob = accept === "application/json"
+    ? new Blob([JSON.stringify((await r.json()).params, null, 1)], { type: "application/json" })
+    : await r.blob();
+  const a = document.createElement("a");
+  a.href = URL.createObjectURL(blob);
+  a.download = name;
+  a.click();
+  setTimeout(() => URL.revokeObjectURL(a.href), 10_000);
+}
+$("dl-glb").addEventListener("click", (ev) => downloadEdited(ev, "model/gltf-binary", "tree_edited.glb"));
+$("dl-json").addEventListener("click", (ev) => downloadEdited(ev, "application/json", "tree_edited.json"));
 
 // ---- the 3D view ---------------------------------------------------------------------
 const view = $("view");
-let renderer = null, scene = null, camera = null, controls = null, model = null;
+let renderer = null, scene = null, camera = null, controls = null, model = null, ground = null;
+let framedJob = null; // the job whose tree the camera was framed on
 
 function render() { if (renderer) renderer.render(scene, camera); }
 
@@ -257,6 +553,14 @@ function setupView() {
   const sun = new THREE.DirectionalLight(0xffffff, 1.8);
   sun.position.set(3, 10, 6);
   scene.add(sun);
+  // the ground: a disc at the tree's base (y = 0 in the GLB), sized to the tree
+  ground = new THREE.Mesh(
+    new THREE.CircleGeometry(1, 48),
+    new THREE.MeshLambertMaterial({ color: 0x9fb58f, side: THREE.DoubleSide }),
+  );
+  ground.rotation.x = -Math.PI / 2;
+  ground.visible = $("ground").checked;
+  scene.add(ground);
   camera = new THREE.PerspectiveCamera(40, 1, 0.01, 1000);
   controls = new OrbitControls(camera, renderer.domElement);
   controls.addEventListener("change", render);
@@ -273,10 +577,28 @@ function resize() {
   render();
 }
 
-function loadModel(url) {
+// look at the whole tree from the front, a little above
+function frameModel() {
+  if (!model) return;
+  const box = new THREE.Box3().setFromObject(model);
+  const size = box.getSize(new THREE.Vector3());
+  const centre = box.getCenter(new THREE.Vector3());
+  const dist = (Math.max(size.y, size.x, size.z) / 2 / Math.tan((camera.fov * Math.PI) / 360)) * 1.25;
+  camera.position.set(centre.x, centre.y + size.y * 0.1, centre.z + dist);
+  camera.near = dist / 100; camera.far = dist * 10;
+  camera.updateProjectionMatrix();
+  controls.target.copy(centre);
+  controls.update();
+  render();
+}
+$("reset-view").onclick = frameModel;
+$("ground").onchange = () => { if (ground) { ground.visible = $("ground").checked; render(); } };
+
+// ``source``: a URL or the bytes of a GLB (an edit's answer); ``frame``: move the camera
+function loadModel(source, frame = true) {
   if (!renderer) setupView();
   document.body.dataset.model = "loading";
-  new GLTFLoader().load(url, (gltf) => {
+  const onLoad = (gltf) => {
     if (model) scene.remove(model);
     model = gltf.scene;
     scene.add(model);
@@ -295,21 +617,24 @@ function loadModel(url) {
         m.needsUpdate = true;
       }
     });
-    // frame the tree: look at its middle from the front, a little above
     const box = new THREE.Box3().setFromObject(model);
     const size = box.getSize(new THREE.Vector3());
-    const centre = box.getCenter(new THREE.Vector3());
-    const dist = (Math.max(size.y, size.x, size.z) / 2 / Math.tan((camera.fov * Math.PI) / 360)) * 1.25;
-    camera.position.set(centre.x, centre.y + size.y * 0.1, centre.z + dist);
-    camera.near = dist / 100; camera.far = dist * 10;
-    camera.updateProjectionMatrix();
-    controls.target.copy(centre);
-    controls.update();
-    render();
+    ground.scale.setScalar(Math.max(size.x, size.z, size.y * 0.5) * 0.75);
+    ground.position.set((box.min.x + box.max.x) / 2, box.min.y - size.y * 0.002, (box.min.z + box.max.z) / 2);
+    $("height-readout").textContent = `${size.y.toFixed(size.y < 10 ? 2 : 1)} m`;
+    if (frame) frameModel(); else render();
     document.body.dataset.meshes = String(meshes);
     document.body.dataset.model = "loaded";
-  }, undefined, (err) => {
+  };
+  const onError = (err) => {
     document.body.dataset.model = "failed";
     say(`The 3D view cannot load the tree: ${err.message || err}`);
-  });
+  };
+  if (typeof source === "string") new GLTFLoader().load(source, onLoad, undefined, onError);
+  else new GLTFLoader().parse(source, "", onLoad, onError);
 }
+
+// ---- start ---------------------------------------------------------------------------
+loadControls().then(restoreFromUrl);
+loadGallery();
+refreshRecent();

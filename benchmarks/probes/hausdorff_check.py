@@ -1,6 +1,6 @@
 """eval.hausdorff (libigl AABB, exact) against MeshLab's Metro filter, and a far-apart pair.
 
-    .venv/bin/python benchmarks/hausdorff_check.py [--samples 20000] [--no-metro]
+    .venv/bin/python benchmarks/probes/hausdorff_check.py [--samples 20000] [--no-metro]
 
 Near pairs: each species' ``species.sample(name, 1)`` grown with seeds 0 and 1 (the
 seed floor), measured by ``eval.hausdorff.tree_hausdorff`` and by the Metro filter as
@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 

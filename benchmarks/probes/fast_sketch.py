@@ -1,6 +1,6 @@
 """The refinement's fast sketch against the full one: pixels and shape distance.
 
-    .venv/bin/python benchmarks/fast_sketch.py [--seeds 3] [--size 128] [--yaws 0 37]
+    .venv/bin/python benchmarks/probes/fast_sketch.py [--seeds 3] [--size 128] [--yaws 0 37]
 
 For ``species.sample(name, seed)``, ``seed < --seeds``, and each yaw, three sketches of
 ``--size`` px: the full path (``build_mesh`` + mitsuba, what datasets and outputs use),
@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 

@@ -13,9 +13,9 @@ ends of the profile are not counted.  The truth (offset 0) is one by constructio
 distance there is 0); "spurious" counts the others: each is a place where a local search
 moving this value can stop short of the truth.
 
-    nice -n 10 .venv/bin/python benchmarks/probe_minima.py --species maple \
+    nice -n 10 .venv/bin/python benchmarks/probes/probe_minima.py --species maple \
         --json /tmp/probe_minima.json
-    .venv/bin/python benchmarks/probe_minima.py --markdown /tmp/probe_minima.json
+    .venv/bin/python benchmarks/probes/probe_minima.py --markdown /tmp/probe_minima.json
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
 from refine.objective import SearchSpace, SketchObjective, framed, make_target  # noqa: E402

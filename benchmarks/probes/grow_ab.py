@@ -1,6 +1,6 @@
 """CPU time of grow and grow + mesh for the code in two source trees, A/B on one machine.
 
-    .venv/bin/python benchmarks/grow_ab.py BEFORE_DIR AFTER_DIR [--trees 8] [--repeats 7]
+    .venv/bin/python benchmarks/probes/grow_ab.py BEFORE_DIR AFTER_DIR [--trees 8] [--repeats 7]
         [--rounds 2]
 
 Each directory is a checkout of this repository (e.g. ``git archive <commit> | tar -x``).

@@ -1,9 +1,9 @@
 """How far the trees we grow stay below weberpenn.limits.
 
-    .venv/bin/python benchmarks/limits_margin.py [--trees 20] [--ref DIR]
+    .venv/bin/python benchmarks/probes/limits_margin.py [--trees 20] [--ref DIR]
 
 Grows ``species.sample(name, i)`` for ``i < --trees`` and the 15 reference dictionaries
-(``DIR``, default ``../shared/reference/treesketchnet_test_params``) and prints the
+(``DIR``, default ``tests/data/treesketchnet_test_params``) and prints the
 largest stems, control points, leaves, mesh vertices and triangles per species next to
 the limits.
 """
@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
@@ -44,7 +44,7 @@ def main() -> None:
     ap.add_argument(
         "--ref",
         type=Path,
-        default=ROOT.parent / "shared" / "reference" / "treesketchnet_test_params",
+        default=ROOT / "tests" / "data" / "treesketchnet_test_params",
     )
     args = ap.parse_args()
     rows: dict[str, dict[str, int]] = {}

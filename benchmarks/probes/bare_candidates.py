@@ -11,7 +11,7 @@ of the views ``--yaws``, and prints the refinement's distance (``refine.shape`` 
 shipped embedding) and the hand-made shape distance alone for each.  Leafy drawings are
 listed as the reference in the same run: there the leafy candidates must stay ahead.
 
-    PYTHONPATH=$PWD .venv/bin/python benchmarks/bare_candidates.py [--drawings winter,ballpoint,cherry,weeping]
+    PYTHONPATH=$PWD .venv/bin/python benchmarks/probes/bare_candidates.py [--drawings winter,ballpoint,cherry,weeping]
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
 from refine.objective import framed, make_target  # noqa: E402

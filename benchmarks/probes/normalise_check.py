@@ -12,7 +12,7 @@ on the larger page.  Reported: % of the reference's ink pixels (the padded page'
 < 128) not within a pixel of the direct result's ink, and the two ink counts.  A large share means strokes
 of the tree were taken for paper ruling (e.g. a long straight trunk).
 
-    PYTHONPATH=$PWD .venv/bin/python benchmarks/normalise_check.py
+    PYTHONPATH=$PWD .venv/bin/python benchmarks/probes/normalise_check.py
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 from scipy import ndimage
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
 from render.reader import normalise_drawing  # noqa: E402

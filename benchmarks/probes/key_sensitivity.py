@@ -14,7 +14,7 @@ sketch evidence: refinement trades it for pixel noise (``refine.search.DEFAULT_H
 A value with both changes exactly 0 does not act on that tree at all
 (``SearchSpace.live`` drops those).
 
-    nice -n 10 .venv/bin/python benchmarks/key_sensitivity.py --data /work/data/ds_v1 \
+    nice -n 10 .venv/bin/python benchmarks/probes/key_sensitivity.py --data /work/data/ds_v1 \
         --per-species 3 --json /work/data/key_sensitivity.json
 """
 
@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 

@@ -1,6 +1,6 @@
 """What the time limit buys: one refinement with the fast sketch and with the full one.
 
-    .venv/bin/python benchmarks/refine_speed.py [--time-limit 15] [--species cherry bonsai maple]
+    .venv/bin/python benchmarks/probes/refine_speed.py [--time-limit 15] [--species cherry bonsai maple]
 
 For each species: the truth is ``species.sample(name, 1)`` seen from the front (its full
 128 px sketch), the start is another tree of the species (``species.sample(name, 2)``),
@@ -17,7 +17,7 @@ import argparse
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 

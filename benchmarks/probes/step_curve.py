@@ -1,8 +1,8 @@
 """Distance against parameter step: how far the tree moves when one value moves a little.
 
-    .venv/bin/python benchmarks/step_curve.py --out step.json [--species maple pine]
+    .venv/bin/python benchmarks/probes/step_curve.py --out step.json [--species maple pine]
         [--metric points|mesh] [--points 3]
-    .venv/bin/python benchmarks/step_curve.py --table before.json after.json
+    .venv/bin/python benchmarks/probes/step_curve.py --table before.json after.json
 
 For each species, the point ``x`` is ``species.sample(name, i)`` (``i < --points``) in
 the unit cube of the species' free continuous unfixed values
@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 

@@ -5,7 +5,7 @@ seeds 0, 1, 2) and grows each reference dictionary with seeds 0, 1, 2.  Prints, 
 the mean bounding-box size of branches and of branches+leaves (ours / Sapling's ratio),
 stems per level (ours vs Sapling's) and leaf count, then per-species summaries.
 
-Run: ``.venv/bin/python benchmarks/compare_sapling.py [--ref DIR]``
+Run: ``.venv/bin/python benchmarks/probes/compare_sapling.py [--ref DIR]``
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ import numpy as np
 from weberpenn import load_params
 from weberpenn.grow import grow
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_REF = ROOT.parent / "shared" / "reference"
 LEAF_FACES = {"hex": 2, "rect": 1}
 

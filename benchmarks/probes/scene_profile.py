@@ -1,6 +1,6 @@
 """Where the mitsuba scene build of one refinement evaluation goes.
 
-    .venv/bin/python benchmarks/scene_profile.py [--repeats 3] [--species cherry maple]
+    .venv/bin/python benchmarks/probes/scene_profile.py [--repeats 3] [--species cherry maple]
 
 For ``species.sample(name, 0)``'s full mesh, per part (branches, leaves), the best of
 ``--repeats`` wall times of: creating the ``mi.Mesh`` and filling its buffers from numpy
@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 

@@ -1,0 +1,202 @@
+"""Benchmark the interactive loop over HTTP: the first tree viewable, an edit's round
+trip, the viewer's GLB.
+
+    PYTHONPATH=$PWD .venv/bin/python benchmarks/bench_interactive.py [--trees 4]
+        [--edits 10] [--estimator tsn] [--drawings 4] [--json FILE]
+
+A real server (uvicorn on a local port, one worker process, ``--estimator``) is started.
+
+1. **First tree viewable**: for each of ``--drawings`` example drawings
+   (``examples/hand/``), ``POST /jobs`` (the default budget), then ``GET /jobs/{id}`` every
+   20 ms until its progress carries a ``preview`` and ``GET .../preview/tree.glb`` answers;
+   the seconds from the POST, and the job's whole run for comparison.
+2. **Edit round trip**, per species of ``weberpenn.species.SPECIES``: ``--trees`` sampled
+   trees, ``--edits`` edits each (random values of random controls, as a person drags a
+   slider), timed from sending ``POST /trees`` (``Accept: model/gltf-binary``, the
+   viewer's face budget) to the whole GLB received; median and p95.  Run twice: with the
+   worker idle ("quiet") and while it refines a drawing ("at load").
+3. **Viewer GLB**: triangles and bytes of each edit's GLB per species (largest).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import random
+import socket
+import statistics
+import sys
+import tempfile
+import threading
+import time
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import httpx  # noqa: E402
+
+from treesketch.service import ServiceConfig, create_app  # noqa: E402
+from treesketch.trees import VIEW_FACES  # noqa: E402
+from weberpenn import species  # noqa: E402
+from weberpenn.controls import CONTROLS  # noqa: E402
+
+
+@contextmanager
+def serve(app: Any):
+    import uvicorn
+
+    sock = socket.socket()
+    sock.bind(("127.0.0.1", 0))
+    server = uvicorn.Server(uvicorn.Config(app, log_level="warning", lifespan="on"))
+    thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, daemon=True)
+    thread.start()
+    while not server.started:
+        time.sleep(0.05)
+    try:
+        yield f"http://127.0.0.1:{sock.getsockname()[1]}"
+    finally:
+        server.should_exit = True
+        thread.join(30)
+        sock.close()
+
+
+def wait_ready(client: httpx.Client) -> None:
+    while client.get("/health").json()["workers"] < 1:
+        time.sleep(0.2)
+
+
+def random_edit(rng: random.Random, own: dict[str, Any]) -> dict[str, Any]:
+    """One to three controls at random values (a height near the tree's own)."""
+    out: dict[str, Any] = {}
+    for c in rng.sample(CONTROLS, rng.randint(1, 3)):
+        if c.kind == "toggle":
+            out[c.name] = rng.random() < 0.8
+        elif c.kind == "choice":
+            out[c.name] = rng.choice(c.choices)[0]
+        elif c.name == "seed":
+            out[c.name] = rng.randrange(1000)
+        elif c.name == "height":
+            out[c.name] = round(own["height"] * rng.uniform(0.6, 1.6), 1)
+        else:
+            out[c.name] = round(rng.uniform(c.lo, c.hi), 2)
+    return out
+
+
+def glb_faces(data: bytes) -> int:
+    import io
+
+    import trimesh
+
+    scene = trimesh.load(io.BytesIO(data), file_type="glb")
+    return sum(len(g.faces) for g in scene.geometry.values())
+
+
+def edits(client: httpx.Client, trees: int, n: int, seed: int) -> dict[str, Any]:
+    rng = random.Random(seed)
+    out: dict[str, Any] = {}
+    for name in species.SPECIES:
+        times, sizes, faces, refused = [], [], [], 0
+        for t in range(trees):
+            params = species.sample(name, t).to_dict()
+            own = client.post("/trees", json={"params": params, "species": name}).json()
+            for _ in range(n):
+                body = {
+                    "params": params,
+                    "species": name,
+                    "controls": random_edit(rng, own["controls"]),
+                    "max_faces": VIEW_FACES,
+                }
+                t0 = time.perf_counter()
+                r = client.post("/trees", json=body, headers={"Accept": "model/gltf-binary"})
+                data = r.content
+                dt = time.perf_counter() - t0
+                if r.status_code != 200:  # past the generator's limits: a clear 422
+                    refused += 1
+                    continue
+                times.append(dt)
+                sizes.append(len(data))
+                faces.append(glb_faces(data))
+        times.sort()
+        out[name] = {
+            "edits": len(times),
+            "refused": refused,
+            "median_ms": 1000 * statistics.median(times),
+            "p95_ms": 1000 * times[min(len(times) - 1, int(0.95 * len(times)))],
+            "max_glb_mb": max(sizes) / 1e6,
+            "median_glb_mb": statistics.median(sizes) / 1e6,
+            "max_faces": max(faces),
+        }
+        print(name, out[name], flush=True)
+    return out
+
+
+def first_tree(client: httpx.Client, drawings: list[Path]) -> list[dict[str, Any]]:
+    rows = []
+    for path in drawings:
+        t0 = time.perf_counter()
+        r = client.post("/jobs", files={"sketch": (path.name, path.read_bytes(), "image/png")})
+        job = r.json()["id"]
+        first = None
+        while True:
+            body = client.get(f"/jobs/{job}").json()
+            if first is None and (body.get("progress") or {}).get("preview"):
+                g = client.get(f"/jobs/{job}/preview/tree.glb")
+                if g.status_code == 200:
+                    first = time.perf_counter() - t0
+            if body["state"] in ("done", "failed", "cancelled"):
+                break
+            time.sleep(0.02)
+        total = time.perf_counter() - t0
+        rows.append({"drawing": path.name, "first_tree_s": first, "job_s": total})
+        print(rows[-1], flush=True)
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--trees", type=int, default=4, help="sampled trees per species")
+    ap.add_argument("--edits", type=int, default=10, help="edits per tree")
+    ap.add_argument("--estimator", default="tsn")
+    ap.add_argument("--drawings", type=int, default=4, help="example drawings for step 1")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--json", type=Path, default=None)
+    args = ap.parse_args()
+    drawings = sorted((ROOT / "examples" / "hand").glob("*.png"))[: args.drawings]
+    report: dict[str, Any] = {
+        "machine": f"{platform.node()} {platform.machine()}, {os.cpu_count()} CPUs",
+        "loadavg_start": os.getloadavg(),
+        "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+    }
+    with tempfile.TemporaryDirectory(prefix="bench-interactive-") as data:
+        config = ServiceConfig(data=Path(data), workers=1, estimator=args.estimator)
+        with serve(create_app(config)) as url, httpx.Client(base_url=url, timeout=600) as c:
+            wait_ready(c)
+            report["first_tree"] = first_tree(c, drawings)
+            print("quiet edits", flush=True)
+            report["edits_quiet"] = edits(c, args.trees, args.edits, args.seed)
+            # at load: the worker refines a drawing (a long budget) meanwhile
+            job = c.post(
+                "/jobs",
+                files={"sketch": ("d.png", drawings[0].read_bytes(), "image/png")},
+                data={"budget": "1000", "time_limit": "600"},
+            ).json()["id"]
+            while c.get(f"/jobs/{job}").json()["state"] != "running":
+                time.sleep(0.1)
+            print("edits at load", flush=True)
+            report["edits_load"] = edits(c, args.trees, args.edits, args.seed + 1)
+            report["load_job_state"] = c.get(f"/jobs/{job}").json()["state"]
+            c.delete(f"/jobs/{job}")
+    report["loadavg_end"] = os.getloadavg()
+    text = json.dumps(report, indent=1)
+    if args.json:
+        args.json.write_text(text + "\n")
+    print(text)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,308 @@
+"""The trees people draw: species accuracy, the "is this a tree?" warning, confidence.
+
+    # the network alone, every style of a dataset's test split (seconds)
+    .venv/bin/python benchmarks/bench_species.py network --data DS [--checkpoint PT]
+    # the whole pipeline on held-out drawings (about 15 s a drawing on two cores)
+    .venv/bin/python benchmarks/bench_species.py pipeline --data DS --per-cell 3 \
+        --nontrees 40 --budget 20 --out runs.jsonl
+    # fit the species posterior and the warning on those runs; reliability diagram
+    .venv/bin/python benchmarks/bench_species.py calibrate runs.jsonl --png docs/confidence.png
+
+``network``: the checkpoint's species (its calibrated classifier when it has one) on
+every test sketch of ``--data``, per style and per species, with the confusions.
+
+``pipeline``: ``Pipeline.run`` at ``--budget`` on ``--per-cell`` test drawings per species
+and style of ``--data`` (trees the network never saw), the hand-style tree doodles and the
+non-tree doodles of ``eval.doodles`` when that module is there; one JSON line per drawing
+with the truth ("nontree" for the others), the candidates (scores, distances), the
+warning's distances and the confidence.
+
+``calibrate``: the posterior's ``NET_WEIGHT`` and ``DISTANCE_SCALE`` by maximum likelihood
+of the true species among the candidates (half the runs fit, the other half score: the
+figures printed are on the held-out half), the accuracy before and after, the warning
+rates per kind of drawing at the shipped limits, and the expected calibration error of the
+confidence with its reliability diagram.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import platform
+import sys
+import time
+from collections import Counter, defaultdict
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import numpy as np  # noqa: E402
+
+
+def _machine() -> str:
+    import os
+
+    return f"{platform.machine()}, {os.cpu_count()} CPUs, load {os.getloadavg()[0]:.1f}"
+
+
+def _stamp() -> str:
+    import subprocess
+
+    commit = subprocess.run(
+        ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, check=False
+    ).stdout.strip()
+    return f"{datetime.now(UTC):%Y-%m-%d %H:%M} UTC, commit {commit}, {_machine()}"
+
+
+# --------------------------------------------------------------------------- network
+def network(args: argparse.Namespace) -> None:
+    from PIL import Image
+
+    from render.dataset import read_manifest, row_style
+    from tsn.predict import load_model
+
+    model = load_model(args.checkpoint)
+    rows = read_manifest(args.data, split="test")
+    by_style: dict[str, list[bool]] = defaultdict(list)
+    by_species: dict[tuple[str, str], list[bool]] = defaultdict(list)
+    confusions: Counter[tuple[str, str, str]] = Counter()
+    t0 = time.perf_counter()
+    for i in range(0, len(rows), 32):
+        chunk = rows[i : i + 32]
+        imgs = [np.asarray(Image.open(Path(args.data) / r["sketch"]).convert("L")) for r in chunk]
+        for r, pred in zip(chunk, model.predict_batch(imgs), strict=True):
+            ok = pred.species == r["species"]
+            style = row_style(r)
+            by_style[style].append(ok)
+            by_species[(style, r["species"])].append(ok)
+            if not ok:
+                confusions[(style, r["species"], pred.species)] += 1
+    secs = time.perf_counter() - t0
+    print(f"## Species, network alone ({args.checkpoint or 'shipped'}), {_stamp()}")
+    print(f"test split of {args.data}: {len(rows)} sketches in {secs:.0f} s\n")
+    print("| style | sketches | species right |")
+    print("|---|---:|---:|")
+    for style, oks in sorted(by_style.items()):
+        print(f"| {style} | {len(oks)} | {np.mean(oks):.1%} |")
+    allok = [o for v in by_style.values() for o in v]
+    print(f"| **all** | {len(allok)} | **{np.mean(allok):.1%}** |\n")
+    styles = sorted(by_style)
+    print("| species | " + " | ".join(styles) + " |")
+    print("|---|" + "---:|" * len(styles))
+    for name in sorted({s for _, s in by_species}):
+        cells = [by_species.get((st, name), []) for st in styles]
+        print(f"| {name} | " + " | ".join(f"{np.mean(c):.0%}" if c else "-" for c in cells) + " |")
+    if confusions:
+        print("\nconfusions (style: truth -> predicted x count): " + ", ".join(
+            f"{st}: {a}->{b} x{n}" for (st, a, b), n in confusions.most_common(12)
+        ))  # fmt: skip
+
+
+# --------------------------------------------------------------------------- pipeline
+def _drawings(args: argparse.Namespace) -> list[tuple[str, str, str, Any]]:
+    """(kind, truth, label, image) of every drawing the pipeline part runs."""
+    from PIL import Image
+
+    from render.dataset import read_manifest, row_style
+
+    out: list[tuple[str, str, str, Any]] = []
+    if args.data:
+        cells: dict[tuple[str, str], list[dict]] = defaultdict(list)
+        for r in read_manifest(args.data, split="test"):
+            cells[(row_style(r), r["species"])].append(r)
+        rng = np.random.default_rng(args.seed)
+        for (style, name), rows in sorted(cells.items()):
+            for k in rng.permutation(len(rows))[: args.per_cell]:
+                r = rows[int(k)]
+                img = np.asarray(Image.open(Path(args.data) / r["sketch"]).convert("L"))
+                out.append((style, name, r["sketch"], img))
+    try:
+        from eval import doodles
+    except ImportError:
+        doodles = None
+    if doodles is not None:
+        from weberpenn import species
+
+        for name in species.SPECIES:
+            for seed in range(args.hand_trees):
+                out.append(("hand", name, f"tree_doodle({name},{seed})",
+                            doodles.tree_doodle(name, seed)))  # fmt: skip
+        kinds = list(doodles.NONTREE_KINDS)
+        for i in range(args.nontrees):
+            kind = kinds[i % len(kinds)]
+            out.append(("nontree", "nontree", f"nontree_doodle({kind},{i})",
+                        doodles.nontree_doodle(kind, 1000 + i)))  # fmt: skip
+    return out
+
+
+def pipeline(args: argparse.Namespace) -> None:
+    from treesketch import Pipeline, RefineSettings
+    from treesketch.estimators import load_estimator
+
+    pipe = Pipeline(
+        load_estimator("tsn", checkpoint=args.checkpoint),
+        RefineSettings(budget=args.budget, time_limit=args.time_limit, species_tries=args.tries),
+    )
+    done = set()
+    out = Path(args.out)
+    if out.is_file():  # resume: a drawing already run is not run again
+        done = {json.loads(line)["label"] for line in out.read_text().splitlines() if line}
+    todo = [d for d in _drawings(args) if d[2] not in done]
+    print(f"{len(todo)} drawings to run ({len(done)} done), budget {args.budget}", flush=True)
+    with out.open("a") as fh:
+        for n, (kind, truth, label, img) in enumerate(todo, 1):
+            t0 = time.perf_counter()
+            try:
+                r = pipe.run(img)
+            except ValueError as exc:  # a blank page: a clear error, recorded as such
+                rec = {"kind": kind, "truth": truth, "label": label, "error": str(exc)}
+            else:
+                rec = {
+                    "kind": kind,
+                    "truth": truth,
+                    "label": label,
+                    "species": r.species,
+                    "network": r.estimate.species if r.estimate else None,
+                    "scores": r.species_scores,
+                    "distances": r.extras.get("tried", {}),
+                    "loss_after": r.losses["after"],
+                    "ink_after": r.losses["ink_after"],
+                    "warning": r.warning is not None,
+                    "confidence": r.confidence,
+                    "seconds": time.perf_counter() - t0,
+                }
+            fh.write(json.dumps(rec) + "\n")
+            fh.flush()
+            print(f"[{n}/{len(todo)}] {kind} {truth}: {rec.get('species')} "
+                  f"({rec.get('seconds', 0):.0f} s)", flush=True)  # fmt: skip
+
+
+# --------------------------------------------------------------------------- calibrate
+def _loglik(recs: list[dict], w: float, scale: float) -> float:
+    from treesketch.species_choice import posterior
+
+    ll = 0.0
+    for r in recs:
+        p = posterior(r["scores"], r["distances"], w, scale)
+        ll += math.log(max(p.get(r["truth"], 0.0), 1e-6))
+    return ll
+
+
+def _choose(r: dict, w: float, scale: float) -> tuple[str, float]:
+    from treesketch.species_choice import posterior
+
+    p = posterior(r["scores"], r["distances"], w, scale)
+    tried = r["distances"] or p
+    best = max(tried, key=lambda s: p.get(s, 0.0))
+    return best, p.get(best, 0.0)
+
+
+def ece(conf: np.ndarray, right: np.ndarray, bins: int = 10) -> tuple[float, list]:
+    edges = np.linspace(0, 1, bins + 1)
+    total, rows = 0.0, []
+    for lo, hi in zip(edges[:-1], edges[1:], strict=True):
+        sel = (conf > lo) & (conf <= hi) if lo > 0 else (conf >= lo) & (conf <= hi)
+        if sel.any():
+            total += sel.mean() * abs(conf[sel].mean() - right[sel].mean())
+            rows.append((lo, hi, int(sel.sum()), float(conf[sel].mean()), float(right[sel].mean())))
+    return float(total), rows
+
+
+def calibrate(args: argparse.Namespace) -> None:
+    from scipy.optimize import minimize
+
+    from treesketch import species_choice as sc
+
+    recs = [json.loads(line) for line in Path(args.runs).read_text().splitlines() if line]
+    trees = [r for r in recs if r["truth"] != "nontree" and "error" not in r]
+    fit, test = trees[0::2], trees[1::2]
+    x0 = np.log([sc.NET_WEIGHT, sc.DISTANCE_SCALE])
+    res = minimize(lambda v: -_loglik(fit, *np.exp(v)), x0, method="Nelder-Mead")
+    w, scale = (float(v) for v in np.exp(res.x))
+    print(f"## Species posterior calibration, {_stamp()}\n")
+    print(f"{len(recs)} runs ({len(trees)} tree drawings: {len(fit)} fit, {len(test)} scored)")
+    print(f"fitted NET_WEIGHT {w:.3f}, DISTANCE_SCALE {scale:.4f} "
+          f"(shipped {sc.NET_WEIGHT}, {sc.DISTANCE_SCALE})\n")  # fmt: skip
+    print("| on the scored half | species right | ECE |")
+    print("|---|---:|---:|")
+    for label, (ww, ss) in (
+        ("network alone", (1.0, 1e9)),
+        ("shipped posterior", (sc.NET_WEIGHT, sc.DISTANCE_SCALE)),
+        ("fitted posterior", (w, scale)),
+    ):
+        got = [_choose(r, ww, ss) for r in test]
+        right = np.array([g[0] == r["truth"] for g, r in zip(got, test, strict=True)])
+        e, _ = ece(np.array([g[1] for g in got]), right)
+        print(f"| {label} | {right.mean():.1%} ({right.sum()}/{len(right)}) | {e:.3f} |")
+    kinds: dict[str, list[bool]] = defaultdict(list)
+    for r in recs:
+        if "error" not in r:
+            kinds[r["kind"]].append(bool(r["warning"]))
+    print("\n| drawings | runs | warned |")
+    print("|---|---:|---:|")
+    for k, v in sorted(kinds.items()):
+        print(f"| {k} | {len(v)} | {np.mean(v):.1%} |")
+    # the confidence as shipped (every run, the pipeline's own number) against the truth
+    conf = np.array([r["confidence"] for r in trees])
+    right = np.array([r["species"] == r["truth"] for r in trees])
+    e, rows = ece(conf, right)
+    print(f"\nconfidence of the pipeline (all {len(trees)} tree drawings): ECE {e:.3f}; "
+          f"accuracy {right.mean():.1%}")  # fmt: skip
+    if args.png:
+        _reliability_png(rows, e, len(trees), Path(args.png))
+        print(f"wrote {args.png}")
+
+
+def _reliability_png(rows: list, e: float, n: int, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(4.5, 4.5), dpi=120)
+    ax.plot([0, 1], [0, 1], color="0.6", lw=1, ls="--", label="perfectly calibrated")
+    for lo, hi, k, _c, a in rows:
+        ax.bar((lo + hi) / 2, a, width=(hi - lo) * 0.9, color="#4c8c4a", alpha=0.8)
+        ax.text((lo + hi) / 2, a + 0.02, str(k), ha="center", fontsize=7)
+    ax.plot([r[3] for r in rows], [r[4] for r in rows], "o-", color="#1f3b73", ms=3,
+            label="mean confidence -> accuracy")  # fmt: skip
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1.08)
+    ax.set_xlabel("confidence (the species' probability)")
+    ax.set_ylabel("share of drawings whose species is right")
+    ax.set_title(f"Reliability on {n} held-out drawings, ECE {e:.3f}", fontsize=9)
+    ax.legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    sub = ap.add_subparsers(dest="part", required=True)
+    n = sub.add_parser("network")
+    n.add_argument("--data", required=True)
+    n.add_argument("--checkpoint", default=None)
+    p = sub.add_parser("pipeline")
+    p.add_argument("--data", default=None)
+    p.add_argument("--checkpoint", default=None)
+    p.add_argument("--per-cell", type=int, default=3)
+    p.add_argument("--hand-trees", type=int, default=2)
+    p.add_argument("--nontrees", type=int, default=40)
+    p.add_argument("--budget", type=int, default=20)
+    p.add_argument("--time-limit", type=float, default=30.0)
+    p.add_argument("--tries", type=int, default=2)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", required=True)
+    c = sub.add_parser("calibrate")
+    c.add_argument("runs")
+    c.add_argument("--png", default=None)
+    args = ap.parse_args()
+    {"network": network, "pipeline": pipeline, "calibrate": calibrate}[args.part](args)
+
+
+if __name__ == "__main__":
+    main()

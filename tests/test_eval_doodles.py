@@ -1,0 +1,130 @@
+"""Doodles made by code (eval/doodles.py): seeded, drawable for every kind and species, ink
+on the page and inside it, bad input refused by name, and tree doodles whose shapes differ
+by species the way people draw them (a fir tall and pointed, an oak wide, a poplar a
+column, a palm's crown on a thin trunk)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from eval.doodles import NONTREE_KINDS, SIZE, TREE_SPECIES, nontree_doodle, tree_doodle
+from weberpenn.species import SPECIES
+
+SEEDS = range(24)
+
+
+def _check_page(img: np.ndarray, what: str) -> None:
+    assert img.shape == (SIZE, SIZE) and img.dtype == np.uint8, what
+    ink = img < 128
+    assert 0.004 < ink.mean() < 0.3, (what, ink.mean())
+    assert img.max() == 255, what  # the paper stays white
+    # every stroke inside the page: a blank margin all round
+    for edge in (img[:2], img[-2:], img[:, :2], img[:, -2:]):
+        assert edge.min() >= 250, what
+
+
+def _shape(img: np.ndarray) -> dict[str, float]:
+    """Shape statistics of the ink's bounding box: height over width, how much of the width
+    the top 15% of rows spans, and how much the lower half spans."""
+    ink = img < 128
+    rows, cols = np.flatnonzero(ink.any(axis=1)), np.flatnonzero(ink.any(axis=0))
+    box = ink[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]
+    h, w = box.shape
+
+    def span(mask: np.ndarray) -> float:
+        on = np.flatnonzero(mask.any(axis=0))
+        return (on[-1] - on[0] + 1) / w if on.size else 0.0
+
+    return {"aspect": h / w, "top": span(box[: max(1, h * 15 // 100)]), "low": span(box[h // 2 :])}
+
+
+@pytest.fixture(scope="module")
+def shapes() -> dict[str, list[dict[str, float]]]:
+    return {sp: [_shape(tree_doodle(sp, seed)) for seed in SEEDS] for sp in TREE_SPECIES}
+
+
+def _median(rows: list[dict[str, float]], key: str) -> float:
+    return float(np.median([r[key] for r in rows]))
+
+
+def test_the_kinds_and_species_cover_what_is_asked() -> None:
+    assert set(TREE_SPECIES) == set(SPECIES)
+    assert len(NONTREE_KINDS) >= 12 and len(set(NONTREE_KINDS)) == len(NONTREE_KINDS)
+    asked = {"house", "car", "face", "cat", "fish", "bird", "cup", "word", "sun", "flower"}
+    assert asked | {"bicycle", "chair"} <= set(NONTREE_KINDS)
+    assert not set(NONTREE_KINDS) & set(SPECIES)
+
+
+def test_same_seed_same_image_and_seeds_vary() -> None:
+    for kind in NONTREE_KINDS:
+        a = nontree_doodle(kind, 5)
+        assert np.array_equal(a, nontree_doodle(kind, 5)), kind
+        assert not np.array_equal(a, nontree_doodle(kind, 6)), kind
+    for species in TREE_SPECIES:
+        a = tree_doodle(species, 5)
+        assert np.array_equal(a, tree_doodle(species, 5)), species
+        assert not np.array_equal(a, tree_doodle(species, 6)), species
+    # numpy integers are seeds too, and give the same drawing as the int
+    assert np.array_equal(tree_doodle("oak", np.int64(3)), tree_doodle("oak", 3))
+
+
+def test_every_kind_is_drawn_on_the_page_inside_it() -> None:
+    for kind in NONTREE_KINDS:
+        for seed in range(6):
+            _check_page(nontree_doodle(kind, seed), f"{kind} {seed}")
+
+
+def test_every_species_is_drawn_on_the_page_inside_it() -> None:
+    for species in TREE_SPECIES:
+        for seed in range(6):
+            _check_page(tree_doodle(species, seed), f"{species} {seed}")
+
+
+def test_the_hand_varies_line_width_size_and_position() -> None:
+    imgs = [tree_doodle("maple", seed) for seed in SEEDS]
+    ink = np.array([(img < 128).mean() for img in imgs])
+    centres, heights = [], []
+    for img in imgs:
+        rows, cols = np.nonzero(img < 128)
+        centres.append((rows.mean(), cols.mean()))
+        heights.append(rows.max() - rows.min())
+    assert ink.max() > 2.5 * ink.min()  # thin pen to thick finger
+    assert np.ptp(np.array(centres), axis=0).min() > 20  # not always in the middle
+    assert max(heights) > 1.4 * min(heights)
+    # some antialiased (grey edge pixels), some aliased (the mouse: ink or paper only)
+    grey = [((img > 40) & (img < 215)).mean() for img in imgs]
+    assert min(grey) < 0.001 < max(grey)
+
+
+def test_tree_shapes_differ_by_species(shapes: dict[str, list[dict[str, float]]]) -> None:
+    # a fir: taller than wide and pointed, every time
+    assert all(r["aspect"] > 1.15 and r["top"] < 0.35 for r in shapes["fir"])
+    # an oak and a cherry: wider than tall, every time; a poplar: a tall column
+    assert all(r["aspect"] < 1.0 for r in shapes["oak"] + shapes["cherry"])
+    assert _median(shapes["poplar"], "aspect") > 2.5
+    assert all(r["aspect"] > 1.4 for r in shapes["poplar"])
+    # a palm and a birch: the crown up high on a thin trunk; the lower half stays narrow
+    for species in ("palm", "birch"):
+        assert _median(shapes[species], "low") < 0.35, species
+    assert _median(shapes["palm"], "top") > 0.75
+    # and in the order people draw them: poplar > fir > maple > oak, in height over width
+    order = [_median(shapes[s], "aspect") for s in ("poplar", "fir", "maple", "oak")]
+    assert order == sorted(order, reverse=True), order
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda: nontree_doodle("tree", 0), "unknown doodle kind 'tree'"),
+        (lambda: nontree_doodle("oak", 0), "one of house"),
+        (lambda: tree_doodle("spruce", 0), "unknown tree species 'spruce'"),
+        (lambda: tree_doodle(["oak"], 0), r"unknown tree species \['oak'\]"),
+        (lambda: tree_doodle("fir", -1), "non-negative integer, got -1"),
+        (lambda: tree_doodle("fir", 1.5), "non-negative integer, got 1.5"),
+        (lambda: nontree_doodle("cup", True), "non-negative integer, got True"),
+    ],
+)
+def test_bad_input_is_refused_by_name(call, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        call()

@@ -1,0 +1,157 @@
+"""The routes of the interactive loop: the controls, a tree grown from them, a running
+job's current best tree.
+
+- ``GET /controls``: the controls table (``weberpenn.controls``), every species' defaults
+  (the species list is ``weberpenn.species.SPECIES``), the default budget and the
+  viewer's triangle budget.
+- ``POST /trees`` (JSON: ``params``, ``controls``, ``seed``, ``species``, ``max_faces``):
+  the tree grown; ``Accept: model/gltf-binary`` answers its GLB (the tree's height,
+  species and control values in ``X-Tree-*`` headers), otherwise JSON with its
+  parameters, species, height and control values.
+- ``GET /jobs/{id}/preview/tree.glb`` and ``.../sketch.png``: the job's current best tree
+  while it runs (``preview.PreviewWriter``; the job's progress says which ``preview``
+  version is there).  Local worker processes write it beside the job's results; a Ray
+  actor's job shows none (its files live on another node until the job ends).
+- ``GET /examples`` (names and links) and ``GET /examples/{name}``: the example drawings
+  (the repository's ``examples/hand/``, when the service runs from a checkout);
+  ``GET /help/controls.png``: pictures of what each control does (``docs/controls.png``).
+
+A tree is grown here in the front's thread pool, not in a worker: an edit must not wait
+behind a refinement, and one tree takes a fraction of a second; :data:`EDITS_AT_ONCE`
+bounds how many grow together.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+from pathlib import Path
+from typing import Any
+
+from fastapi import FastAPI, HTTPException, Request
+from fastapi.responses import FileResponse, JSONResponse, Response
+from starlette.concurrency import run_in_threadpool
+
+from .preview import PREVIEW_FILES
+from .store import JobStore
+
+__all__ = ["EDITS_AT_ONCE", "MAX_TREE_BODY", "add_interactive_routes"]
+
+REPO = Path(__file__).resolve().parents[2]
+EXAMPLES = REPO / "examples" / "hand"
+CONTROLS_PICTURE = REPO / "docs" / "controls.png"
+EDITS_AT_ONCE = 2
+MAX_TREE_BODY = 256 * 1024  # bytes: a parameter dictionary is about 3 KB
+GLB = "model/gltf-binary"
+
+
+def controls_table() -> dict[str, Any]:
+    from refine.search import DEFAULT_BUDGET
+    from treesketch.trees import VIEW_FACES
+    from weberpenn import species
+    from weberpenn.controls import defaults, table
+
+    return {
+        "controls": table(),
+        "species": {name: defaults(name) for name in species.SPECIES},
+        "default_budget": DEFAULT_BUDGET,
+        "view_faces": VIEW_FACES,
+    }
+
+
+def grow_request(body: Any, want_glb: bool) -> tuple[bytes | dict[str, Any], dict[str, str]]:
+    """(GLB bytes or the JSON answer, headers) of one ``POST /trees`` body; ValueError
+    for a bad one."""
+    from treesketch.trees import TreeRequest, edit_tree, light_glb
+
+    request = TreeRequest.from_json(body)
+    tree = edit_tree(request)
+    facts = {
+        "X-Tree-Species": tree.species,
+        "X-Tree-Height": f"{tree.height:.4f}",
+        "X-Tree-Controls": json.dumps(tree.controls, separators=(",", ":")),
+    }
+    if want_glb:
+        return light_glb(tree.mesh, max_faces=request.max_faces), facts
+    return {
+        "params": tree.params.to_dict(),
+        "species": tree.species,
+        "height": tree.height,
+        "controls": tree.controls,
+    }, facts
+
+
+async def _json_body(request: Request) -> Any:
+    size = request.headers.get("content-length")
+    if size is not None and (not size.isdigit() or int(size) > MAX_TREE_BODY):
+        raise HTTPException(413, f"the body must be at most {MAX_TREE_BODY} bytes")
+    data = bytearray()
+    async for chunk in request.stream():
+        data += chunk
+        if len(data) > MAX_TREE_BODY:
+            raise HTTPException(413, f"the body must be at most {MAX_TREE_BODY} bytes")
+    try:
+        return json.loads(bytes(data))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise HTTPException(422, f"the body is not JSON: {exc}") from exc
+
+
+def example_files(folder: Path = EXAMPLES) -> dict[str, Path]:
+    """The example drawings by name (PNG files of ``folder``, sorted)."""
+    if not folder.is_dir():
+        return {}
+    return {p.stem: p for p in sorted(folder.glob("*.png")) if p.is_file()}
+
+
+def add_interactive_routes(app: FastAPI, store: JobStore) -> None:
+    """Add the routes of the module text to ``app``."""
+    gate = asyncio.Semaphore(EDITS_AT_ONCE)
+
+    @app.get("/examples")
+    async def examples() -> dict[str, Any]:
+        names = await run_in_threadpool(example_files)
+        return {"examples": [{"name": n, "url": f"/examples/{n}"} for n in names]}
+
+    @app.get("/examples/{name}")
+    async def example(name: str) -> Response:
+        path = (await run_in_threadpool(example_files)).get(name)  # never a path from the URL
+        if path is None:
+            raise HTTPException(404, f"no example drawing {name!r}")
+        return FileResponse(path, media_type="image/png")
+
+    @app.get("/help/controls.png")
+    async def controls_picture() -> Response:
+        if not CONTROLS_PICTURE.is_file():
+            raise HTTPException(404, "the controls picture is not installed")
+        return FileResponse(CONTROLS_PICTURE, media_type="image/png")
+
+    @app.get("/controls")
+    async def controls() -> dict[str, Any]:
+        return await run_in_threadpool(controls_table)
+
+    @app.post("/trees")
+    async def trees(request: Request) -> Response:
+        body = await _json_body(request)
+        want_glb = GLB in request.headers.get("accept", "")
+        async with gate:
+            try:
+                answer, facts = await run_in_threadpool(grow_request, body, want_glb)
+            except ValueError as exc:  # ParamError and bad controls: the request's fault
+                raise HTTPException(422, str(exc)) from exc
+        if isinstance(answer, bytes):
+            return Response(answer, media_type=GLB, headers={**facts, "Cache-Control": "no-store"})
+        return JSONResponse(answer)
+
+    @app.get("/jobs/{job_id}/preview/{name}")
+    async def preview(job_id: str, name: str) -> Response:
+        if name not in PREVIEW_FILES:
+            raise HTTPException(404, f"no preview {name!r}; there are {', '.join(PREVIEW_FILES)}")
+        job = await run_in_threadpool(store.get, job_id)
+        if job is None:
+            raise HTTPException(404, f"no job {job_id!r}")
+        path = store.result_dir(job_id) / "preview" / name
+        if not path.is_file():
+            raise HTTPException(404, f"job {job_id} has no tree to show yet")
+        return FileResponse(
+            path, media_type=PREVIEW_FILES[name], headers={"Cache-Control": "no-store"}
+        )

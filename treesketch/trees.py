@@ -1,0 +1,108 @@
+"""A tree to look at now: parameters (+ a person's controls) -> a light GLB or a sketch.
+
+What the page's live preview, ``POST /trees``, ``treesketch grow --set`` and a running
+job's current best tree share: :func:`edit_tree` (a :class:`TreeRequest` checked, the
+controls applied, the tree grown) and :func:`light_glb` (the viewer's GLB, at most
+:data:`VIEW_FACES` triangles; full detail is the download's).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from weberpenn import TreeMesh, TreeParams
+from weberpenn import species as species_table
+
+__all__ = ["VIEW_FACES", "EditedTree", "TreeRequest", "edit_tree", "light_glb", "tree_sketch"]
+
+# the viewer's default triangle budget (and the live preview's): the heaviest species
+# stays under 5 MB of GLB with its textures (benchmarks/RESULTS.md, "The interactive loop")
+VIEW_FACES = 80_000
+
+
+@dataclass(frozen=True)
+class TreeRequest:
+    """A tree to grow: ``params`` (a Sapling dictionary), ``controls`` (name: value, see
+    ``weberpenn.controls``), ``seed`` (the variant; same as ``controls["seed"]``),
+    ``species`` (its textures and leaf shape; None: the nearest species to ``params``),
+    ``max_faces`` (None: full detail)."""
+
+    params: TreeParams
+    controls: Mapping[str, Any] = field(default_factory=dict)
+    seed: int | None = None
+    species: str | None = None
+    max_faces: int | None = VIEW_FACES
+
+    @classmethod
+    def from_json(cls, body: Any) -> TreeRequest:
+        """From a JSON object (``POST /trees``); ValueError naming the bad field."""
+        from weberpenn.controls import check_controls
+        from weberpenn.lod import check_budget
+
+        if not isinstance(body, Mapping):
+            raise ValueError("the body must be a JSON object with 'params'")
+        unknown = sorted(set(body) - {"params", "controls", "seed", "species", "max_faces"})
+        if unknown:
+            raise ValueError(
+                f"unknown field(s) {', '.join(unknown)}; "
+                "send params, controls, seed, species, max_faces"
+            )
+        if "params" not in body or not isinstance(body["params"], Mapping):
+            raise ValueError("'params' must be a parameter dictionary (a JSON object)")
+        params = TreeParams(body["params"])  # ParamError names the key
+        controls = check_controls(body.get("controls") or {})
+        seed = body.get("seed")
+        if seed is not None:
+            controls = {**controls, **check_controls({"seed": seed})}
+        name = body.get("species")
+        if name is not None:
+            name = species_table.canonical(name)
+        max_faces = body.get("max_faces", VIEW_FACES)
+        if max_faces is not None:
+            check_budget(max_faces)
+        return cls(params, controls, controls.get("seed"), name, max_faces)
+
+
+@dataclass(frozen=True)
+class EditedTree:
+    params: TreeParams
+    species: str
+    mesh: TreeMesh
+    height: float
+    controls: dict[str, Any]  # the values that leave ``params`` as it is (see ``current``)
+
+
+def edit_tree(request: TreeRequest) -> EditedTree:
+    """Apply the request's controls and grow the tree (``weberpenn.controls``)."""
+    from refine.search import guess_species
+    from weberpenn.controls import current, grow_with_controls
+
+    name = request.species or guess_species(request.params)
+    controls = dict(request.controls)
+    if request.seed is not None:
+        controls["seed"] = request.seed
+    params, mesh = grow_with_controls(request.params, controls, name)
+    lo, hi = mesh.bounds()
+    height = float(np.asarray(hi)[2] - np.asarray(lo)[2])
+    return EditedTree(params, name, mesh, height, current(params, height))
+
+
+def light_glb(mesh: TreeMesh, yaw: float = 0.0, max_faces: int | None = VIEW_FACES) -> bytes:
+    """The tree as a binary glTF of at most ``max_faces`` triangles (None: all)."""
+    from weberpenn.export import glb_bytes
+
+    return glb_bytes(mesh, yaw=yaw, max_faces=max_faces)
+
+
+def tree_sketch(params: TreeParams, species: str, yaw: float = 0.0, size: int = 256) -> np.ndarray:
+    """The tree's sketch the cheap way (thin stems left out, numpy rasteriser): what a
+    running job shows of its current best tree."""
+    from render.sketch import SketchRenderer, sketch_mesh
+    from weberpenn import grow
+
+    mesh = sketch_mesh(grow(params), size, species)
+    return SketchRenderer(mesh, engine="raster").sketch(yaw, size)
