@@ -240,8 +240,8 @@ def test_the_page_keeps_the_token_out_of_every_url(tmp_path: Path) -> None:
             draw_with_mouse(page)
             page.fill("#budget", "2")
             page.click("#submit")
-            page.wait_for_selector("body[data-model=loaded]", timeout=180_000)
-            assert page.get_attribute("body", "data-state") == "done"
+            page.wait_for_selector("body[data-state=done]", timeout=180_000)
+            page.wait_for_selector("body[data-model=loaded]", timeout=30_000)
             assert page.evaluate("document.querySelector('#after').naturalWidth") > 0
             links = page.evaluate("[...document.querySelectorAll('a[href]')].map(a => a.href)")
             cookies = page.context.cookies()
