@@ -1,11 +1,22 @@
-"""Compare our skeletons with Blender Sapling's on the 15 TreeSketchNet reference files.
+"""Compare our trees with Blender Sapling's.
 
-Reads ``../shared/reference/sapling_reference_stats.json`` (Sapling 0.3.4 in Blender 3.4,
-seeds 0, 1, 2) and grows each reference dictionary with seeds 0, 1, 2.  Prints, per file,
-the mean bounding-box size of branches and of branches+leaves (ours / Sapling's ratio),
-stems per level (ours vs Sapling's) and leaf count, then per-species summaries.
+Default: the 15 TreeSketchNet reference files.  Reads
+``../shared/reference/sapling_reference_stats.json`` (Sapling 0.3.4 in Blender 3.4, seeds
+0, 1, 2) and grows each reference dictionary with seeds 0, 1, 2.  Prints, per file, the
+mean bounding-box size of branches and of branches+leaves (ours / Sapling's ratio), stems
+per level (ours vs Sapling's) and leaf count, then per-species summaries.
+
+``--species``: every species' base dictionary (``species.base(name)``, seed 0), our
+``build_mesh(grow(...))`` against Sapling's tree from the same dictionary as recorded in
+``benchmarks/sapling_species_stats.json`` (``benchmarks/sapling_run.py``): whole-tree
+bounding-box width, depth and height (must agree within 10 %), branch and leaf triangles
+(Sapling's quads count as two), and, for the species people draw, the untouched Sapling
+preset they start from (seeds 0, 1, 2) with the values the species sets (its source).
+``--blender BIN`` first re-records that file with Blender's Sapling (about 1.5 minutes on
+a 2-core machine); ``--markdown`` prints the table as Markdown.
 
 Run: ``.venv/bin/python benchmarks/compare_sapling.py [--ref DIR]``
+     ``.venv/bin/python benchmarks/compare_sapling.py --species [--blender blender] [--markdown]``
 """
 
 from __future__ import annotations
@@ -13,18 +24,30 @@ from __future__ import annotations
 import argparse
 import json
 import random
+import subprocess
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-from weberpenn import load_params
-from weberpenn.grow import grow
-
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from benchmarks.sapling_run import (  # noqa: E402
+    SPECIES_STATS,
+    SaplingError,
+    record,
+    recorded,
+    sizes,
+)
+from weberpenn import build_mesh, load_params, species  # noqa: E402
+from weberpenn.grow import grow  # noqa: E402
+
 DEFAULT_REF = ROOT.parent / "shared" / "reference"
 LEAF_FACES = {"hex": 2, "rect": 1}
+#: Largest relative difference of a whole-tree size (width, depth, height) from Sapling's.
+TOLERANCE = 0.10
 
 
 def _leaf_corners(sk) -> np.ndarray:
@@ -103,10 +126,151 @@ def _ints(a: np.ndarray) -> str:
     return "[" + " ".join(f"{x:.0f}" for x in a) + "]"
 
 
+def _box_size(vertices: np.ndarray) -> list[float]:
+    v = np.asarray(vertices)
+    return (v.max(axis=0) - v.min(axis=0)).tolist() if len(v) else [0.0, 0.0, 0.0]
+
+
+def ours(name: str) -> dict:
+    """Sizes and triangles of our tree from the species' base dictionary."""
+    tm = build_mesh(grow(species.base(name)), species=name)
+    lo, hi = tm.bounds()
+    return {
+        "tree": (hi - lo).tolist(),
+        "branch": _box_size(tm.branches.vertices),
+        "branch_tris": len(tm.branches.faces),
+        "leaf_tris": len(tm.leaves.faces),
+    }
+
+
+def compare_species(
+    data: dict, ours_of=ours, names: tuple[str, ...] = species.SPECIES
+) -> list[dict]:
+    """One row per species: our sizes and triangles against Sapling's record (``data`` as
+    :func:`benchmarks.sapling_run.recorded` returns it), the worst size ratio's distance
+    from 1, and the untouched preset's mean size where the species starts from one."""
+    rows = []
+    for name in names:
+        entry = data["trees"][name]
+        sap = entry["base"]
+        o = ours_of(name)
+        s_tree = sizes(sap)["tree"]
+        ratio = [a / b if b > 0 else float("inf") for a, b in zip(o["tree"], s_tree, strict=True)]
+        preset = entry.get("preset_rows") or []
+        rows.append(
+            {
+                "species": name,
+                "display": entry.get("display", name),
+                "ours": o["tree"],
+                "sapling": s_tree,
+                "ratio": ratio,
+                "worst": max(abs(r - 1.0) for r in ratio),
+                "ours_tris": (o["branch_tris"], o["leaf_tris"]),
+                "sapling_tris": (2 * sap["branch_faces"], 2 * sap["leaf_faces"]),
+                "preset": entry.get("preset"),
+                "preset_size": np.mean([sizes(r)["tree"] for r in preset], axis=0).tolist()
+                if preset
+                else None,
+                "preset_tris": (
+                    float(np.mean([2 * r["branch_faces"] for r in preset])),
+                    float(np.mean([2 * r["leaf_faces"] for r in preset])),
+                )
+                if preset
+                else None,
+                "source": species.source(name),
+            }
+        )
+    return rows
+
+
+def _dims(v: list[float] | None) -> str:
+    return "-" if v is None else " x ".join(f"{x:.1f}" for x in v)
+
+
+def species_markdown(rows: list[dict]) -> str:
+    lines = [
+        "| species | ours w x d x h | Sapling w x d x h (same dictionary) | ours / Sapling "
+        "| branch tris ours / Sapling | leaf tris ours / Sapling "
+        "| untouched Sapling preset, seeds 0-2: w x d x h, branch / leaf tris |",
+        "|---|---|---|---|---:|---:|---|",
+    ]
+    for r in rows:
+        ok = "" if r["worst"] <= TOLERANCE else " **(over 10 %)**"
+        pre = (
+            "-"
+            if r["preset"] is None
+            else f"`{r['preset']}`: {_dims(r['preset_size'])}, "
+            f"{r['preset_tris'][0] / 1000:.0f}k / {r['preset_tris'][1] / 1000:.0f}k"
+        )
+        lines.append(
+            f"| {r['display']} | {_dims(r['ours'])} | {_dims(r['sapling'])} "
+            f"| {' '.join(f'{x:.2f}' for x in r['ratio'])}{ok} "
+            f"| {r['ours_tris'][0] / 1000:.0f}k / {r['sapling_tris'][0] / 1000:.0f}k "
+            f"| {r['ours_tris'][1] / 1000:.1f}k / {r['sapling_tris'][1] / 1000:.1f}k | {pre} |"
+        )
+    worst = max(rows, key=lambda r: r["worst"])
+    lines += [
+        "",
+        f"Largest size difference: {worst['display']} {100 * worst['worst']:.1f} % "
+        f"(tolerance {100 * TOLERANCE:.0f} %); species over it: "
+        + (", ".join(r["display"] for r in rows if r["worst"] > TOLERANCE) or "none")
+        + ".",
+    ]
+    return "\n".join(lines)
+
+
+def species_main(args: argparse.Namespace) -> int:
+    try:
+        if args.blender:
+            commit = subprocess.run(
+                ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
+                capture_output=True,
+                text=True,
+            ).stdout.strip()
+            record(
+                args.blender,
+                SPECIES_STATS,
+                command=f"benchmarks/compare_sapling.py --species --blender {args.blender}",
+                commit=commit,
+            )
+            print(f"recorded {SPECIES_STATS}", file=sys.stderr)
+        data = recorded(SPECIES_STATS)
+    except SaplingError as exc:
+        print(f"compare_sapling: {exc}", file=sys.stderr)
+        return 1
+    rows = compare_species(data)
+    if args.markdown:
+        print(species_markdown(rows))
+        return 0
+    print(
+        f"{'species':<8} {'ours w d h':>20} {'Sapling w d h':>20} {'ratio':>17}  tris ours/Sapling"
+    )
+    for r in rows:
+        flag = "" if r["worst"] <= TOLERANCE else "  OVER 10 %"
+        print(
+            f"{r['species']:<8} {_dims(r['ours']):>20} {_dims(r['sapling']):>20} "
+            f"{' '.join(f'{x:.2f}' for x in r['ratio']):>17}  "
+            f"{r['ours_tris'][0]}+{r['ours_tris'][1]} / "
+            f"{r['sapling_tris'][0]}+{r['sapling_tris'][1]}{flag}"
+        )
+        if r["preset"]:
+            print(f"{'':<8} untouched {r['preset']}: {_dims(r['preset_size'])}; {r['source']}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--ref", type=Path, default=DEFAULT_REF, help="the shared reference folder")
+    ap.add_argument(
+        "--species", action="store_true", help="every species' base dictionary vs Sapling"
+    )
+    ap.add_argument("--blender", help="with --species: re-record Sapling with this Blender")
+    ap.add_argument("--markdown", action="store_true", help="with --species: Markdown table")
     args = ap.parse_args(argv)
+    if (args.blender or args.markdown) and not args.species:
+        ap.error("--blender and --markdown go with --species")
+    if args.species:
+        return species_main(args)
     stats_path = args.ref / "sapling_reference_stats.json"
     if not stats_path.is_file():
         print(f"no Sapling statistics at {stats_path}", file=sys.stderr)
