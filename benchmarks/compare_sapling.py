@@ -183,30 +183,37 @@ def compare_species(
     return rows
 
 
-def _dims(v: list[float] | None) -> str:
-    return "-" if v is None else " x ".join(f"{x:.1f}" for x in v)
+def dims(v: list[float] | None, unit: str = "") -> str:
+    """``w x d x h`` with one decimal, two for a tree under 3 m (a bonsai is a metre tall:
+    one decimal would hide a 16 % difference)."""
+    if v is None:
+        return "-"
+    fmt = ".2f" if max(v) < 3.0 else ".1f"
+    return " x ".join(f"{x:{fmt}}" for x in v) + unit
 
 
 def species_markdown(rows: list[dict]) -> str:
     lines = [
         "| species | ours w x d x h | Sapling w x d x h (same dictionary) | ours / Sapling "
         "| branch tris ours / Sapling | leaf tris ours / Sapling "
-        "| untouched Sapling preset, seeds 0-2: w x d x h, branch / leaf tris |",
-        "|---|---|---|---|---:|---:|---|",
+        "| untouched Sapling preset, seeds 0-2: w x d x h, branch / leaf tris "
+        "| source (values the species sets) |",
+        "|---|---|---|---|---:|---:|---|---|",
     ]
     for r in rows:
         ok = "" if r["worst"] <= TOLERANCE else " **(over 10 %)**"
         pre = (
             "-"
             if r["preset"] is None
-            else f"`{r['preset']}`: {_dims(r['preset_size'])}, "
+            else f"`{r['preset']}`: {dims(r['preset_size'])}, "
             f"{r['preset_tris'][0] / 1000:.0f}k / {r['preset_tris'][1] / 1000:.0f}k"
         )
         lines.append(
-            f"| {r['display']} | {_dims(r['ours'])} | {_dims(r['sapling'])} "
+            f"| {r['display']} | {dims(r['ours'])} | {dims(r['sapling'])} "
             f"| {' '.join(f'{x:.2f}' for x in r['ratio'])}{ok} "
             f"| {r['ours_tris'][0] / 1000:.0f}k / {r['sapling_tris'][0] / 1000:.0f}k "
-            f"| {r['ours_tris'][1] / 1000:.1f}k / {r['sapling_tris'][1] / 1000:.1f}k | {pre} |"
+            f"| {r['ours_tris'][1] / 1000:.1f}k / {r['sapling_tris'][1] / 1000:.1f}k | {pre} "
+            f"| {r['source']} |"
         )
     worst = max(rows, key=lambda r: r["worst"])
     lines += [
@@ -248,13 +255,13 @@ def species_main(args: argparse.Namespace) -> int:
     for r in rows:
         flag = "" if r["worst"] <= TOLERANCE else "  OVER 10 %"
         print(
-            f"{r['species']:<8} {_dims(r['ours']):>20} {_dims(r['sapling']):>20} "
+            f"{r['species']:<8} {dims(r['ours']):>20} {dims(r['sapling']):>20} "
             f"{' '.join(f'{x:.2f}' for x in r['ratio']):>17}  "
             f"{r['ours_tris'][0]}+{r['ours_tris'][1]} / "
             f"{r['sapling_tris'][0]}+{r['sapling_tris'][1]}{flag}"
         )
         if r["preset"]:
-            print(f"{'':<8} untouched {r['preset']}: {_dims(r['preset_size'])}; {r['source']}")
+            print(f"{'':<8} untouched {r['preset']}: {dims(r['preset_size'])}; {r['source']}")
     return 0
 
 

@@ -105,6 +105,18 @@ def _row(raw: dict, seed: int) -> dict:
     }
 
 
+def write_untouched(name: str, seed: int, path: Path) -> Path:
+    """Write the untouched Sapling preset the species starts from as a one-line preset,
+    with Sapling ``seed`` and its leaves shown (the presets of the fir, the willow and the
+    aspen hide them; ours have them)."""
+    preset = species.sapling_preset(name)
+    if preset is None:
+        raise SaplingError(f"{name} does not start from a Sapling preset")
+    d = {**preset_line(PRESETS / f"{preset}.py"), "seed": int(seed), "showLeaves": True}
+    path.write_text(repr(d) + "\n", encoding="utf-8")
+    return path
+
+
 def record(blender: str, out: Path = SPECIES_STATS, *, command: str = "", commit: str = "") -> dict:
     """Grow every species' base dictionary (seed 0) in Sapling, and each species people
     draw's untouched source preset (leaves shown, seeds :data:`PRESET_SEEDS`); write the
@@ -116,13 +128,8 @@ def record(blender: str, out: Path = SPECIES_STATS, *, command: str = "", commit
             save_sapling_preset(species.base(name), path)
             jobs.append((name, "base", 0, path))
         for name in species.PEOPLE_SPECIES:
-            preset = species.sapling_preset(name)
-            raw = preset_line(PRESETS / f"{preset}.py")
             for seed in PRESET_SEEDS:
-                # the presets of conifers and willows hide their leaves; shown, like ours
-                d = {**raw, "seed": seed, "showLeaves": True}
-                path = Path(tmp) / f"{name}_preset_{seed}.py"
-                path.write_text(repr(d) + "\n", encoding="utf-8")
+                path = write_untouched(name, seed, Path(tmp) / f"{name}_preset_{seed}.py")
                 jobs.append((name, "preset", seed, path))
         rows = run_sapling(blender, [j[3] for j in jobs])
     trees: dict[str, dict] = {}
