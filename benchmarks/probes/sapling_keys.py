@@ -14,6 +14,12 @@ how much one seed says (issue 27, item 1).
    (``curveV1[0]``, ``curveV2[0]``) kept and set to 0, by us and by Sapling.  Sapling has
    no realised curve: the export maps it to an amplitude ``curveV = (|V1| + |V2|) * curveRes``
    that Sapling draws per segment at random.
+4. The weeping willow (no value set by the species): its untouched preset, then with
+   each Sapling key that ``species.base`` treats otherwise set as the base has it, one
+   after the other (``splitByLen`` off, ``handleType`` auto, the variation amplitudes 0),
+   Sapling seed 0.
+
+``--part`` runs one of them (default: all).
 """
 
 from __future__ import annotations
@@ -120,15 +126,55 @@ def trunk_curve(blender: str) -> None:
         print(f"| {label} | {_dims(o, 2)} | {_dims(s_, 2)} | {ratio} |")
 
 
+def willow_steps(blender: str) -> None:
+    print(
+        "\n| weeping_willow preset, seed 0 | Sapling w x d x h | splines | branch tris "
+        "| leaf faces |"
+    )
+    print("|---|---|---:|---:|---:|")
+    zero = [0.0, 0.0, 0.0, 0.0]
+    d = {**preset_line(PRESETS / "weeping_willow.py"), "seed": 0, "showLeaves": True}
+    steps = [
+        ("untouched", {}),
+        ("+ splitByLen off", {"splitByLen": False}),
+        ("+ handleType auto ('0')", {"handleType": "0"}),
+        ("+ curveV 0", {"curveV": zero}),
+        ("+ downAngleV 0", {"downAngleV": zero}),
+        ("+ rotateV, splitAngleV, scaleV 0", {"rotateV": zero, "splitAngleV": zero, "scaleV": 0.0}),
+    ]
+    with tempfile.TemporaryDirectory() as tmp:
+        paths = []
+        for i, (_, change) in enumerate(steps):
+            d = {**d, **change}
+            path = Path(tmp) / f"willow_{i}.py"
+            path.write_text(repr(d) + "\n", encoding="utf-8")
+            paths.append(path)
+        rows = run_sapling(blender, paths)
+    for (label, _), r in zip(steps, rows, strict=True):
+        print(
+            f"| {label} | {_dims(sizes(r)['tree'])} | {r['splines']} "
+            f"| {2 * r['branch_faces'] / 1000:.0f}k | {r['leaf_faces'] / 1000:.0f}k |"
+        )
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--blender", default="blender")
     ap.add_argument("--seeds", type=int, default=5, help="seeds of the base dictionary")
     ap.add_argument("--species", default="willow", help="species for the seed study")
+    ap.add_argument(
+        "--part", choices=("all", "splitbylen", "seeds", "curve", "willow"), default="all"
+    )
     args = ap.parse_args()
-    split_by_len(args.blender)
-    seeds(args.blender, args.seeds, [species.canonical(s) for s in args.species.split(",")])
-    trunk_curve(args.blender)
+    if args.part in ("all", "splitbylen"):
+        split_by_len(args.blender)
+    if args.part in ("all", "seeds"):
+        names = [species.canonical(s) for s in args.species.split(",")]
+        seeds(args.blender, args.seeds, names)
+    if args.part in ("all", "curve"):
+        trunk_curve(args.blender)
+    if args.part in ("all", "willow"):
+        willow_steps(args.blender)
     return 0
 
 
