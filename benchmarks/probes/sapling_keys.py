@@ -9,7 +9,8 @@ how much one seed says (issue 27, item 1).
    0..2: the change in size and branch faces is what that key alone does.
 2. One seed of a dictionary is one draw of its trunk splits: the species' base
    dictionary is grown with seeds 0..N-1 by us and by Sapling (``replace(seed=s)``), and
-   the mean sizes and branch triangles are compared.
+   the mean sizes, branch triangles and trunk stems (Sapling's: its draws replayed by
+   ``compare_sapling.replay_trunk_splines``) are compared.
 3. The bonsai's height: its base dictionary with the trunk's realised curve variation
    (``curveV1[0]``, ``curveV2[0]``) kept and set to 0, by us and by Sapling.  Sapling has
    no realised curve: the export maps it to an amplitude ``curveV = (|V1| + |V2|) * curveRes``
@@ -33,6 +34,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
+from benchmarks.compare_sapling import replay_trunk_splines  # noqa: E402
 from benchmarks.sapling_run import PRESETS, preset_line, run_sapling, sizes  # noqa: E402
 from weberpenn import build_mesh, grow, species  # noqa: E402
 from weberpenn.export import save_sapling_preset  # noqa: E402
@@ -75,9 +77,9 @@ def split_by_len(blender: str) -> None:
 def seeds(blender: str, n: int, names: list[str]) -> None:
     print(
         "\n| species | seeds | ours mean w x d x h | Sapling mean w x d x h | ours / Sapling "
-        "| branch tris ours / Sapling (mean) |"
+        "| branch tris ours / Sapling (mean) | trunk stems ours / Sapling (mean) |"
     )
-    print("|---|---|---|---|---|---:|")
+    print("|---|---|---|---|---|---:|---:|")
     with tempfile.TemporaryDirectory() as tmp:
         jobs = []
         for name in names:
@@ -86,11 +88,14 @@ def seeds(blender: str, n: int, names: list[str]) -> None:
                 jobs.append((name, p, save_sapling_preset(p, Path(tmp) / f"{name}_{s}.py")))
         rows = run_sapling(blender, [j[2] for j in jobs])
     for name in names:
-        ours, sap, ot, st = [], [], [], []
+        ours, sap, ot, st, tr_o, tr_s = [], [], [], [], [], []
         for (nm, p, _), r in zip(jobs, rows, strict=True):
             if nm != name:
                 continue
-            tm = build_mesh(grow(p), species=name)
+            sk = grow(p)
+            tm = build_mesh(sk, species=name)
+            tr_o.append(int(sk.stems_per_level()[0]))
+            tr_s.append(replay_trunk_splines(p.to_dict(), int(p["seed"])))
             lo, hi = tm.bounds()
             ours.append((hi - lo).tolist())
             ot.append(len(tm.branches.faces))
@@ -100,7 +105,8 @@ def seeds(blender: str, n: int, names: list[str]) -> None:
         ratio = " ".join(f"{a / b:.2f}" for a, b in zip(o, s_, strict=True))
         print(
             f"| {name} | 0-{n - 1} | {_dims(o)} | {_dims(s_)} | {ratio} "
-            f"| {statistics.mean(ot) / 1000:.0f}k / {statistics.mean(st) / 1000:.0f}k |"
+            f"| {statistics.mean(ot) / 1000:.0f}k / {statistics.mean(st) / 1000:.0f}k "
+            f"| {statistics.mean(tr_o):.1f} / {statistics.mean(tr_s):.1f} |"
         )
 
 
