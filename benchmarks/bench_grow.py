@@ -6,15 +6,18 @@
 For each species: ``species.sample(name, seed)`` for seeds 0..trees-1, then
 ``build_mesh(grow(params))`` timed on one thread (BLAS/OpenMP pinned to 1 thread); the
 median seconds, median branch/leaf triangle counts and Sapling's mean seconds on the
-species' three reference dictionaries (``sapling_reference_stats.json``; Sapling's branch
-faces are quads, so its triangles are twice its faces) give the speed-up.  ``--write``
+species' three reference dictionaries (``sapling_reference_stats.json``; for the species
+people draw, which have none, on the base dictionary as ``sapling_species_stats.json``
+records it; Sapling's branch faces are quads, so its triangles are twice its faces) give
+the speed-up.  ``--write``
 replaces this benchmark's section of ``benchmarks/RESULTS.md``.
 
 ``--blender BIN`` also times Blender's own Sapling in the same run, on this machine: the
-species' three reference dictionaries are exported as Sapling presets
-(``weberpenn.export.save_sapling_preset``), ``scripts/blender_time_sapling.py`` runs
-``tree_add`` on each ``--repeats`` times inside Blender, and our grow + mesh is timed on the
-very same dictionaries; the same-run ratio is reported beside the recorded one.
+species' three reference dictionaries (the species people draw: its base dictionary) are
+exported as Sapling presets (``weberpenn.export.save_sapling_preset``),
+``benchmarks/sapling_run.py`` runs ``tree_add`` on each ``--repeats`` times inside
+Blender, and our grow + mesh is timed on the very same dictionaries; the same-run ratio is
+reported beside the recorded one.  ``--species a,b`` limits the run to those species.
 """
 
 from __future__ import annotations
@@ -26,29 +29,40 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import datetime as dt  # noqa: E402
-import json  # noqa: E402
 import statistics  # noqa: E402
-import subprocess  # noqa: E402
+import sys  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-# benchmarks/ is on the path when this runs as a script
-from results_md import cpu_name, write_section  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
 
+from results_md import cpu_name, write_section  # noqa: E402  (benchmarks/ is on the path)
+
+from benchmarks.sapling_run import (  # noqa: E402
+    REFERENCE_STATS,
+    SaplingError,
+    recorded,
+    reference_rows,
+    run_sapling,
+)
 from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
 from weberpenn.export import save_sapling_preset  # noqa: E402
+from weberpenn.params import TreeParams  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
-STATS = ROOT.parent / "shared" / "reference" / "sapling_reference_stats.json"
 SECTION = "## Generator: grow + mesh"
 
 
 def _sapling(name: str) -> dict[str, float] | None:
-    if not STATS.is_file():
-        return None
-    trees = json.loads(STATS.read_text())["trees"]
-    rows = [r for f in species.reference_files(name) for r in trees.get(Path(f).stem, [])]
+    """Sapling's recorded seconds and triangles: the reference dictionaries' mean, or for
+    a species without any, its base dictionary's record (None when neither is there)."""
+    rows = reference_rows(name)
+    if not rows and not species.reference_files(name):
+        try:
+            rows = [recorded()["trees"][name]["base"]]
+        except SaplingError:
+            return None
     if not rows:
         return None
     return {
@@ -58,10 +72,10 @@ def _sapling(name: str) -> dict[str, float] | None:
     }
 
 
-def run(trees: int) -> list[dict]:
+def run(trees: int, names: tuple[str, ...] = species.SPECIES) -> list[dict]:
     rows = []
     build_mesh(grow(species.sample("maple", 0)))  # warm-up (imports, caches)
-    for name in species.SPECIES:
+    for name in names:
         secs, grow_s, bt, lt = [], [], [], []
         for seed in range(trees):
             p = species.sample(name, seed)
@@ -93,30 +107,33 @@ def run(trees: int) -> list[dict]:
     return rows
 
 
-def same_run_sapling(blender: str, repeats: int) -> list[dict]:
-    """Sapling and our generator on each species' reference dictionaries, this machine."""
-    script = ROOT / "scripts" / "blender_time_sapling.py"
-    ref_dir = STATS.parent / "treesketchnet_test_params"
+def _dictionaries(name: str) -> list[tuple[str, TreeParams]]:
+    """(label, dictionary) the species is timed on: its three reference dictionaries, or
+    its base dictionary when it has none (the species people draw)."""
+    ref_dir = REFERENCE_STATS.parent / "treesketchnet_test_params"
+    files = species.reference_files(name)
+    if not files:
+        return [(name, species.base(name))]
+    return [(Path(f).stem, load_params(ref_dir / Path(f).name)) for f in files]
+
+
+def same_run_sapling(
+    blender: str, repeats: int, names: tuple[str, ...] = species.SPECIES
+) -> list[dict]:
+    """Sapling and our generator on each species' dictionaries, this machine."""
     out = []
     with tempfile.TemporaryDirectory() as tmp:
         presets, owners = [], []
-        for name in species.SPECIES:
-            for f in species.reference_files(name):
-                path = ref_dir / Path(f).name if not Path(f).is_file() else Path(f)
-                params = load_params(path)
-                preset = Path(tmp) / f"{Path(f).stem}.py"
+        for name in names:
+            for label, params in _dictionaries(name):
+                preset = Path(tmp) / f"{label}.py"
                 save_sapling_preset(params, preset)
-                presets.append(str(preset))
+                presets.append(preset)
                 owners.append((name, params))
-        res_path = Path(tmp) / "sapling.json"
-        cmd = [blender, "--background", "--factory-startup", "--python", str(script), "--"]
-        proc = subprocess.run(
-            [*cmd, str(res_path), str(repeats), *presets], capture_output=True, text=True
-        )
-        if proc.returncode != 0 or not res_path.is_file():
-            tail = (proc.stdout + proc.stderr)[-2000:]
-            raise SystemExit(f"blender failed (exit {proc.returncode}):\n{tail}")
-        sap = json.loads(res_path.read_text())
+        try:
+            sap = run_sapling(blender, presets, repeats)
+        except SaplingError as exc:
+            raise SystemExit(str(exc)) from None
     for (name, params), s in zip(owners, sap, strict=True):
         ours = []
         for _ in range(repeats):
@@ -151,7 +168,9 @@ def markdown_same_run(rows: list[dict], repeats: int) -> str:
         "",
         f"Same run, same machine (`--blender blender --repeats {repeats}`): Blender "
         "Sapling (Debian blender 3.4.1) and our grow + mesh on each species' three "
-        "reference dictionaries (best of the repeats per dictionary, since both are disturbed by other jobs on this shared machine, mean over the three).",
+        "reference dictionaries (the species people draw: its base dictionary; best of "
+        "the repeats per dictionary, since both are disturbed by other jobs on this shared "
+        "machine, mean over the dictionaries).",
         "",
         "| species | Sapling s | ours s | speed-up (same run) |",
         "|---|---:|---:|---:|",
@@ -179,7 +198,8 @@ def markdown(rows: list[dict], trees: int) -> str:
         f"machine: {cpu_name()}, nproc {os.cpu_count()}, one thread, load average {load:.2f} "
         f"(shared with other jobs); {now}. Trees: `species.sample(name, seed)`, seeds "
         f"0..{trees - 1}. Sapling: Blender 3.4 Sapling on the species' three reference "
-        "dictionaries (sapling_reference_stats.json, 2-core machine); its quads counted as 2 "
+        "dictionaries (sapling_reference_stats.json, 2-core machine; the species people draw: "
+        "their base dictionary, sapling_species_stats.json); its quads counted as 2 "
         "triangles.",
         "",
         "| species | grow+mesh median s | max s | grow s | branch tris | leaf tris "
@@ -228,20 +248,35 @@ def main() -> None:
     ap.add_argument("--write", action="store_true", help="update benchmarks/RESULTS.md")
     ap.add_argument("--blender", help="Blender binary: also time Sapling in the same run")
     ap.add_argument("--repeats", type=int, default=3, help="Sapling/ours runs per dictionary")
+    ap.add_argument("--species", help="comma-separated species (default: all)")
     args = ap.parse_args()
     if args.trees < 1 or args.repeats < 1:
         ap.error("--trees and --repeats must be at least 1")
-    rows = run(args.trees)
+    try:
+        names = (
+            tuple(species.canonical(n) for n in args.species.split(",") if n.strip())
+            if args.species
+            else species.SPECIES
+        )
+    except ValueError as exc:
+        ap.error(str(exc))
+    if not names:
+        ap.error("--species names no species")
+    if args.write and names != species.SPECIES:
+        ap.error("--write replaces the all-species section; drop --species or --write")
+    rows = run(args.trees, names)
     text = markdown(rows, args.trees)
     if args.blender:
         text = (
             text.rstrip("\n")
             + "\n"
-            + markdown_same_run(same_run_sapling(args.blender, args.repeats), args.repeats)
+            + markdown_same_run(same_run_sapling(args.blender, args.repeats, names), args.repeats)
         )
+        extra = f" --species {args.species}" if args.species else ""
         text = text.replace(
             f"--trees {args.trees} --write`",
-            f"--trees {args.trees} --blender {args.blender} --repeats {args.repeats} --write`",
+            f"--trees {args.trees} --blender {args.blender} --repeats {args.repeats}{extra}"
+            " --write`",
         )
     if args.markdown or not args.write:
         print(text)

@@ -31,7 +31,7 @@ autoTaper on, closeTip off, splitByLen off).  A dictionary whose tree would exce
 :mod:`weberpenn.limits` (stems, control points, leaves, or the vertices and triangles of
 its mesh) is refused with a :class:`~weberpenn.params.ParamError` naming the keys
 responsible, as soon as growing reaches the limit.  The trunk-split rule is checked draw for
-draw against Sapling's own statistics by ``benchmarks/probes/compare_sapling.py``.
+draw against Sapling's own statistics by ``benchmarks/compare_sapling.py``.
 
 The implementation is vectorised: all stems of a level grow together, one Bezier
 segment at a time, with local frames as rotation matrices (Sapling's quaternions from

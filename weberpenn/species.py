@@ -117,6 +117,12 @@ def source(name: str) -> str:
     return str(_data()[canonical(name)].get("source", ""))
 
 
+def sapling_preset(name: str) -> str | None:
+    """Stem of the Blender Sapling preset the species starts from (``douglas_fir``), or
+    None for the paper's five (they come from its published files)."""
+    return _data()[canonical(name)].get("sapling_preset")
+
+
 def reference_files(name: str) -> tuple[str, ...]:
     """File names of the species' three published ground-truth dictionaries."""
     return tuple(_data()[canonical(name)]["reference_files"])
