@@ -456,22 +456,33 @@ def make_figure(paths: list[Path], target: Path, budget: int) -> list[dict]:
         for c, img in enumerate(imgs):
             sheet.paste(_tile(np.asarray(img), tile), (c * tile, y))
         d.rectangle((0, y, 4 * tile - 1, y + tile + label_h - 1), outline=(180, 180, 180))
-        desc = DRAWINGS[path.stem].what
-        tried = ", ".join(f"{s} {v:.2f}" for s, v in res.extras.get("tried", {}).items())
+        drawing = DRAWINGS[path.stem]
+        right = res.species == drawing.species or res.species in drawing.also
         line1 = (
-            f"{path.stem} ({desc}): {res.species}, distance {res.losses['before']:.3f} -> "
-            f"{res.losses['after']:.3f}, line {res.losses['ink_after']:.3f} (tried {tried})"
+            f"{path.stem} ({drawing.what}; a person says {drawing.species}): "
+            f"{res.species_text or res.species}"
         )
-        warn = "warning: low confidence (is this a tree?)" if res.warning else "no warning"
+        line2 = (
+            f"{'right' if right else 'WRONG'}; distance {res.losses['before']:.3f} -> "
+            f"{res.losses['after']:.3f}; "
+            + ("warning: is this a tree?" if res.warning else "no warning")
+        )
         d.text((6, y + tile + 4), line1, fill="black", font=font)
         d.text(
-            (6, y + tile + 22), warn, fill=(190, 0, 0) if res.warning else (0, 110, 0), font=font
+            (6, y + tile + 22),
+            line2,
+            fill=(190, 0, 0) if res.warning or not right else (0, 110, 0),
+            font=font,
         )
-        rows.append({"drawing": path.stem, **res.summary()})
+        rows.append(
+            {"drawing": path.stem, "person": drawing.species, "right": right, **res.summary()}
+        )
         rows[-1].pop("params", None)
-        print(line1, "|", warn, flush=True)
+        print(line1, "|", line2, flush=True)
     with atomic_target(target) as tmp:
         sheet.save(tmp, format="PNG", optimize=True)
+    n_right = sum(r["right"] for r in rows)
+    print(f"species as a person names it: {n_right} of {len(rows)} right", flush=True)
     return rows
 
 
