@@ -1,10 +1,12 @@
 """Build the installable add-on zip: ``python scripts/blender_addon_zip.py [OUT.zip]``.
 
 The zip holds the folder ``treesketch_addon/`` (Blender's Install... button takes it as
-is) and ``treesketch_addon/controls.json``: the controls table
-(``weberpenn.controls.table()``) and the default budget, written here so that the add-on's
-panel shows the very controls of the project that built it (Blender's Python cannot import
-the project).  Written through the project's atomic writer.
+is), ``treesketch_addon/controls.json``: the controls table
+(``weberpenn.controls.table()``) and the default budget, and
+``treesketch_addon/species.json``: the species a person may pick (``weberpenn.species``:
+name, display name, whether the paper has it), written here so that the add-on's panel
+shows the very controls and species of the project that built it (Blender's Python cannot
+import the project).  Written through the project's atomic writer.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from refine.search import DEFAULT_BUDGET  # noqa: E402
+from weberpenn import species  # noqa: E402
 from weberpenn.controls import table  # noqa: E402
 from weberpenn.fileio import atomic_write  # noqa: E402
 
@@ -33,11 +36,20 @@ def addon_zip() -> bytes:
             if f.is_file() and "__pycache__" not in f.parts:
                 zf.write(f, f"treesketch_addon/{f.relative_to(ADDON).as_posix()}")
         zf.writestr("treesketch_addon/controls.json", controls_json())
+        zf.writestr("treesketch_addon/species.json", species_json())
     return buf.getvalue()
 
 
 def controls_json() -> str:
     return json.dumps({"controls": table(), "default_budget": DEFAULT_BUDGET}, indent=1)
+
+
+def species_json() -> str:
+    rows = [
+        {"name": s, "display": species.display_name(s), "paper": s in species.PAPER_SPECIES}
+        for s in species.SPECIES
+    ]
+    return json.dumps({"species": rows}, indent=1)
 
 
 def main(argv: list[str]) -> int:

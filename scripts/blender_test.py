@@ -7,18 +7,22 @@
    Blender 3.4's glTF importer calls; this script patches nothing).
 1. Blender's own glTF importer, called plainly, reads our GLB: the tree stands along +Z,
    base at z~0, height equal to ours within 1 %.
-2. The add-on registers its panel, and the panel draws.
+2. The add-on registers its panel, and the panel draws; its species picker holds Let it
+   decide and every species the zip carries.
 3. It adds a tree from the bundled drawing through the project's CLI, as a native
    Sapling tree (every level and the leaves: no Limit Import), and from a Grease Pencil
    drawing as the imported GLB, standing upright; each comes in as one hierarchy (an
    empty named after the species) in the ``TreeSketch`` collection, and each
-   prediction's Sapling preset gets a name of its own; a broken preset is reported by
+   prediction's Sapling preset gets a name of its own; a species picked in the panel is
+   the tree's, and the panel says the species in words; a broken preset is reported by
    the operator in plain words.
 """
 
+import json
 import os
 import sys
 import time
+import zipfile
 from pathlib import Path
 
 import numpy as _np
@@ -142,7 +146,14 @@ log = []
 panel = bpy.types.VIEW3D_PT_treesketch
 panel.draw(type("P", (), {"layout": Layout(log)})(), bpy.context)
 assert ("operator", "treesketch.predict") in log and ("prop", "image_path") in log, log
-step(f"add-on installed, panel draws {len(log)} items")
+assert ("prop", "species") in log, log
+# the species picker: Let it decide, then the project's species (the zip's species.json)
+items = bpy.context.scene.treesketch.bl_rna.properties["species"].enum_items
+assert items[0].identifier == "AUTO" and bpy.context.scene.treesketch.species == "AUTO"
+with zipfile.ZipFile(ZIP) as zf:
+    shipped = json.loads(zf.read("treesketch_addon/species.json"))["species"]
+assert sorted(i.identifier for i in items[1:]) == sorted(s["name"] for s in shipped), items
+step(f"add-on installed, panel draws {len(log)} items; species: {[i.name for i in items]}")
 
 
 def check_hierarchy(kind):
@@ -179,10 +190,20 @@ if SAPLING:
     n_leaves = len(leaves[0].data.polygons)
     step(f"Sapling tree from the bundled drawing: {splines} splines, {n_leaves} leaves")
     first = check_hierarchy("Sapling tree")
-    # a second prediction: its own preset in Sapling's menu, its own parent
+    assert settings.species_text, "the panel does not say the species in words"
+    # a second prediction, of the species picked: its own preset in Sapling's menu, its
+    # own parent, named after that species; the panel says it in words
+    settings.species = "oak"
     assert bpy.ops.treesketch.predict(wait=True) == {"FINISHED"}, settings.status
     second = check_hierarchy("second Sapling tree")
     assert second.name != first.name
+    assert second.name.split(".")[0] == "oak", second.name
+    assert settings.species_text.startswith("an oak"), settings.species_text
+    log = []
+    panel.draw(type("P", (), {"layout": Layout(log)})(), bpy.context)
+    assert ("label", f"It is {settings.species_text}") in log, log
+    step(f"species picked: {second.name}, the panel says 'It is {settings.species_text}'")
+    settings.species = "AUTO"
     presets = sorted(p for p in os.listdir(folder) if p.startswith("treesketch_"))
     assert len(presets) == 2, f"each prediction's preset needs a name of its own: {presets}"
     step(f"two predictions, two presets: {presets}")

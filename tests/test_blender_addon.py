@@ -381,3 +381,59 @@ def test_post_trees_against_the_service(backend, tmp_path):
     edited = json.loads(out.params.read_text())
     assert edited["length"][1] == pytest.approx(1.5 * params["length"][1])
     assert edited["seed"] == 3 and out.glb.read_bytes()[:4] == b"glTF"
+
+
+# ------------------------------------------------ issue 27, item 4: the species meant
+def test_species_in_the_zip_and_the_species_meant_reaches_the_cli(backend, tmp_path):
+    """The panel's species are the project's list (shipped in the zip as species.json);
+    the one picked goes to ``treesketch predict --species``; the CLI's "it is ..." line is
+    the species in words the panel shows."""
+    sys.path.insert(0, str(ROOT / "scripts"))
+    try:
+        from blender_addon_zip import main
+    finally:
+        sys.path.remove(str(ROOT / "scripts"))
+    assert main([str(tmp_path / "a.zip")]) == 0
+    zf = zipfile.ZipFile(tmp_path / "a.zip")
+    assert zf.namelist().count("treesketch_addon/species.json") == 1
+    (tmp_path / "species.json").write_bytes(zf.read("treesketch_addon/species.json"))
+    rows = backend.load_species(tmp_path / "species.json")
+    assert [r["name"] for r in rows] == list(species.SPECIES)
+    assert all(r["display"] == species.display_name(r["name"]) for r in rows)
+    assert {r["name"] for r in rows if r["paper"]} == set(species.PAPER_SPECIES)
+    assert backend.load_species(tmp_path / "missing.json") == []
+
+    out = backend.Outputs.in_folder(tmp_path)
+    cmd = backend.cli_command("t", "d.png", out, species="fir")
+    assert cmd[cmd.index("--species") + 1] == "fir"
+    assert "--species" not in backend.cli_command("t", "d.png", out)  # the drawing decides
+    lines = [
+        "refining 3/3",
+        "species: palm (first estimate: tsn); view yaw 0",
+        "it is a palm (87%); could also be a cherry",
+        "  candidate palm     87.0%  0.412",
+    ]
+    assert backend.species_text_of(lines) == "a palm (87%); could also be a cherry"
+    assert backend.species_text_of(lines[:2]) is None
+
+
+def test_post_predict_asks_the_service_for_the_species_meant(backend, tmp_path):
+    """The service path: the species picked reaches the real service's job (the
+    estimator says palm; a fir is asked for) and its answer says the species in words."""
+    from service_helpers import palm_sketch_png, serve
+
+    from treesketch.service import ServiceConfig, create_app
+
+    config = ServiceConfig(
+        data=tmp_path / "data", workers=1, estimator="service_helpers:palm_estimator"
+    )
+    image = tmp_path / "palm.png"
+    image.write_bytes(palm_sketch_png())
+    with serve(create_app(config)) as url:
+        meant = backend.post_predict(url, image, tmp_path / "f.glb", refine=False, species="fir")
+        free = backend.post_predict(url, image, tmp_path / "p.glb", refine=False)
+        with pytest.raises(backend.PredictError, match="unknown species 'baobab'"):
+            backend.post_predict(url, image, tmp_path / "b.glb", refine=False, species="baobab")
+    assert meant["species"] == "fir" and meant["species_text"].startswith("a fir")
+    assert (tmp_path / "f.glb").read_bytes()[:4] == b"glTF"
+    assert free["species"] == "palm" and free["species_text"].startswith("a palm")

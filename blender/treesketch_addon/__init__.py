@@ -1,7 +1,9 @@
 """TreeSketch for Blender: draw a tree (an image file or a Grease Pencil drawing), get a
 3D tree back, as a native Sapling tree (editable in Sapling's redo panel) or as the
 imported GLB, then shape it with the project's controls (height, crown width, ..., another
-variant: the table the zip carries as ``controls.json``).  Install the zip (``make blender-addon``) in Edit > Preferences > Add-ons,
+variant: the table the zip carries as ``controls.json``).  The species may be left to
+the drawing or picked (the list the zip carries as ``species.json``); the panel says the
+result's species in words.  Install the zip (``make blender-addon``) in Edit > Preferences > Add-ons,
 then set where the project's ``treesketch`` program lives (or the service's URL) in the
 add-on's preferences.  Panel: 3D view > sidebar (N) > TreeSketch.
 """
@@ -37,6 +39,18 @@ BUNDLED_DRAWING = Path(__file__).with_name("drawing_maple.png")
 SAPLING = "add_curve_sapling"
 COLLECTION = "TreeSketch"  # where every predicted tree goes
 CONTROLS = backend.load_controls(Path(__file__).with_name("controls.json"))["controls"]
+SPECIES = backend.load_species(Path(__file__).with_name("species.json"))
+AUTO = "AUTO"  # the species enum's "Let it decide"
+
+
+def species_items() -> list[tuple[str, str, str]]:
+    """The panel's species choices: Let it decide, then every species by its name."""
+    items = [(AUTO, "Let it decide", "TreeSketch decides from the drawing")]
+    items += [
+        (s["name"], s["display"], f"Make a {s['display']} from the drawing")
+        for s in sorted(SPECIES, key=lambda s: s["display"].lower())
+    ]
+    return items
 
 
 def _prefs(context) -> bpy.types.AddonPreferences:
@@ -106,6 +120,12 @@ class TREESKETCH_Settings(bpy.types.PropertyGroup):
         ],
         default="SAPLING",
     )
+    species: EnumProperty(
+        name="Species",
+        description="The kind of tree drawn: let TreeSketch decide, or pick the one you mean",
+        items=species_items(),
+        default=AUTO,
+    )
     refine: BoolProperty(name="Refine", description="Refine the network's estimate", default=True)
     budget: IntProperty(
         name="Budget",
@@ -115,6 +135,7 @@ class TREESKETCH_Settings(bpy.types.PropertyGroup):
         min=0,
     )
     status: StringProperty(name="Status", default="")
+    species_text: StringProperty(default="")  # the last prediction's species, in words
     # the last prediction, which the controls edit (JSON parameters, species, view yaw)
     last_params: StringProperty(default="")
     last_species: StringProperty(default="")
@@ -216,12 +237,13 @@ def drawing_file(context, folder: Path) -> Path:
 
 
 def prediction_job(context, image: Path, out: backend.Outputs):
-    """A function ``job(on_line, cancel)`` that runs the prediction with the backend
-    chosen in the preferences; it reads every setting now, so it can run in a thread
-    without touching Blender's data."""
+    """A function ``job(on_line, cancel) -> (species, species in words)`` that runs the
+    prediction with the backend chosen in the preferences; it reads every setting now, so
+    it can run in a thread without touching Blender's data."""
     prefs, settings = _prefs(context), context.scene.treesketch
     refine = bool(settings.refine)
     budget = int(settings.budget) or None  # 0: the project's one default
+    species = None if settings.species == AUTO else str(settings.species)
     if prefs.backend == "CLI":
         cmd = backend.cli_command(
             bpy.path.abspath(prefs.cli_path) or "treesketch",
@@ -229,6 +251,7 @@ def prediction_job(context, image: Path, out: backend.Outputs):
             out,
             refine=refine,
             budget=budget,
+            species=species,
         )
 
         def run(on_line=None, cancel=None):
@@ -240,16 +263,18 @@ def prediction_job(context, image: Path, out: backend.Outputs):
                     on_line(line)
 
             backend.run_cli(cmd, seen, cancel)
-            return backend.species_of(lines)
+            return backend.species_of(lines), backend.species_text_of(lines)
 
         return run
     url = str(prefs.service_url)
     token = str(prefs.service_token) or os.environ.get("TREESKETCH_TOKEN") or None
 
     def ask(on_line=None, cancel=None):
-        reply = backend.post_predict(url, image, out.glb, refine=refine, budget=budget, token=token)
+        reply = backend.post_predict(
+            url, image, out.glb, refine=refine, budget=budget, token=token, species=species
+        )
         out.params.write_text(json.dumps(reply.get("params", {})), encoding="utf-8")
-        return reply.get("species")
+        return reply.get("species"), reply.get("species_text")
 
     return ask
 
@@ -363,9 +388,11 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
     _lines: queue.Queue
     _cancel = False
     _species = None
+    _species_text = None
 
     def execute(self, context):
         settings = context.scene.treesketch
+        settings.species_text = ""  # an earlier prediction's words would mislead
         folder = Path(tempfile.mkdtemp(prefix="treesketch-"))
         try:
             if settings.result == "SAPLING" and _prefs(context).backend == "CLI":
@@ -381,7 +408,7 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
         if self.wait or bpy.app.background:
             try:
                 job = prediction_job(context, image, self._out)
-                self._species = job(on_line=lambda s: print("treesketch:", s))
+                self._species, self._species_text = job(on_line=lambda s: print("treesketch:", s))
             except (backend.PredictError, RuntimeError) as exc:
                 shutil.rmtree(folder, ignore_errors=True)
                 return self._failed(settings, exc)
@@ -392,7 +419,9 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
 
         def work():
             try:
-                self._species = job(on_line=self._lines.put, cancel=lambda: self._cancel)
+                self._species, self._species_text = job(
+                    on_line=self._lines.put, cancel=lambda: self._cancel
+                )
             except Exception as exc:  # shown in the panel, never lost in a thread
                 self._error = exc
 
@@ -447,6 +476,7 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
         finally:
             shutil.rmtree(self._folder, ignore_errors=True)
         settings.progress, settings.status = 1.0, f"added {new[0].name} ({len(new) - 1} object(s))"
+        settings.species_text = self._species_text or ""
         return {"FINISHED"}
 
 
@@ -563,6 +593,7 @@ class TREESKETCH_PT_panel(bpy.types.Panel):
             layout.label(
                 text=obj.name if ok else "select a Grease Pencil drawing", icon="GREASEPENCIL"
             )
+        layout.prop(settings, "species")
         layout.prop(settings, "result", expand=True)
         row = layout.row()
         row.prop(settings, "refine")
@@ -576,6 +607,8 @@ class TREESKETCH_PT_panel(bpy.types.Panel):
             layout.prop(settings, "progress", text="Progress (Esc cancels)")
         if settings.status:
             layout.label(text=settings.status)
+        if settings.species_text and not settings.running:
+            layout.label(text=f"It is {settings.species_text}", icon="INFO")
         if settings.last_params and CONTROLS:
             box = layout.box()
             box.label(text=f"Shape the {settings.last_species or 'tree'}")

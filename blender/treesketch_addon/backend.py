@@ -17,8 +17,12 @@ both), so the project's test suite checks it without Blender.
   3.4 (Debian's) still calls though numpy 1.24 removed it.
 - :func:`plain_error`: one line a person can read from an exception (an operator's
   ``RuntimeError`` carries Blender's whole "Error: Python: Traceback ..." text).
-- :func:`species_of` / :func:`preset_name`: the predicted species from the CLI's output,
-  and a preset file name of its own for every prediction.
+- :func:`species_of` / :func:`species_text_of` / :func:`preset_name`: the predicted
+  species and the species in words ("a palm (87%); could also be a cherry") from the
+  CLI's output, and a preset file name of its own for every prediction.
+- :func:`load_species`: the species a person may pick (the project's list, shipped in
+  the zip as ``species.json``); ``cli_command`` and ``post_predict`` pass the one picked
+  (``--species`` / the ``species`` field).
 - :func:`load_controls`, :func:`keep_value`, :func:`changed_controls`,
   :func:`grow_command`, :func:`post_trees`: the controls a person edits the predicted tree
   with (the project's table, shipped in the zip as ``controls.json``), and the tree grown
@@ -53,11 +57,13 @@ __all__ = [
     "grow_command",
     "keep_value",
     "load_controls",
+    "load_species",
     "post_trees",
     "numpy_bool_alias",
     "plain_error",
     "preset_name",
     "species_of",
+    "species_text_of",
     "PredictError",
     "cli_command",
     "multipart_body",
@@ -70,6 +76,7 @@ __all__ = [
 
 _ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
 _SPECIES = re.compile(r"^species: ([A-Za-z0-9_]+)")
+_SPECIES_TEXT = re.compile(r"^it is (.+)$")
 _ERROR_LINE = re.compile(r"^[A-Za-z_][\w.]*(Error|Exception|Exit)\b.*?: ")
 _YAW = re.compile(r"^# view yaw: (-?[0-9.]+) degrees")
 
@@ -100,8 +107,10 @@ def cli_command(
     refine: bool = True,
     budget: int | None = None,
     max_faces: int | None = None,
+    species: str | None = None,
 ) -> list[str]:
-    """The ``treesketch predict`` command line for one drawing."""
+    """The ``treesketch predict`` command line for one drawing (``species``: the one the
+    person means; None lets the drawing decide)."""
     cmd = [str(treesketch), "predict", str(image), "--out", str(outputs.glb)]
     cmd += ["--params", str(outputs.params), "--preset", str(outputs.preset)]
     if not refine:
@@ -110,6 +119,8 @@ def cli_command(
         cmd += ["--budget", str(int(budget))]
     if max_faces is not None:
         cmd += ["--max-faces", str(int(max_faces))]
+    if species:
+        cmd += ["--species", str(species)]
     return cmd
 
 
@@ -275,10 +286,12 @@ def post_predict(
     timeout: float = 600.0,
     token: str | None = None,
     max_glb_bytes: int = MAX_GLB_BYTES,
+    species: str | None = None,
 ) -> dict:
     """``POST {url}/predict`` with the drawing; writes the returned GLB to ``glb_path``
-    (whole or not at all) and returns the service's JSON.  ``token``: the service's
-    token, sent as ``Authorization: Bearer``."""
+    (whole or not at all) and returns the service's JSON (its ``species_text`` says the
+    species in words).  ``token``: the service's token, sent as ``Authorization:
+    Bearer``; ``species``: the one the person means (None lets the drawing decide)."""
     origin = _origin(url)
     headers = {}
     if token:
@@ -288,6 +301,8 @@ def post_predict(
     fields = {"refine": "true" if refine else "false"}
     if budget is not None:
         fields["budget"] = str(int(budget))
+    if species:
+        fields["species"] = str(species)
     body, ctype = multipart_body("sketch", Path(image).name, Path(image).read_bytes(), fields)
     base = url.rstrip("/") + "/"
     opener = _opener(origin)
@@ -455,6 +470,16 @@ def species_of(lines: Iterable[str]) -> str | None:
     return None
 
 
+def species_text_of(lines: Iterable[str]) -> str | None:
+    """The species in words ``treesketch predict`` printed ("it is a palm (87%); could
+    also be a cherry" -> "a palm (87%); could also be a cherry")."""
+    for line in lines:
+        m = _SPECIES_TEXT.match(line)
+        if m:
+            return m.group(1)
+    return None
+
+
 def preset_name(species: str | None, taken: Iterable[str]) -> str:
     """A Sapling preset file name no earlier prediction has: treesketch_<species>_<n>.py
     with the first free n."""
@@ -473,6 +498,16 @@ def load_controls(path: str | os.PathLike[str]) -> dict:
     if not p.is_file():
         return {"controls": [], "default_budget": None}
     return json.loads(p.read_text(encoding="utf-8"))
+
+
+def load_species(path: str | os.PathLike[str]) -> list[dict]:
+    """The species a person may pick, as the zip carries them (``species.json``:
+    ``{"species": [{"name", "display", "paper"}, ...]}``); none when the file is missing
+    (an add-on run from the source folder: the drawing decides)."""
+    p = Path(path)
+    if not p.is_file():
+        return []
+    return list(json.loads(p.read_text(encoding="utf-8"))["species"])
 
 
 def keep_value(row: dict):

@@ -167,6 +167,7 @@ async function submit(ev) {
   form.append("refine", $("refine").checked ? "true" : "false");
   if ($("height").value) form.append("height", $("height").value);
   if ($("max_faces").value) form.append("max_faces", $("max_faces").value);
+  if ($("species-pick").value) form.append("species", $("species-pick").value);
   jobId = null;
   setState("sending");
   say("Sending...");
@@ -276,9 +277,7 @@ $("cancel").onclick = async () => {
 function showResult(job) {
   const r = job.result;
   const links = job.links;
-  $("species").textContent = r.species;
-  $("confidence").textContent = `${Math.round(r.confidence * 100)}%`;
-  $("distance").textContent = `${r.losses.before.toFixed(3)} → ${r.losses.after.toFixed(3)}`;
+  shownJob = job;
   $("warning").hidden = !r.warning;
   $("warning").textContent = r.warning || "";
   $("before").src = links["sketch_before.png"];
@@ -287,12 +286,111 @@ function showResult(job) {
     $(id).href = links[name];
     $(id).classList.remove("disabled");
   }
+  showCandidates(job);
+  showFacts(null);
   $("view-note").textContent = "";
   // the viewer's light tree; the GLB download keeps full detail
   loadModel(links["tree_view.glb"], framedJob !== job.id);
   framedJob = job.id;
   if (phone()) $("result-panel").scrollIntoView({ behavior: "smooth" });
   startEdit(r);
+}
+
+// ---- the species: the picker (GET /species) and the result's candidates ---------------
+let speciesNames = new Map(); // name -> what people call it
+let shownJob = null; // the finished job on show
+let switchCount = 0; // the switches to a candidate so far (a late answer of an earlier one is dropped)
+
+async function loadSpecies() {
+  const r = await api("/species").catch(() => null);
+  if (!r || !r.ok) return;
+  const { species } = await r.json();
+  speciesNames = new Map(species.map((s) => [s.name, s.display]));
+  const pick = $("species-pick");
+  const byName = [...species].sort((a, b) => a.display.localeCompare(b.display));
+  for (const s of byName) pick.append(new Option(s.display, s.name));
+  document.body.dataset.species = "ready";
+}
+const displayName = (name) => speciesNames.get(name) || name;
+// a species that kept a sliver of the probability is not ruled out: "<1%", not "0%"
+const percent = (p) => (p > 0 && p < 0.005 ? "<1%" : `${Math.round(p * 100)}%`);
+
+// the result's species in words and its candidates as thumbnails to switch to
+function showCandidates(job) {
+  const r = job.result;
+  const box = $("candidates");
+  box.replaceChildren();
+  const cands = (r.candidates || []).slice(0, 3);
+  $("species-text").textContent = r.species_text ? `It is ${r.species_text}.` : "";
+  cands.forEach((c, i) => {
+    const b = document.createElement("button");
+    b.type = "button";
+    b.className = "candidate";
+    b.dataset.species = c.species;
+    b.setAttribute("aria-pressed", String(i === 0));
+    b.title = i === 0 ? `The tree the drawing gave: ${c.name}` : `Show it as ${c.name} instead`;
+    const im = document.createElement("img");
+    im.src = job.links[`candidate${i + 1}.png`];
+    im.alt = "";
+    const name = document.createElement("span");
+    name.className = "cand-name";
+    name.textContent = c.name;
+    const prob = document.createElement("span");
+    prob.className = "cand-prob";
+    prob.textContent = percent(c.probability);
+    b.setAttribute("aria-label", `${c.name}, ${percent(c.probability)}`);
+    b.append(im, name, prob);
+    b.onclick = () => switchTo(i);
+    box.append(b);
+  });
+  $("candidates-panel").hidden = !cands.length && !r.species_text;
+}
+
+// the facts of the tree on show: the job's own (null) or candidate ``c``
+function showFacts(c) {
+  const r = shownJob.result;
+  const species = c ? c.species : r.species;
+  $("species").textContent = displayName(species);
+  document.body.dataset.shown = species;
+  $("confidence").textContent = percent(c ? c.probability : r.confidence);
+  if (!c) $("distance").textContent = `${r.losses.before.toFixed(3)} → ${r.losses.after.toFixed(3)}`;
+  else $("distance").textContent = c.distance == null ? "– (not refined)" : c.distance.toFixed(3);
+}
+
+// show candidate ``i`` (0: the job's own tree) in the 3D view; the controls edit it and
+// the downloads are of it
+async function switchTo(i) {
+  if (!shownJob) return;
+  const job = shownJob;
+  const cands = job.result.candidates || [];
+  const c = cands[i];
+  if (!c) return;
+  const mine = ++switchCount;
+  for (const [k, b] of [...$("candidates").children].entries()) b.setAttribute("aria-pressed", String(k === i));
+  showFacts(i === 0 ? null : c);
+  $("view-note").textContent = "";
+  if (i === 0) {
+    // the job's own tree and files again
+    loadModel(job.links["tree_view.glb"], true);
+    setPreset(true);
+    startEdit(job.result);
+    return;
+  }
+  setPreset(false);
+  $("edit-status").textContent = `Growing the ${c.name}...`;
+  await startEdit({ params: c.params, species: c.species }, true);
+  if (mine !== switchCount || !edit) return;
+  const r = await treeRequest({}, "model/gltf-binary", table ? table.view_faces : null);
+  if (mine !== switchCount) return;
+  if (!r.ok) { $("edit-status").textContent = `Refused (${r.status})`; return; }
+  loadModel(await r.arrayBuffer(), true);
+  $("edit-status").textContent = "";
+}
+
+// the Sapling preset is the job's own tree's: a switched or edited tree has none
+function setPreset(own) {
+  $("dl-preset").classList.toggle("disabled", !own);
+  $("dl-preset").title = own ? "" : "The Sapling preset is of the drawing's own tree: download the JSON (Sapling's keys) instead";
 }
 
 // ---- examples, recent jobs, a job from the address -----------------------------------
@@ -361,7 +459,7 @@ async function restoreFromUrl() {
 
 // ---- shaping the tree: the controls (GET /controls, POST /trees) ---------------------
 let table = null; // GET /controls
-let edit = null; // {params, species, initial: {name: value}, busy, again, edited}
+let edit = null; // {params, species, initial: {name: value}, busy, again, edited, switched}
 let editTimer = null;
 
 async function loadControls() {
@@ -443,12 +541,16 @@ async function treeRequest(controls, accept, maxFaces) {
   });
 }
 
-async function startEdit(result) {
+// ``switched``: a candidate species' tree, not the job's own (its downloads are grown)
+async function startEdit(result, switched = false) {
   if (!table) return;
-  edit = { params: result.params, species: result.species, initial: null, busy: false, again: false, edited: false, count: 0 };
+  const count = edit ? edit.count : 0;
+  const mine = { params: result.params, species: result.species, initial: null, busy: false, again: false, edited: false, switched, count };
+  edit = mine;
   const r = await treeRequest({}, "application/json", table.view_faces);
-  if (!r.ok || !edit) return;
+  if (!r.ok || edit !== mine) return;
   const body = await r.json();
+  if (edit !== mine) return;
   edit.initial = body.controls;
   for (const c of table.controls) setControl(c, edit.initial[c.name]);
   $("edit-panel").hidden = false;
@@ -457,6 +559,9 @@ async function startEdit(result) {
 
 function endEdit() {
   edit = null;
+  shownJob = null;
+  switchCount++;
+  $("candidates-panel").hidden = true;
   $("edit-panel").hidden = true;
   delete document.body.dataset.edit;
 }
@@ -480,27 +585,32 @@ function scheduleEdit() {
   editTimer = setTimeout(runEdit, 60);
 }
 async function runEdit() {
-  if (edit.busy) { edit.again = true; return; }
-  edit.busy = true;
+  const mine = edit;
+  if (!mine) return;
+  if (mine.busy) { mine.again = true; return; }
+  mine.busy = true;
   const t0 = performance.now();
   const controls = changedControls();
   try {
     const r = await treeRequest(controls, "model/gltf-binary", table.view_faces);
+    if (edit !== mine) return; // switched to another tree meanwhile
     if (!r.ok) {
       const body = await r.json().catch(() => ({}));
       $("edit-status").textContent = `Refused: ${body.detail || r.statusText}`;
     } else {
       const buffer = await r.arrayBuffer();
+      if (edit !== mine) return;
       loadModel(buffer, false);
       edit.edited = Object.keys(controls).length > 0;
       edit.count += 1;
       document.body.dataset.edits = String(edit.count);
+      setPreset(!edit.edited && !edit.switched);
       $("edit-status").textContent = `${Math.round(performance.now() - t0)} ms`;
       $("view-note").textContent = edit.edited ? "edited" : "";
     }
   } finally {
-    edit.busy = false;
-    if (edit.again) { edit.again = false; runEdit(); }
+    mine.busy = false;
+    if (mine.again && edit === mine) { mine.again = false; runEdit(); }
   }
 }
 
@@ -516,10 +626,12 @@ $("reset-controls").onclick = () => {
   scheduleEdit();
 };
 
-// the downloads of an edited tree: asked for when clicked (full detail for the GLB)
-async function downloadEdited(ev, accept, name) {
-  if (!edit || !edit.edited) return; // the job's own file
+// the downloads of an edited tree or another candidate's: asked for when clicked (full
+// detail for the GLB)
+async function downloadEdited(ev, accept, ext) {
+  if (!edit || !(edit.edited || edit.switched)) return; // the job's own file
   ev.preventDefault();
+  const name = `tree_${edit.species}${edit.edited ? "_edited" : ""}.${ext}`;
   const r = await treeRequest(changedControls(), accept, null);
   if (!r.ok) { $("edit-status").textContent = `Download failed (${r.status})`; return; }
   const blob = accept === "application/json"
@@ -531,8 +643,8 @@ async function downloadEdited(ev, accept, name) {
   a.click();
   setTimeout(() => URL.revokeObjectURL(a.href), 10_000);
 }
-$("dl-glb").addEventListener("click", (ev) => downloadEdited(ev, "model/gltf-binary", "tree_edited.glb"));
-$("dl-json").addEventListener("click", (ev) => downloadEdited(ev, "application/json", "tree_edited.json"));
+$("dl-glb").addEventListener("click", (ev) => downloadEdited(ev, "model/gltf-binary", "glb"));
+$("dl-json").addEventListener("click", (ev) => downloadEdited(ev, "application/json", "json"));
 
 // ---- the 3D view ---------------------------------------------------------------------
 const view = $("view");
@@ -624,6 +736,7 @@ function loadModel(source, frame = true) {
     $("height-readout").textContent = `${size.y.toFixed(size.y < 10 ? 2 : 1)} m`;
     if (frame) frameModel(); else render();
     document.body.dataset.meshes = String(meshes);
+    document.body.dataset.loads = String(Number(document.body.dataset.loads || 0) + 1);
     document.body.dataset.model = "loaded";
   };
   const onError = (err) => {
@@ -635,6 +748,6 @@ function loadModel(source, frame = true) {
 }
 
 // ---- start ---------------------------------------------------------------------------
-loadControls().then(restoreFromUrl);
+Promise.all([loadControls(), loadSpecies()]).then(restoreFromUrl);
 loadGallery();
 refreshRecent();

@@ -1,0 +1,230 @@
+"""The page's species in a real browser (Debian's chromium through Playwright): the picker
+lists every species and the one picked reaches the job; the result names its species in
+words and shows its candidates as thumbnails; clicking one (or pressing Enter on it)
+switches the 3D view, the controls and the downloads to that candidate's tree.  A real
+server with one worker (a fixed palm as the first estimate, tiny budgets); any console
+error, page error or request outside the server fails the test."""
+
+from __future__ import annotations
+
+import io
+import json
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from service_helpers import serve
+from web_helpers import CHROMIUM, CHROMIUM_ARGS, draw_with_mouse
+
+from treesketch.service import ServiceConfig, create_app
+from weberpenn import species
+
+pytestmark = pytest.mark.slow
+
+JOB_TIMEOUT = 180_000  # ms
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    config = ServiceConfig(
+        data=tmp_path_factory.mktemp("web-species"),
+        workers=1,
+        estimator="service_helpers:palm_estimator",
+    )
+    with serve(create_app(config)) as url:
+        yield url
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Any]:
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        yield b
+        b.close()
+
+
+def _context(browser: Any, server: str, **options: Any) -> tuple[Any, list[str], list[str]]:
+    """A context that may talk to the server only; (context, outside URLs, errors)."""
+    ctx = browser.new_context(accept_downloads=True, **options)
+    outside: list[str] = []
+    errors: list[str] = []
+
+    def guard(route: Any) -> None:
+        if route.request.url.startswith(server):
+            route.continue_()
+        else:
+            outside.append(route.request.url)
+            route.abort()
+
+    ctx.route("**/*", guard)
+    ctx.on("weberror", lambda e: errors.append(str(e.error)))
+    ctx.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    return ctx, outside, errors
+
+
+@pytest.fixture
+def page(browser: Any, server: str) -> Iterator[Any]:
+    ctx, outside, errors = _context(browser, server, viewport={"width": 1200, "height": 900})
+    pg = ctx.new_page()
+    pg.goto(server + "/")
+    pg.wait_for_selector("body[data-species=ready]")
+    pg.wait_for_function("document.getElementById('budget').value !== ''")
+    yield pg
+    ctx.close()
+    assert not outside, f"the page fetched from outside the server: {outside}"
+    assert not errors, errors
+
+
+def _make_tree(page: Any, pick: str | None = None) -> dict:
+    """Draw, submit (the species ``pick``, or let it decide) and wait for the result on
+    show; returns the finished job as the API gives it."""
+    if pick is not None:
+        page.select_option("#species-pick", pick)
+    draw_with_mouse(page)
+    page.fill("#budget", "2")
+    page.click("#submit")
+    page.wait_for_selector("body[data-state=done]", timeout=JOB_TIMEOUT)
+    page.wait_for_selector("body[data-edit=ready]", timeout=30_000)
+    page.wait_for_selector("body[data-model=loaded]", timeout=30_000)
+    return page.evaluate("async (id) => (await fetch(`/jobs/${id}`)).json()", _job(page))
+
+
+def _job(page: Any) -> str:
+    return page.get_attribute("body", "data-job")
+
+
+def _loads(page: Any) -> int:
+    return int(page.get_attribute("body", "data-loads") or 0)
+
+
+def _view_pixels(page: Any) -> np.ndarray:
+    from PIL import Image
+
+    shot = page.locator("#view canvas").screenshot()
+    return np.asarray(Image.open(io.BytesIO(shot)))[..., :3].astype(int)
+
+
+def test_the_picker_lists_every_species_and_the_pick_reaches_the_job(page: Any) -> None:
+    options = page.eval_on_selector_all(
+        "#species-pick option", "os => os.map(o => [o.value, o.textContent])"
+    )
+    assert options[0] == ["", "Let it decide"]
+    assert page.input_value("#species-pick") == ""  # the drawing decides by default
+    assert sorted(v for v, _ in options[1:]) == sorted(species.SPECIES)
+    assert {v: t for v, t in options[1:]} == {s: species.display_name(s) for s in species.SPECIES}
+    labels = [t for _, t in options[1:]]
+    assert labels == sorted(labels, key=str.lower)  # found by name
+
+    job = _make_tree(page, pick="fir")  # the estimator says palm; the person means a fir
+    assert job["result"]["species"] == "fir"
+    assert page.text_content("#species") == species.display_name("fir")
+    assert page.get_attribute("body", "data-shown") == "fir"
+    assert page.inner_text("#species-text").startswith("It is a fir")
+    first = page.locator("#candidates .candidate").first
+    assert first.get_attribute("data-species") == "fir"
+    assert first.get_attribute("aria-pressed") == "true"
+
+
+def test_candidates_switch_the_tree_the_controls_and_the_downloads(
+    page: Any, tmp_path: Path
+) -> None:
+    job = _make_tree(page)
+    result = job["result"]
+    assert result["species"] == "palm"
+    text = page.inner_text("#species-text")
+    assert text == f"It is {result['species_text']}." and "palm" in text
+    cands = page.locator("#candidates .candidate")
+    assert cands.count() == 3
+    for i, c in enumerate(result["candidates"][:3]):
+        thumb = cands.nth(i)
+        assert thumb.get_attribute("data-species") == c["species"]
+        assert c["name"] in thumb.inner_text()
+        p = c["probability"]
+        assert (f"{round(p * 100)}%" if p == 0 or p >= 0.005 else "<1%") in thumb.inner_text()
+        page.wait_for_function(
+            "(i) => document.querySelectorAll('#candidates img')[i].naturalWidth > 0", arg=i
+        )
+        assert thumb.get_attribute("aria-pressed") == ("true" if i == 0 else "false")
+    before = _view_pixels(page)
+    h0 = page.inner_text("#height-readout")
+
+    # the second candidate, from the keyboard: a new GLB, its species, its controls
+    other = result["candidates"][1]
+    n = _loads(page)
+    cands.nth(1).focus()
+    page.keyboard.press("Enter")
+    page.wait_for_function(f"Number(document.body.dataset.loads) > {n}", timeout=30_000)
+    page.wait_for_selector("body[data-model=loaded]")
+    assert page.get_attribute("body", "data-shown") == other["species"]
+    assert page.text_content("#species") == species.display_name(other["species"])
+    assert cands.nth(1).get_attribute("aria-pressed") == "true"
+    assert cands.nth(0).get_attribute("aria-pressed") == "false"
+    after = _view_pixels(page)
+    assert (np.abs(after - before).sum(axis=2) > 40).mean() > 0.01, "the tree did not change"
+    assert page.inner_text("#height-readout") != h0
+    page.wait_for_selector("body[data-edit=ready]")
+    assert "disabled" in (page.get_attribute("#dl-preset", "class") or "")
+
+    # the downloads are the candidate's tree
+    with page.expect_download() as dl:
+        page.click("#dl-json")
+    got = json.loads(Path(dl.value.path()).read_text())
+    assert got == other["params"]
+    with page.expect_download() as dl:
+        page.click("#dl-glb")
+    glb = Path(dl.value.path()).read_bytes()
+    assert glb[:4] == b"glTF"
+    import trimesh
+
+    assert len(trimesh.load(io.BytesIO(glb), file_type="glb").geometry) >= 1
+    job_glb = page.evaluate(
+        "async (id) => (await (await fetch(`/jobs/${id}/tree.glb`)).arrayBuffer()).byteLength",
+        job["id"],
+    )
+    assert len(glb) != job_glb
+
+    # the controls now shape the candidate's tree
+    edits = int(page.get_attribute("body", "data-edits") or 0)
+    page.uncheck("#c-leafy")
+    page.wait_for_function(f"Number(document.body.dataset.edits || 0) > {edits}", timeout=30_000)
+    with page.expect_download() as dl:
+        page.click("#dl-json")
+    edited = json.loads(Path(dl.value.path()).read_text())
+    assert edited["leaves"] == 0 and edited["shape"] == other["params"]["shape"]
+    assert page.get_attribute("body", "data-shown") == other["species"]
+
+    # and back to the drawing's own tree: its species, its files
+    n = _loads(page)
+    cands.nth(0).click()
+    page.wait_for_function(f"Number(document.body.dataset.loads) > {n}", timeout=30_000)
+    page.wait_for_selector("body[data-edit=ready]")
+    assert page.inner_text("#species").lower() == "palm"
+    assert "disabled" not in (page.get_attribute("#dl-preset", "class") or "")
+    assert page.get_attribute("#dl-glb", "href").endswith(f"/jobs/{job['id']}/tree.glb")
+
+
+def test_a_phone_shows_and_switches_the_candidates(browser: Any, server: str) -> None:
+    ctx, outside, errors = _context(
+        browser, server, viewport={"width": 390, "height": 844}, has_touch=True
+    )
+    pg = ctx.new_page()
+    pg.goto(server + "/")
+    pg.wait_for_selector("body[data-species=ready]")
+    pg.wait_for_function("document.getElementById('budget').value !== ''")
+    job = _make_tree(pg)
+    cands = pg.locator("#candidates .candidate")
+    assert cands.count() == 3
+    boxes = [cands.nth(i).bounding_box() for i in range(3)]
+    assert all(b["width"] >= 80 and b["x"] + b["width"] <= 390 for b in boxes)
+    assert len({round(b["y"]) for b in boxes}) == 1  # one row
+    assert pg.evaluate("document.scrollingElement.scrollWidth") <= 390  # no sideways scroll
+    n = _loads(pg)
+    cands.nth(2).tap()
+    pg.wait_for_function(f"Number(document.body.dataset.loads) > {n}", timeout=30_000)
+    assert pg.get_attribute("body", "data-shown") == job["result"]["candidates"][2]["species"]
+    ctx.close()
+    assert not outside and not errors, (outside, errors)
