@@ -56,12 +56,13 @@ class Candidate:
 
     @property
     def name(self) -> str:
-        return species.display_name(self.species)
+        return species.common_name(self.species)
 
     def summary(self) -> dict[str, Any]:
         return {
             "species": self.species,
             "name": self.name,
+            "display": species.display_name(self.species),
             "probability": float(self.probability),
             "score": float(self.score),
             "distance": None if self.distance is None else float(self.distance),

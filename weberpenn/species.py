@@ -106,6 +106,11 @@ def display_name(name: str) -> str:
     return str(_data()[canonical(name)].get("display", canonical(name)))
 
 
+def common_name(name: str) -> str:
+    """The display name without its gloss: "oak" for "oak (round crown)"."""
+    return display_name(name).split(" (")[0]
+
+
 def doodle_foliage(name: str) -> bool:
     """Whether people draw the species' foliage as single strokes (palm fronds, a weeping
     willow's hanging twigs) rather than as a crown outline."""
