@@ -42,7 +42,7 @@ def test_grow_from_params_same_tree(tmp_path):
 
 def test_errors_exit_2_without_traceback(tmp_path):
     cases = [
-        ["grow", "--species", "oak", "--out", str(tmp_path / "x.glb")],
+        ["grow", "--species", "baobab", "--out", str(tmp_path / "x.glb")],
         ["grow", "--params", str(tmp_path / "missing.json"), "--out", str(tmp_path / "x.glb")],
         ["grow", "--out", str(tmp_path / "x.glb")],
         ["grow", "--species", "maple", "--params", "p.json", "--out", str(tmp_path / "x.glb")],

@@ -93,7 +93,7 @@ def test_views_between_the_axes_are_yaws_in_degrees():
 @pytest.mark.parametrize(
     "kwargs, match",
     [
-        ({"species": ("oak",)}, "unknown species 'oak'"),
+        ({"species": ("baobab",)}, "unknown species 'baobab'"),
         ({"views": ("top",)}, "unknown view 'top'"),
         ({"views": ("front", "front")}, "twice"),
         ({"views": ("0", "front")}, "twice"),
