@@ -72,7 +72,8 @@ class PaperSizes:
 
 
 QUICK = PaperSizes("quick", 10, 4, 120.0, 2, 1000)
-FULL = PaperSizes("full", 250, 40, 15.0, 10, 10_000)
+# the refined sweep needs a budget that tries 8 start views (a third of it: refine.search)
+FULL = PaperSizes("full", 250, 40, 30.0, 24, 10_000)
 
 
 def published_trees(folder: Path = PUBLISHED_DIR) -> list[tuple[str, str, TreeParams]]:
