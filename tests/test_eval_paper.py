@@ -123,3 +123,21 @@ def test_published_trees_are_the_papers_fifteen():
     assert len(trees) == 15
     assert [name for name, _, _ in trees][:2] == ["0_acer_2.json", "1_acer_2.json"]
     assert {sp for _, sp, _ in trees} == {"maple", "palm", "pine", "cherry", "bonsai"}
+
+
+def test_cli_rejects_bad_input_before_any_work(tmp_path):
+    from typer.testing import CliRunner
+
+    from treesketch.cli import app
+
+    runner = CliRunner()
+    res = runner.invoke(app, ["eval", "paper", "--quick", "--checkpoint", str(tmp_path / "no.pt"),
+                              "--out", str(tmp_path / "r"), "--cache", str(tmp_path / "c")])  # fmt: skip
+    assert res.exit_code == 2
+    assert "no.pt: no such file" in res.output and "Traceback" not in res.output
+    afile = tmp_path / "file"
+    afile.write_text("x")
+    res = runner.invoke(app, ["eval", "paper", "--quick", "--out", str(afile),
+                              "--cache", str(tmp_path / "c")])  # fmt: skip
+    assert res.exit_code == 2 and "not a folder" in res.output
+    assert not (tmp_path / "c").exists()  # nothing built
