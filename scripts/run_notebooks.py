@@ -29,7 +29,7 @@ STORED = {  # the sizes the stored outputs are made with (a few minutes on two c
     "TS_NB_SAMPLES": "2000",
 }
 MAX_WIDTH = 640
-MAX_PNG_BYTES = 60_000
+MAX_PNG_BYTES = 100_000
 MAX_NOTEBOOK_BYTES = 400_000
 TIMEOUT_S = 900
 

@@ -97,3 +97,15 @@ def test_shrink_png_keeps_pictures_small():
     out = Image.open(io.BytesIO(small))
     assert out.width == 640 and out.height == round(600 * 640 / 1400)
     assert len(small) < len(buf.getvalue())
+
+
+def test_checkout_listing_sees_any_new_file():
+    """The check above would see a file a notebook leaves, ignored by git or not."""
+    before = _checkout_files()
+    probe = ROOT / "notebooks" / "left_behind.tmp"  # *.tmp is git-ignored
+    try:
+        probe.write_text("x")
+        assert _checkout_files() - before == {"notebooks/left_behind.tmp"}
+    finally:
+        probe.unlink()
+    assert _checkout_files() == before
