@@ -215,7 +215,7 @@ def _plot_sweeps(sp: str, res: Mapping[str, Any], sizes: PaperSizes, stamp: Stam
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6.4, 3.0))
+    fig, ax = plt.subplots(figsize=(8.0, 3.0))
     styles = {"alone": ("C0", "o", "network alone"),
               "refined": ("C3", "s", f"+ refinement ({sizes.rotation_budget} evaluations)")}  # fmt: skip
     for label, (colour, marker, text) in styles.items():
@@ -232,7 +232,7 @@ def _plot_sweeps(sp: str, res: Mapping[str, Any], sizes: PaperSizes, stamp: Stam
     ax.set_xlabel("yaw of the sketch (degrees)")
     ax.set_ylabel("max Hausdorff / GT diagonal")
     ax.set_title(f"rotation sweep: {sp} ({res['file']})", fontsize=10)
-    ax.legend(fontsize=7, loc="upper right")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # off the curves
     ax.grid(alpha=0.3)
     fig.tight_layout(rect=(0, 0.04, 1, 1))
     _footer(fig, stamp)
