@@ -4,7 +4,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: setup demo test test-fast lint bench reports clean blender-test blender-addon
+.PHONY: setup demo test test-fast lint bench reports notebooks clean blender-test blender-addon
 
 $(STAMP): pyproject.toml scripts/setup.sh
 	bash scripts/setup.sh
@@ -34,6 +34,17 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_grow.py
 	$(PY) benchmarks/bench_render.py
 	$(PY) benchmarks/bench_tsn.py
+
+## The paper's tables for the shipped network into reports/ (treesketch eval paper: builds
+## its own seeded test data under out/paper_cache; full sizes, estimated 20-25 min on two
+## cores). `make reports REPORT_ARGS=--quick` is the few-minute check.
+REPORT_ARGS ?=
+reports: $(STAMP)
+	$(PY) -m treesketch.cli eval paper $(REPORT_ARGS)
+
+## Re-execute notebooks/*.ipynb and store them with their (small) outputs.
+notebooks: $(STAMP)
+	$(PY) scripts/run_notebooks.py
 
 ## The Blender add-on as an installable zip: $(OUT)/treesketch_addon.zip.
 blender-addon: $(STAMP)

@@ -24,7 +24,6 @@ speed, and running trees side by side on a 2-core machine would change what it f
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import math
 import sys
@@ -37,7 +36,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from eval.hausdorff import DEFAULT_SAMPLES, rotate_about_trunk, tree_hausdorff  # noqa: E402
-from treesketch import Estimate, Pipeline, RefineSettings, load_estimator  # noqa: E402
+from treesketch import Pipeline, RefineSettings, load_estimator  # noqa: E402
+from treesketch.estimators import SeededEstimator  # noqa: E402
 from treesketch.pipeline import rescale_height, tree_height  # noqa: E402
 from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
 from weberpenn.fileio import atomic_write  # noqa: E402
@@ -60,23 +60,6 @@ def gt_files(only: str | None) -> list[Path]:
     if not files:
         raise SystemExit(f"no ground-truth files selected in {GT_DIR}")
     return files
-
-
-class Seeded:
-    """An estimator whose every dictionary carries the given ``seed`` key."""
-
-    def __init__(self, inner, seed: int) -> None:
-        self.inner, self.seed, self.name = inner, int(seed), inner.name
-
-    def estimate(self, sketch: np.ndarray) -> Estimate:
-        e = self.inner.estimate(sketch)
-        s = self.seed
-        return dataclasses.replace(
-            e,
-            params=e.params.replace(seed=s),
-            decoded=None if e.decoded is None else e.decoded.replace(seed=s),
-            alternatives={k: v.replace(seed=s) for k, v in e.alternatives.items()},
-        )
 
 
 def distances(pred_mesh, gt_mesh, samples: int) -> dict:
@@ -102,7 +85,7 @@ def run_tree(
     # the ground truth's height, as a user passes ``height=`` (pipeline.rescale_height)
     height = tree_height(gt) if known_height else None
     t0 = time.perf_counter()
-    run = Pipeline(Seeded(inner, int(gt["seed"])), settings).run(img, height=height)
+    run = Pipeline(SeededEstimator(inner, int(gt["seed"])), settings).run(img, height=height)
     seconds = time.perf_counter() - t0
     est = run.estimate
     tsn_params = est.params if height is None else rescale_height(est.params, height)

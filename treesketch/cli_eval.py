@@ -1,4 +1,5 @@
-"""`treesketch eval ...` commands: `eval tsn` (cli_eval_tsn), `eval rotation`, `eval all`."""
+"""`treesketch eval ...` commands: `eval tsn` (cli_eval_tsn), `eval rotation`, `eval all`,
+`eval paper` (cli_eval_paper)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from pathlib import Path
 
 import typer
 
-from . import cli_eval_tsn
+from . import cli_eval_paper, cli_eval_tsn
 from .cli_common import address_option, executor_option, fail, workers_option
 
 eval_app = typer.Typer(
@@ -208,4 +209,5 @@ def all_(
 def register(app: typer.Typer) -> None:
     """Add the `eval` command group to the main app."""
     cli_eval_tsn.register(eval_app)
+    cli_eval_paper.register(eval_app)
     app.add_typer(eval_app, name="eval")
