@@ -13,10 +13,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from service_helpers import serve
-from web_helpers import CHROMIUM, CHROMIUM_ARGS, draw_with_mouse
-
-from treesketch.service import ServiceConfig, create_app
+from web_helpers import chromium, draw_with_mouse, palm_service
 
 pytestmark = pytest.mark.slow
 
@@ -32,23 +29,14 @@ JOB_TIMEOUT = 180_000  # ms
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
-    config = ServiceConfig(
-        data=tmp_path_factory.mktemp("web-interactive"),
-        workers=1,
-        estimator="service_helpers:palm_estimator",
-    )
-    with serve(create_app(config)) as url:
+    with palm_service(tmp_path_factory.mktemp("web-interactive")) as url:
         yield url
 
 
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Any]:
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+    with chromium() as b:
         yield b
-        b.close()
 
 
 @pytest.fixture

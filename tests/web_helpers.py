@@ -3,12 +3,41 @@ Playwright (no browser download), and a tree drawn with mouse strokes."""
 
 from __future__ import annotations
 
+import contextlib
 import math
+from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 CHROMIUM = "/usr/bin/chromium"
 # software WebGL (SwiftShader) so the 3D view renders on a machine without a GPU
 CHROMIUM_ARGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--no-sandbox"]
+
+
+@contextlib.contextmanager
+def palm_service(data: Path) -> Iterator[str]:
+    """A real server on ``data`` with one worker and the palm test estimator (no network
+    to load); yields its base URL."""
+    from service_helpers import serve
+
+    from treesketch.service import ServiceConfig, create_app
+
+    config = ServiceConfig(data=data, workers=1, estimator="service_helpers:palm_estimator")
+    with serve(create_app(config)) as url:
+        yield url
+
+
+@contextlib.contextmanager
+def chromium() -> Iterator[Any]:
+    """Debian's chromium through Playwright (never a downloaded browser)."""
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        try:
+            yield browser
+        finally:
+            browser.close()
 
 
 def tree_strokes(size: int = 512) -> list[list[tuple[float, float]]]:
