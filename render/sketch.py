@@ -168,7 +168,8 @@ def sketch_mesh(
 ) -> Any:
     """The lightest TreeMesh of a grown ``skeleton`` that draws the same ``size`` px
     sketch: its stems thinner than half a :func:`sample_width` are left out
-    (``weberpenn.lod.drop_thin_stems``); every kept stem and every leaf is meshed as
+    (``weberpenn.lod.drop_thin_stems``; less for the species whose twigs darken the
+    silhouette together, ``weberpenn.species.sketch_stem_cut``); every kept stem and every leaf is meshed as
     ``build_mesh`` meshes them.
 
     The sample width comes from a framing of the skeleton's control points and leaf
@@ -176,11 +177,14 @@ def sketch_mesh(
     tree's own: the cut errs on the side of keeping stems.
     """
     from weberpenn import build_mesh
+    from weberpenn import species as wp_species
     from weberpenn.lod import drop_thin_stems
 
     framing = Framing.from_parts([skeleton.points, skeleton.leaf_positions])
     width = sample_width(framing, size, config)
-    return build_mesh(drop_thin_stems(skeleton, 0.5 * width), species=species)
+    # a species whose sub-pixel twigs darken its silhouette together keeps more of them
+    cut = 0.5 if species is None else wp_species.sketch_stem_cut(species)
+    return build_mesh(drop_thin_stems(skeleton, cut * width), species=species)
 
 
 def _area_resize(img: np.ndarray, size: int) -> np.ndarray:

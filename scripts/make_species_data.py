@@ -76,6 +76,12 @@ PEOPLE_SPECIES: dict[str, dict] = {
     },
 }
 
+#: Stems a fast sketch may leave out, as a fraction of its sample width (default 0.5):
+#: where many twigs thinner than a pixel together darken the silhouette (a bare tree's
+#: crown, a willow's curtain, an oak's twigs), leaving them out changes the sketch by
+#: 4-12 % of its pixels (tests/test_render_raster.py); these keep them.
+SKETCH_STEM_CUT = {"oak": 0.25, "winter": 0.1, "willow": 0.05}
+
 #: Species whose foliage people draw as single strokes (fronds, hanging twigs).
 FOLIAGE_STROKES = ("palm", "willow")
 
@@ -244,6 +250,8 @@ def main(src: str, presets: str) -> None:
         out["species"][name] = people_species(name, row, Path(presets))
     for name in FOLIAGE_STROKES:
         out["species"][name]["foliage_strokes"] = True
+    for name, cut in SKETCH_STEM_CUT.items():
+        out["species"][name]["sketch_stem_cut"] = cut
     out["_source"] += "; the species people draw from Blender 3.4's Sapling presets (numbers only)"
     dst = Path(__file__).resolve().parent.parent / "weberpenn" / "species_data.json"
     dst.write_text(json.dumps(out, indent=1) + "\n")

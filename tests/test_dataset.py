@@ -120,7 +120,7 @@ def test_bad_settings_are_clear_errors(kwargs, match):
     "args, match",
     [
         (["--views", "front,top"], "unknown view 'top'"),
-        (["--species", "maple,oak"], "unknown species 'oak'"),
+        (["--species", "maple,baobab"], "unknown species 'baobab'"),
         (["--trees-per-species", "0"], "trees-per-species"),
         (["--size", "7"], "size"),
         (["--workers", "0"], "workers"),

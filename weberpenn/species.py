@@ -117,6 +117,12 @@ def doodle_foliage(name: str) -> bool:
     return bool(_data()[canonical(name)].get("foliage_strokes", False))
 
 
+def sketch_stem_cut(name: str) -> float:
+    """Stems thinner than this fraction of a sketch's sample width may be left out of the
+    fast sketch's mesh without changing the sketch (``render.sketch.sketch_mesh``)."""
+    return float(_data()[canonical(name)].get("sketch_stem_cut", 0.5))
+
+
 def source(name: str) -> str:
     """Where the species' numbers come from (the paper's files or a Sapling preset)."""
     return str(_data()[canonical(name)].get("source", ""))
