@@ -9,7 +9,8 @@
     .venv/bin/python benchmarks/bench_species.py calibrate runs.jsonl --png docs/confidence.png
 
 ``network``: the checkpoint's species (its calibrated classifier when it has one) on
-every test sketch of ``--data``, per style and per species, with the confusions.
+every test sketch of ``--data``, prepared as the pipeline prepares a drawing, per style and
+per species, with the confusions.
 
 ``pipeline``: ``Pipeline.run`` at ``--budget`` on ``--per-cell`` test drawings per species
 and style of ``--data`` (trees the network never saw), the hand-style tree doodles and the
@@ -64,6 +65,7 @@ def network(args: argparse.Namespace) -> None:
     from PIL import Image
 
     from render.dataset import read_manifest, row_style
+    from treesketch.pipeline import prepare_input
     from tsn.predict import load_model
 
     model = load_model(args.checkpoint)
@@ -74,7 +76,11 @@ def network(args: argparse.Namespace) -> None:
     t0 = time.perf_counter()
     for i in range(0, len(rows), 32):
         chunk = rows[i : i + 32]
-        imgs = [np.asarray(Image.open(Path(args.data) / r["sketch"]).convert("L")) for r in chunk]
+        # prepared as the pipeline prepares a drawing (the one reader's normaliser)
+        imgs = [
+            prepare_input(np.asarray(Image.open(Path(args.data) / r["sketch"]).convert("L")))
+            for r in chunk
+        ]
         for r, pred in zip(chunk, model.predict_batch(imgs), strict=True):
             ok = pred.species == r["species"]
             style = row_style(r)
@@ -285,7 +291,7 @@ def _reliability_png(rows: list, e: float, n: int, path: Path) -> None:
             label="mean confidence -> accuracy")  # fmt: skip
     ax.set_xlim(0, 1)
     ax.set_ylim(0, 1.08)
-    ax.set_xlabel("confidence (the species' probability)")
+    ax.set_xlabel("confidence (the species' probability; capped when the warning fires)")
     ax.set_ylabel("share of drawings whose species is right")
     ax.set_title(f"Reliability on {n} held-out drawings, ECE {e:.3f}", fontsize=9)
     ax.legend(fontsize=7, loc="lower right")
