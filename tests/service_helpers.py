@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import contextlib
 import io
-from collections.abc import Iterator
+import time
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import numpy as np
@@ -68,3 +69,23 @@ def serve(app: Any, log_level: str = "warning") -> Iterator[str]:
         server.should_exit = True
         thread.join(30)
         sock.close()
+
+
+def wait_for(http: Any, job_id: str, test: Callable[[dict], bool], timeout: float = 120.0) -> dict:
+    """Poll ``GET /jobs/{job_id}`` (an httpx client on a real server) until ``test`` holds."""
+    deadline = time.monotonic() + timeout
+    body: dict = {}
+    while time.monotonic() < deadline:
+        body = http.get(f"/jobs/{job_id}").json()
+        if test(body):
+            return body
+        time.sleep(0.05)
+    raise AssertionError(f"job {job_id}: condition not met in {timeout} s; last {body}")
+
+
+def refining(body: dict) -> bool:
+    return body["state"] == "running" and (body["progress"] or {}).get("evaluations", 0) >= 1
+
+
+def finished(body: dict) -> bool:
+    return body["state"] in ("done", "failed", "cancelled")

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import httpx
 import pytest
-from service_helpers import palm_sketch_png, serve
+from service_helpers import finished, palm_sketch_png, refining, serve, wait_for
 
 from treesketch.service import JobStore, ServiceConfig, create_app
 from treesketch.service.limits import MAX_PARTS
@@ -45,25 +45,6 @@ def submit(http: httpx.Client, sketch: bytes, **fields: str) -> str:
     r = http.post("/jobs", files={"sketch": ("s.png", sketch, "image/png")}, data=fields)
     assert r.status_code == 202, r.text
     return r.json()["id"]
-
-
-def wait_for(http: httpx.Client, job_id: str, test, timeout: float = 120.0) -> dict:
-    deadline = time.monotonic() + timeout
-    body: dict = {}
-    while time.monotonic() < deadline:
-        body = http.get(f"/jobs/{job_id}").json()
-        if test(body):
-            return body
-        time.sleep(0.05)
-    raise AssertionError(f"job {job_id}: condition not met in {timeout} s; last {body}")
-
-
-def refining(body: dict) -> bool:
-    return body["state"] == "running" and (body["progress"] or {}).get("evaluations", 0) >= 1
-
-
-def finished(body: dict) -> bool:
-    return body["state"] in ("done", "failed", "cancelled")
 
 
 def part(name: str, value: bytes, filename: str | None = None) -> bytes:
