@@ -25,6 +25,10 @@ the combined branch+leaf Hausdorff max distance normalised by the ground truth's
 which has no view, as a front view), as ``benchmarks/bench_refine.py`` does, and the
 "aligned" distance (each tree turned about its trunk to its best fit).
 
+``--views both`` (refine) runs every drawing twice: alone, and with a second drawing of
+the same tree in the same style from 90 degrees further round (``Pipeline.run`` with two
+views); the summary has the two-view figures under ``"two views"``.
+
 ``estimate``: milliseconds per ``Pipeline.estimate`` (normaliser + TSN) on 10 drawings and
 the hand drawings of examples/hand, and per stage, wall clock and CPU time, [median, max]
 after one warm-up.
@@ -236,10 +240,12 @@ def non_trees(seed: int = 0) -> list[tuple[str, np.ndarray]]:
 # ---------------------------------------------------------------- tree drawings
 
 
-def tree_drawings(first_seed: int, per_species: int) -> list[dict]:
+def tree_drawings(first_seed: int, per_species: int, side: bool = False) -> list[dict]:
     """Held-out-style drawings: per species ``per_species`` trees (seeds ``first_seed``+),
     each drawn in a style other than "sg" at a random yaw.  Dicts with the drawing, the
-    ground-truth params, species, style and view yaw."""
+    ground-truth params, species, style and view yaw; ``side``: also ``"side"``, the same
+    tree drawn in the same style from 90 degrees further round (drawn after the first, so
+    the first drawing is the same with or without it)."""
     out = []
     for si, name in enumerate(species.SPECIES):
         for k in range(per_species):
@@ -254,6 +260,9 @@ def tree_drawings(first_seed: int, per_species: int) -> list[dict]:
                 {"name": f"{name}{seed}", "species": name, "seed": seed, "style": style,
                  "yaw": yaw, "params": gt, "image": img}
             )  # fmt: skip
+            if side:
+                parts = renderer.parts((yaw + 90.0) % 360.0, SIZE)
+                out[-1]["side"] = draw(style, Silhouettes.from_parts(parts), rng, SIZE)
     return out
 
 
@@ -460,12 +469,13 @@ def part_refine(args: argparse.Namespace) -> dict:
     # one of each species at a time, and each case saved as it ends: a run stopped early
     # still has a balanced, readable record
     drawings = sorted(
-        tree_drawings(args.first_seed, args.per_species),
+        tree_drawings(args.first_seed, args.per_species, side=args.views != "1"),
         key=lambda d: (d["seed"], species.SPECIES.index(d["species"])),
     )
-    for d in drawings:
+    counts = {"1": (1,), "2": (2,), "both": (1, 2)}[args.views]
+    for d, views in ((d, v) for d in drawings for v in counts):
         t = time.perf_counter()
-        res = pipe.run(d["image"])
+        res = pipe.run(d["image"] if views == 1 else [d["image"], (d["side"], 90.0)])
         secs = time.perf_counter() - t
         gt_mesh = build_mesh(grow(d["params"]), species=d["species"])
         gt_c, diag = gt_mesh.combined(), bbox_diagonal(gt_mesh.bounds())
@@ -481,6 +491,7 @@ def part_refine(args: argparse.Namespace) -> dict:
         _, a1 = aligned_tree_hausdorff(m1, gt_mesh, args.samples, args.align_step)
         rec = {
             "name": d["name"],
+            "views": views,
             "style": d["style"],
             "species_true": d["species"],
             "species_tsn": est.species,
@@ -500,9 +511,20 @@ def part_refine(args: argparse.Namespace) -> dict:
         records.append(rec)
         print(refine_line(rec), flush=True)
         if args.json is not None:
-            partial = {"part": "refine", "records": records, "summary": refine_summary(records)}
+            partial = {"part": "refine", "records": records, "summary": refine_summaries(records)}
             atomic_write(args.json, json.dumps(partial | {"machine": machine()}, indent=1))
-    return {"records": records, "summary": refine_summary(records)}
+    return {"records": records, "summary": refine_summaries(records)}
+
+
+def refine_summaries(records: list[dict]) -> dict:
+    """:func:`refine_summary` of the one-view records, and of the two-view ones apart
+    (``"two views"``) when there are any."""
+    one = [r for r in records if r.get("views", 1) == 1]
+    two = [r for r in records if r.get("views", 1) == 2]
+    out = refine_summary(one) if one else {}
+    if two:
+        out["two views"] = refine_summary(two)
+    return out
 
 
 def refine_summary(records: list[dict]) -> dict:
@@ -530,7 +552,7 @@ def refine_summary(records: list[dict]) -> dict:
 
 def refine_line(r: dict) -> str:
     return (
-        f"| {r['name']} | {r['style']} | {r['species_tsn']} -> {r['species']} | "
+        f"| {r['name']} | {r.get('views', 1)} | {r['style']} | {r['species_tsn']} -> {r['species']} | "
         f"{r['loss_before']:.3f} -> {r['loss_after']:.3f} | "
         f"{r['haus_before']:.3f} -> {r['haus_after']:.3f} | "
         f"{r['aligned_before']:.3f} -> {r['aligned_after']:.3f} | {r['seconds']:.0f} |"
@@ -616,9 +638,9 @@ def markdown(doc: dict) -> str:
             lines.append(f"| {g} | {len(rs)} | {len(rs) - len(kept)} | {lo:.3f} | {li:.3f} |")
     elif part == "refine":
         lines += [
-            "| drawing | style | species TSN -> final | sketch distance | Hausdorff max "
+            "| drawing | views | style | species TSN -> final | sketch distance | Hausdorff max "
             "(gt frame) | aligned max | s |",
-            "|---|---|---|---|---|---|---:|",
+            "|---|---:|---|---|---|---|---|---:|",
             *map(refine_line, recs),
         ]
     embedding = doc.get("args", {}).get("embedding", "shipped")
@@ -636,6 +658,13 @@ def main(argv: list[str] | None = None) -> int:
         "--first-seed", type=int, default=950, help="refine: the drawings' first tree seed"
     )
     ap.add_argument("--samples", type=int, default=10_000, help="Hausdorff samples per side")
+    ap.add_argument(
+        "--views",
+        choices=("1", "2", "both"),
+        default="1",
+        help="refine: each drawing alone (1), with the same tree drawn from 90 degrees "
+        "further round (2), or both runs side by side in one run",
+    )
     ap.add_argument("--align-step", type=float, default=15.0)
     ap.add_argument("--json", type=Path, default=None)
     ap.add_argument("--resume", type=Path, default=None, help="warning: keep this JSON's records")

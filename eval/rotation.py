@@ -5,7 +5,9 @@ yaw its synthetic sketch is rendered (one ``render.SketchRenderer``, scenes buil
 parameter dictionary is predicted from that sketch (and optionally refined), the predicted
 tree is grown with the same seed, and its symmetric Hausdorff distance to the ground truth
 is measured (``eval.hausdorff``, combined branch+leaf mesh, normalised by the ground-truth
-bounding-box diagonal).
+bounding-box diagonal).  ``turns`` adds other drawings of the tree at each yaw (e.g.
+``(90,)``: a second sketch from 90 degrees further round), handed to the pipeline as the
+views of one tree (``treesketch.views``).
 
 The predictions come from a pipeline handed in (``treesketch.Pipeline``, or anything with
 ``settings``, ``estimate(sketch)`` and ``run(sketch)``): with refining settings each view is
@@ -128,10 +130,16 @@ class AngleResult:
 
 
 def _angle_fn(
-    gt_mesh: Any, pipeline: Any, size: int, samples: int, seed: int
+    gt_mesh: Any,
+    pipeline: Any,
+    size: int,
+    samples: int,
+    seed: int,
+    turns: tuple[float, ...] = (),
 ) -> Callable[[float], AngleResult]:
-    """The function that does one angle: sketch at that yaw, estimate (and refine),
-    Hausdorff to the ground truth."""
+    """The function that does one angle: sketch at that yaw (and at each of ``turns``
+    further round: the other views), estimate (and refine), Hausdorff to the ground
+    truth."""
     from render.sketch import SketchRenderer
 
     gt_combined = gt_mesh.combined()
@@ -141,16 +149,20 @@ def _angle_fn(
     def one(yaw: float) -> AngleResult:
         t0 = time.perf_counter()
         img = renderer.sketch(float(yaw), size=size)
+        drawing: Any = img
+        if turns:
+            others = [(renderer.sketch((float(yaw) + t) % 360.0, size=size), t) for t in turns]
+            drawing = [img, *others]
         lb = la = float("nan")
         refining = bool(pipeline.settings.refine)
         if refining:
-            run = pipeline.run(img)
+            run = pipeline.run(drawing)
             pred, lb, la = run.params, run.losses["before"], run.losses["after"]
             # the refined tree matches the sketch at the yaw it found: turn it into the
             # ground truth's frame before measuring
             turn = (float(yaw) - run.yaw) % 360.0
         else:
-            pred, turn = TreeParams(pipeline.estimate(img).params), 0.0
+            pred, turn = TreeParams(pipeline.estimate(drawing).params), 0.0
         key = f"{_params_key(pred)}@{turn:.6f}"
         if key not in cache:
             pm = build_mesh(grow(pred, seed=seed))
@@ -185,13 +197,14 @@ class SweepWorker:
     size: int
     samples: int
     seed: int
+    turns: tuple[float, ...] = ()
 
     def __call__(self) -> Callable[[float], AngleResult]:
         from render.backend import init_mitsuba
 
         init_mitsuba(threads=1)
         gt_mesh = build_mesh(grow(self.gt, seed=self.seed))
-        return _angle_fn(gt_mesh, self.pipeline, self.size, self.samples, self.seed)
+        return _angle_fn(gt_mesh, self.pipeline, self.size, self.samples, self.seed, self.turns)
 
 
 def _failed_row(yaw: float, error: str) -> SweepRow:
@@ -209,8 +222,12 @@ def rotation_sweep(
     seed: int = 0,
     progress: Progress | None = None,
     executor: Any = None,
+    turns: tuple[float, ...] = (),
 ) -> SweepResult:
     """Run the sweep (see the module text).
+
+    ``turns``: the other views' yaws relative to the swept one (degrees; ``(90,)`` for a
+    front and a side drawing at every angle).
 
     ``executor`` (``treesketch.executor``: a local pool, Ray) spreads the angles; each is
     deterministic, so the rows are the same values whichever runs them.  An angle that
@@ -223,7 +240,10 @@ def rotation_sweep(
     if gt_mesh.is_empty:
         raise ValueError("the ground-truth parameters grow an empty tree; nothing to compare")
     result = SweepResult([], gt, seed=int(seed), size=int(size))
-    opts = (int(size), int(samples), int(seed))
+    turns = tuple(float(t) % 360.0 for t in turns)
+    if any(not math.isfinite(t) for t in turns) or len(turns) > 3:
+        raise ValueError(f"turns must be at most 3 finite angles in degrees, got {turns}")
+    opts = (int(size), int(samples), int(seed), turns)
     outs: list[AngleResult] = []
     if executor is None:
         one = _angle_fn(gt_mesh, pipeline, *opts)

@@ -150,3 +150,37 @@ def test_embedding_option_is_checked_before_work(tmp_path, sketch_png) -> None:
     res = runner.invoke(app, _args(tmp_path, sketch_png, "--embedding", str(tmp_path / "e.pt")))
     assert res.exit_code == 2 and "embedding" in res.output
     assert not (tmp_path / "out").exists() or list((tmp_path / "out").iterdir()) == []
+
+
+def test_a_second_view(tmp_path, sketch_png) -> None:
+    from PIL import Image
+
+    from render.sketch import SketchRenderer
+
+    side = tmp_path / "side.png"
+    mesh = build_mesh(grow(species.sample("palm", 3)), species="palm")
+    Image.fromarray(SketchRenderer(mesh).sketch(90, 256)).save(side)
+    summary = tmp_path / "out" / "summary.json"
+    args = _args(tmp_path, sketch_png, "--budget", "4", "--summary", str(summary))
+    res = runner.invoke(app, [*args, "--view", f"{side}@90"])
+    assert res.exit_code == 0, res.output
+    assert "view 2: yaw 90 (given)" in res.output
+    views = json.loads(summary.read_text())["views"]
+    assert [v["yaw"] for v in views] == [0.0, 90.0]
+    # the comparison picture has a row per view
+    from PIL import Image as PILImage
+
+    w, h = PILImage.open(tmp_path / "out" / "compare.png").size
+    assert h > w / 4 * 1.5
+
+
+@pytest.mark.parametrize(
+    ("view", "message"),
+    [("side.png@east", "got 'east'"), ("missing.png@90", "missing.png")],
+)
+def test_a_bad_view_fails_before_work(tmp_path, sketch_png, view: str, message: str) -> None:
+    (tmp_path / "side.png").write_bytes(sketch_png.read_bytes())
+    res = runner.invoke(app, [*_args(tmp_path, sketch_png), "--view", str(tmp_path / view)])
+    assert res.exit_code != 0
+    assert message in res.output and "Traceback" not in res.output
+    assert not (tmp_path / "out").exists()

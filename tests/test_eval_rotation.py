@@ -53,3 +53,24 @@ def test_sweep_72_rows_csv_and_plots(tmp_path):
     assert len(rows) == 72 and float(rows[1]["angle"]) == 5.0
     assert plot_sweep(res, tmp_path / "sweep.png").stat().st_size > 1000
     assert plot_cases(res, tmp_path / "cases.png", size=64).stat().st_size > 1000
+
+
+def test_sweep_with_a_second_view_hands_the_pipeline_both_drawings():
+    gt = species.sample("maple", seed=1)
+    seen: list[np.ndarray] = []
+
+    class Recording:
+        name = "recording"
+
+        def estimate(self, img: np.ndarray) -> Estimate:
+            seen.append(img)
+            return Estimate(gt, "maple", {"maple": 1.0})
+
+    pipeline = Pipeline(Recording(), RefineSettings(refine=False))
+    res = rotation_sweep(gt, pipeline, step=180, size=64, samples=500, turns=(90,))
+    assert len(res.rows) == 2 and len(seen) == 4  # two drawings per angle
+    # the second drawing is the tree from 90 degrees further round, not the first again
+    assert not np.array_equal(seen[0], seen[1])
+    assert all(r.hd_max == pytest.approx(0, abs=1e-6) for r in res.rows)
+    with pytest.raises(ValueError, match="turns"):
+        rotation_sweep(gt, pipeline, step=180, size=64, turns=(float("nan"),))

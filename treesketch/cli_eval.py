@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import math
 import shlex
 import sys
 from pathlib import Path
@@ -37,6 +38,12 @@ def rotation(
     size: int = typer.Option(256, "--size", help="Sketch size in pixels."),
     samples: int = typer.Option(10_000, "--samples", help="Hausdorff samples per direction."),
     seed: int = typer.Option(0, "--seed", help="Growth seed for both trees."),
+    turn: list[float] = typer.Option(
+        [],
+        "--turn",
+        help="Also draw the tree from this many degrees further round at every angle and "
+        "give the pipeline both drawings (--turn 90: front and side); repeatable.",
+    ),
     executor: str = executor_option("the angles"),
     workers: int = workers_option(),
     address: str | None = address_option(),
@@ -54,6 +61,8 @@ def rotation(
         n = len(yaw_angles(step))
         if budget < 1:
             raise ValueError(f"--budget must be >= 1, got {budget}")
+        if len(turn) > 3 or not all(math.isfinite(t) for t in turn):
+            raise ValueError(f"--turn: at most 3 finite angles in degrees, got {turn}")
     except (ParamError, ValueError, OSError) as e:
         fail(str(e))
     from .estimators import load_estimator
@@ -79,6 +88,7 @@ def rotation(
                 seed=seed,
                 progress=lambda i, total: bar.update(i - bar.n),
                 executor=runner,
+                turns=tuple(turn),
             )
     finally:
         if runner is not None:
