@@ -5,6 +5,8 @@
     # the whole pipeline on held-out drawings (about 15 s a drawing on two cores)
     .venv/bin/python benchmarks/bench_species.py pipeline --data DS --per-cell 3 \
         --nontrees 40 --budget 20 --out runs.jsonl
+    # the network's "is it a tree?" alone on doodles, simple pictures and examples/hand
+    .venv/bin/python benchmarks/bench_species.py detector
     # fit the species posterior and the warning on those runs; reliability diagram
     .venv/bin/python benchmarks/bench_species.py calibrate runs.jsonl --png docs/confidence.png
 
@@ -39,6 +41,7 @@ from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import numpy as np  # noqa: E402
 
@@ -178,6 +181,7 @@ def pipeline(args: argparse.Namespace) -> None:
                     "distances": r.extras.get("tried", {}),
                     "loss_after": r.losses["after"],
                     "ink_after": r.losses["ink_after"],
+                    "tree_probability": r.estimate.tree_probability if r.estimate else None,
                     "warning": r.warning is not None,
                     "confidence": r.confidence,
                     "seconds": time.perf_counter() - t0,
@@ -186,6 +190,57 @@ def pipeline(args: argparse.Namespace) -> None:
             fh.flush()
             print(f"[{n}/{len(todo)}] {kind} {truth}: {rec.get('species')} "
                   f"({rec.get('seconds', 0):.0f} s)", flush=True)  # fmt: skip
+
+
+# --------------------------------------------------------------------------- detector
+def detector(args: argparse.Namespace) -> None:
+    """The network's "is it a tree?" alone (no refinement) on the benchmark's drawings:
+    hand-style tree doodles (seeds below 1000), doodles of other things (seeds from
+    1000), the simple non-tree pictures of ``bench_drawings`` (noise, circles, squares,
+    text, spirals, grids, stars...: kinds the detector was never fitted on) and
+    ``examples/hand``; the share each judges wrongly at the pipeline's limit."""
+    import bench_drawings
+    from PIL import Image
+
+    from eval import doodles
+    from render.reader import SketchError
+    from treesketch.estimators import load_estimator
+    from treesketch.pipeline import TREE_PROBABILITY_LIMIT, load_sketch, prepare_input
+    from weberpenn import species
+
+    est = load_estimator("tsn", checkpoint=args.checkpoint)
+    root = Path(__file__).resolve().parents[1]
+    sets: dict[str, tuple[bool, list[tuple[str, Any]]]] = {
+        "tree doodles": (True, [(f"{s}{k}", doodles.tree_doodle(s, k))
+                                for s in species.SPECIES for k in range(args.per_species)]),
+        "other doodles": (False, [(f"{kind}{k}", doodles.nontree_doodle(kind, 1000 + k))
+                                  for kind in doodles.NONTREE_KINDS for k in range(args.per_kind)]),
+        "simple pictures": (False, bench_drawings.non_trees(0)),
+        "examples/hand": (True, [(p.stem, np.asarray(Image.open(p).convert("L")))
+                                 for p in sorted((root / "examples" / "hand").glob("*.png"))]),
+    }  # fmt: skip
+    t0 = time.perf_counter()
+    print(f"# {_stamp()}")
+    print("| drawings | n | refused (blank) | judged wrongly | wrong ones |")
+    print("|---|---:|---:|---:|---|")
+    for name, (tree, items) in sets.items():
+        wrong, refused = [], 0
+        for label, img in items:
+            try:
+                prepared = prepare_input(load_sketch(img))
+            except SketchError:
+                refused += 1
+                continue
+            p = est.estimate(prepared).tree_probability
+            if p is None:
+                raise SystemExit("this checkpoint has no tree detector")
+            if (p >= TREE_PROBABILITY_LIMIT) != tree:
+                wrong.append(f"{label} {p:.2f}")
+        n = len(items) - refused
+        print(
+            f"| {name} | {n} | {refused} | {len(wrong) / max(n, 1):.1%} | {', '.join(wrong[:12])} |"
+        )
+    print(f"({time.perf_counter() - t0:.0f} s)")
 
 
 # --------------------------------------------------------------------------- calibrate
@@ -210,11 +265,14 @@ def _choose(r: dict, w: float, scale: float) -> tuple[str, float]:
 
 def _shipped(r: dict) -> tuple[str, float, bool]:
     """(species, confidence, warned) of a recorded run at the shipped constants."""
-    from treesketch.pipeline import LOW_CONFIDENCE_LOSS, result_confidence, tree_likeness
+    from treesketch.pipeline import LOW_CONFIDENCE_LOSS, result_confidence, tree_judgement
 
     best, p = _choose(r, NET_WEIGHT, DISTANCE_SCALE)
-    tree_like, warning = tree_likeness(r["loss_after"], r["ink_after"], LOW_CONFIDENCE_LOSS)
-    return best, result_confidence(p, tree_like, warning), warning is not None
+    tree_p = r.get("tree_probability")
+    tree_like, warning = tree_judgement(
+        tree_p, r["loss_after"], r["ink_after"], LOW_CONFIDENCE_LOSS
+    )
+    return best, result_confidence(p, tree_like, warning, tree_p), warning is not None
 
 
 def ece(conf: np.ndarray, right: np.ndarray, bins: int = 10) -> tuple[float, list]:
@@ -317,11 +375,16 @@ def main() -> None:
     p.add_argument("--tries", type=int, default=2)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", required=True)
+    d = sub.add_parser("detector")
+    d.add_argument("--checkpoint", default=None)
+    d.add_argument("--per-species", type=int, default=20)
+    d.add_argument("--per-kind", type=int, default=5)
     c = sub.add_parser("calibrate")
     c.add_argument("runs")
     c.add_argument("--png", default=None)
     args = ap.parse_args()
-    {"network": network, "pipeline": pipeline, "calibrate": calibrate}[args.part](args)
+    parts = {"network": network, "pipeline": pipeline, "detector": detector, "calibrate": calibrate}
+    parts[args.part](args)
 
 
 if __name__ == "__main__":

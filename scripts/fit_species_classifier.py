@@ -104,6 +104,7 @@ def main() -> None:
         loaded.normaliser,
         loaded.species_id.with_classifier(clf),
         info,
+        loaded.tree_detector,
     )
     print(
         f"classifier: held-out accuracy {acc:.3f} (doodles {doodle_acc:.3f}), temperature "

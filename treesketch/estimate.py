@@ -3,7 +3,8 @@
 An :class:`Estimator` turns a prepared sketch (square ``uint8``, 255 = white, framed as the
 renderer frames a tree) into an :class:`Estimate`: a parameter dictionary, the species it
 belongs to, a score per species (higher is more likely; they need not sum to one) and,
-when the estimator can tell, the view yaw in degrees.  TSN, the template match and the
+when the estimator can tell, the view yaw in degrees and the probability that the drawing
+is a tree at all.  TSN, the template match and the
 nearest-neighbour baseline implement it (:mod:`treesketch.estimators`); anything with a
 ``name`` and an ``estimate`` method plugs into :class:`treesketch.Pipeline`.
 """
@@ -32,6 +33,8 @@ class Estimate:
     yaw: float | None = None
     decoded: TreeParams | None = None
     alternatives: dict[str, TreeParams] = field(default_factory=dict)
+    # the estimator's probability that the drawing is a tree at all (None: it cannot tell)
+    tree_probability: float | None = None
 
     def params_for(self, name: str) -> TreeParams:
         """A starting dictionary for species ``name``."""

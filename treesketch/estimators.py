@@ -63,9 +63,18 @@ class TSNEstimator:
 
     def estimate(self, sketch: np.ndarray) -> Estimate:
         with _one_torch_thread():
-            pred = self.model.predict(sketch)
+            raw, features = self.model.raw_and_features([sketch])
+        pred = self.model.from_raw(raw[0])
         scores = self.model.species_id.scores(pred.matrix)
-        return Estimate(pred.params, pred.species, scores, None, decoded=pred.decoded)
+        tree = self.model.tree_probabilities(features)
+        return Estimate(
+            pred.params,
+            pred.species,
+            scores,
+            None,
+            decoded=pred.decoded,
+            tree_probability=None if tree is None else float(tree[0]),
+        )
 
 
 class SeededEstimator:

@@ -50,6 +50,7 @@ __all__ = [
     "Result",
     "SketchError",
     "SketchView",
+    "TREE_PROBABILITY_LIMIT",
     "ViewResult",
     "check_height",
     "load_sketch",
@@ -58,6 +59,7 @@ __all__ = [
     "prepare_input",
     "rescale_height",
     "result_confidence",
+    "tree_judgement",
     "tree_likeness",
     "tree_line_distance",
 ]
@@ -78,6 +80,11 @@ LOW_CONFIDENCE_LOSS = 2.25
 # distance and warning, recalibrated")
 LOW_CONFIDENCE_LOSS_SHAPE = 0.7
 LOW_CONFIDENCE_INK = 0.06
+# an estimator that can tell whether a drawing is a tree at all (TSN's tree detector,
+# ``tsn.tree_detect``) decides the warning instead of the distances: below this
+# probability the drawing is asked "is this a tree?".  The distances cannot tell a quick
+# doodle of a tree from a house (RESULTS.md, "Is it a tree?")
+TREE_PROBABILITY_LIMIT = 0.5
 MAX_HEIGHT = 200.0  # metres: taller than any tree that grows
 
 
@@ -280,14 +287,41 @@ def tree_likeness(loss: float, ink: float, limit: float) -> tuple[float, str | N
     )
 
 
+def tree_judgement(
+    tree_probability: float | None, loss: float, ink: float, limit: float
+) -> tuple[float, str | None]:
+    """How much the drawing looks like a tree (0..1) and the warning when it may not be
+    one: the estimator's probability when it gives one (warned below
+    :data:`TREE_PROBABILITY_LIMIT`), else the distances' :func:`tree_likeness`."""
+    if tree_probability is None:
+        return tree_likeness(loss, ink, limit)
+    p = float(min(1.0, max(0.0, tree_probability)))
+    if p >= TREE_PROBABILITY_LIMIT:
+        return p, None
+    return p, (
+        f"low confidence: this does not look like a drawing of a tree (probability "
+        f"{p:.0%}; shape distance {loss:.3f}, line distance {ink:.3f}); is this a sketch "
+        f"of a tree?"
+    )
+
+
 def planned_evaluations(cfg: RefineSettings, n: int) -> int:
     """The most trees a run refining ``n`` species evaluates (see :func:`_share`)."""
     return sum(_share(cfg, i, n).budget for i in range(n)) if cfg.refine else 0
 
 
-def result_confidence(species_probability: float, tree_like: float, warning: str | None) -> float:
-    """How sure a result is the kind of tree drawn: its species' probability; a drawing
-    warned as maybe no tree cannot be surer of its kind than of being a tree."""
+def result_confidence(
+    species_probability: float,
+    tree_like: float,
+    warning: str | None,
+    tree_probability: float | None = None,
+) -> float:
+    """How sure a result is the kind of tree drawn: with a calibrated probability that the
+    drawing is a tree, the product (a tree, and of this species); else its species'
+    probability, and a drawing warned as maybe no tree cannot be surer of its kind than of
+    being a tree."""
+    if tree_probability is not None:
+        return float(species_probability * min(1.0, max(0.0, tree_probability)))
     return species_probability if warning is None else min(species_probability, tree_like)
 
 
@@ -548,12 +582,15 @@ class Pipeline:
             )
         )
         limit = LOW_CONFIDENCE_LOSS if self.embedder is not None else LOW_CONFIDENCE_LOSS_SHAPE
-        tree_like, warning = tree_likeness(loss_after, ink_after, limit)
+        tree_like, warning = tree_judgement(est.tree_probability, loss_after, ink_after, limit)
         t = time.perf_counter()
         candidates = self._candidates(est, name, params1, after, refined, post, chosen)
         timings["candidates"] = time.perf_counter() - t
         confidence = result_confidence(
-            candidates[0].probability if candidates else tree_like, tree_like, warning
+            candidates[0].probability if candidates else tree_like,
+            tree_like,
+            warning,
+            est.tree_probability,
         )
         timings["total"] = sum(timings.values())
         return Result(

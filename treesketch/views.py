@@ -178,4 +178,10 @@ def fuse_estimates(estimates: Sequence[Estimate]) -> Estimate:
         yaw=first.yaw,
         decoded=None,
         alternatives=alternatives,
+        tree_probability=_mean_or_none([e.tree_probability for e in estimates]),
     )
+
+
+def _mean_or_none(values: Sequence[float | None]) -> float | None:
+    known = [v for v in values if v is not None]
+    return float(np.mean(known)) if known else None

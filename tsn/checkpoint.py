@@ -10,6 +10,7 @@ strings, numbers), written to a temporary name and renamed::
     state_dict    model weights, floating tensors stored as fp16
     normaliser    ``tsn.encoding.Normaliser.to_dict()``
     species_id    ``tsn.species_id.SpeciesIdentifier.to_dict()``
+    tree_detector ``tsn.tree_detect.TreeDetector.to_dict()`` (optional: is it a tree?)
     train         how it was trained (config, epochs, wall time, validation scores)
 """
 
@@ -27,6 +28,7 @@ from weberpenn.fileio import atomic_target
 from .encoding import Normaliser
 from .model import TSN
 from .species_id import SpeciesIdentifier
+from .tree_detect import TreeDetector
 
 FORMAT = "treesketch-tsn/1"
 
@@ -43,6 +45,7 @@ class Loaded:
     size: int
     info: dict[str, Any]
     path: Path | None = None
+    tree_detector: TreeDetector | None = None
 
 
 def atomic_torch_save(obj: Any, path: str | os.PathLike[str]) -> Path:
@@ -66,7 +69,9 @@ def save_checkpoint(
     normaliser: Normaliser,
     species_id: SpeciesIdentifier,
     info: dict[str, Any],
+    tree_detector: TreeDetector | None = None,
 ) -> Path:
+    extra = {} if tree_detector is None else {"tree_detector": tree_detector.to_dict()}
     return atomic_torch_save(
         {
             "format": FORMAT,
@@ -77,6 +82,7 @@ def save_checkpoint(
             "normaliser": normaliser.to_dict(),
             "species_id": species_id.to_dict(),
             "train": info,
+            **extra,
         },
         path,
     )
@@ -101,6 +107,10 @@ def load_checkpoint(path: str | os.PathLike[str], device: str = "cpu") -> Loaded
     except (KeyError, RuntimeError, ValueError) as e:
         raise CheckpointError(f"{path}: weights do not fit the network: {e}") from None
     model.eval().to(device)
+    try:
+        detector = TreeDetector.from_dict(ck["tree_detector"]) if "tree_detector" in ck else None
+    except (KeyError, TypeError, ValueError) as e:
+        raise CheckpointError(f"{path}: unreadable tree detector: {e}") from None
     return Loaded(
         model,
         Normaliser.from_dict(ck["normaliser"]),
@@ -108,4 +118,5 @@ def load_checkpoint(path: str | os.PathLike[str], device: str = "cpu") -> Loaded
         int(ck["size"]),
         dict(ck.get("train", {})),
         path,
+        detector,
     )

@@ -320,6 +320,11 @@ class TSN(nn.Module):
     def forward(self, x: torch.Tensor) -> dict[str, torch.Tensor]:
         return self.forward_from(self.features(x, 0), 0)
 
+    def forward_pooled(self, x: torch.Tensor) -> tuple[dict[str, torch.Tensor], torch.Tensor]:
+        """:meth:`forward` and the pooled features the heads read, ``(N, m)``."""
+        v = self.backbone.run_stages(self.features(x, 0), 0, self.n_stages).mean(dim=(2, 3))
+        return {h: m(v).view(-1, 4, HEAD_SIZES[h]) for h, m in self.heads.items()}, v
+
     def frozen_modules(self, upto: int) -> list[nn.Module]:
         mods: list[nn.Module] = []
         for i in range(upto):

@@ -87,16 +87,38 @@ class TSNModel:
         return tdata.preprocess(image, self.size)
 
     @torch.no_grad()
+    def _forward(self, images: Any, mirrored: bool) -> tuple[np.ndarray, np.ndarray]:
+        """Normalised outputs ``(B, 4, 62)`` and pooled features ``(B, m)`` of the images
+        (then, with ``mirrored``, of their left-right mirrors: one batch of 2N)."""
+        x = torch.from_numpy(np.stack([self.preprocess(im) for im in images]))[:, None]
+        if mirrored:
+            x = torch.cat([x, torch.flip(x, dims=[3])])
+        x = x.to(self.device).contiguous(memory_format=torch.channels_last)
+        out, pooled = self.net.forward_pooled(x)
+        mats = encoding.join_heads({h: v.float().cpu().numpy() for h, v in out.items()})
+        return mats, pooled.float().cpu().numpy()
+
     def raw_views(self, images: Any, mirrored: bool = True) -> tuple[np.ndarray, ...]:
         """Normalised network outputs ``(N, 4, 62)`` for the images as given and, with
         ``mirrored``, for their left-right mirrors (one batch of 2N)."""
-        x = torch.from_numpy(np.stack([self.preprocess(im) for im in images]))[:, None]
-        n = len(x)
-        if mirrored:
-            x = torch.cat([x, torch.flip(x, dims=[3])])
-        out = self.net(x.to(self.device).contiguous(memory_format=torch.channels_last))
-        mats = encoding.join_heads({h: v.float().cpu().numpy() for h, v in out.items()})
+        mats, _ = self._forward(images, mirrored)
+        n = len(mats) // 2 if mirrored else len(mats)
         return (mats[:n], mats[n:]) if mirrored else (mats,)
+
+    def raw_and_features(self, images: Any) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`raw_batch` and the pooled features the heads read, ``(N, m)`` (with
+        ``self.flip``, each the mean over the image and its mirror)."""
+        mats, pooled = self._forward(images, self.flip)
+        if not self.flip:
+            return mats, pooled
+        n = len(mats) // 2
+        return 0.5 * (mats[:n] + mats[n:]), 0.5 * (pooled[:n] + pooled[n:])
+
+    def tree_probabilities(self, features: np.ndarray) -> np.ndarray | None:
+        """P(each drawing is a tree) from :meth:`raw_and_features`' features, or None when
+        the checkpoint has no tree detector."""
+        det = self.loaded.tree_detector
+        return None if det is None else det.probabilities(features)
 
     def raw_batch(self, images: Any) -> np.ndarray:
         """Normalised network output ``(N, 4, 62)`` for a sequence of images: with

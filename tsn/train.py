@@ -482,6 +482,7 @@ def add_species_classifier(
     save_checkpoint(
         cfg.out, best.model, best.size, cut, norm, best.species_id.with_classifier(clf),
         {**best.info, "val_classifier_species_acc": acc, "classifier_temperature": clf.temperature},
+        best.tree_detector,
     )  # fmt: skip
     log(f"[train] species classifier: val accuracy {acc:.3f}, temperature {clf.temperature:.2f}")
     return acc

@@ -1,0 +1,62 @@
+"""tsn.tree_detect: the calibrated "is it a tree?" probability, on generated features."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tsn.tree_detect import TreeDetector
+
+
+def _data(seed: int, n: int = 200) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    y = rng.random(n) < 0.3  # fewer trees than other things: the classes are weighted
+    x = rng.normal(size=(n, 5))
+    x[:, 0] += np.where(y, 1.5, -1.5)
+    return x, y
+
+
+def test_fit_separates_and_calibrates() -> None:
+    det = TreeDetector.fit(*_data(0), held_out=_data(1))
+    x, y = _data(2)
+    p = det.probabilities(x)
+    assert p.shape == (len(y),) and ((p >= 0) & (p <= 1)).all()
+    assert np.mean((p >= 0.5) == y) > 0.9
+    # balanced: neither class is sacrificed for the larger one
+    assert np.mean(p[y] >= 0.5) > 0.85 and np.mean(p[~y] < 0.5) > 0.85
+    assert 0.05 <= det.temperature <= 20
+
+
+def test_round_trip() -> None:
+    det = TreeDetector.fit(*_data(0))
+    again = TreeDetector.from_dict(det.to_dict())
+    x, _ = _data(3)
+    assert np.allclose(det.probabilities(x), again.probabilities(x))
+
+
+def test_bad_inputs() -> None:
+    x, y = _data(0)
+    with pytest.raises(ValueError, match="both"):
+        TreeDetector.fit(x, np.ones(len(x), bool))
+    with pytest.raises(ValueError, match="one length"):
+        TreeDetector.from_dict({"mean": [0, 1], "std": [1], "weight": [1, 1], "bias": 0})
+
+
+def test_the_shipped_checkpoint_tells_a_tree_from_a_house() -> None:
+    from eval.doodles import nontree_doodle, tree_doodle
+    from treesketch import load_estimator
+
+    est = load_estimator("tsn")
+    if est.model.loaded.tree_detector is None:
+        pytest.fail("the shipped checkpoint has no tree detector (scripts/fit_tree_detector.py)")
+    # benchmark seeds (never fitted on)
+    tree = est.estimate(_prepared(tree_doodle("oak", 3)))
+    house = est.estimate(_prepared(nontree_doodle("house", 1003)))
+    assert tree.tree_probability is not None and house.tree_probability is not None
+    assert tree.tree_probability > 0.5 > house.tree_probability
+
+
+def _prepared(img: np.ndarray) -> np.ndarray:
+    from treesketch.pipeline import prepare_input
+
+    return prepare_input(img)
