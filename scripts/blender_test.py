@@ -16,6 +16,11 @@
    prediction's Sapling preset gets a name of its own; a species picked in the panel is
    the tree's, and the panel says the species in words; a broken preset is reported by
    the operator in plain words.
+4. The trees are dressed (issue 28, part 5): a Sapling tree gets bark and leaf materials
+   with the GLB's textures (packed), the leaves alpha-clipped in Eevee, their shadows
+   too; the imported GLB's leaves clip their shadows as well.  While the CLI refines,
+   its current best tree shows in the scene (a preview, gone when the tree arrives,
+   leaving no data behind).
 """
 
 import json
@@ -156,6 +161,45 @@ assert sorted(i.identifier for i in items[1:]) == sorted(s["name"] for s in ship
 step(f"add-on installed, panel draws {len(log)} items; species: {[i.name for i in items]}")
 
 
+def texture_of(mat):
+    """The image node feeding the material's Principled BSDF's base colour."""
+    bsdf = next(n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
+    links = bsdf.inputs["Base Color"].links
+    assert links and links[0].from_node.type == "TEX_IMAGE", f"{mat.name}: no texture"
+    return links[0].from_node, bsdf
+
+
+def check_leaf_clip(mat):
+    """Leaves clipped by their texture's alpha, in the render and in Eevee's shadows."""
+    tex, bsdf = texture_of(mat)
+    alpha = bsdf.inputs["Alpha"].links
+    assert alpha and alpha[0].from_node == tex and alpha[0].from_socket.name == "Alpha", mat.name
+    assert mat.blend_method == "CLIP", (mat.name, mat.blend_method)
+    assert abs(mat.alpha_threshold - 0.5) < 1e-6, mat.alpha_threshold
+    if hasattr(mat, "shadow_method"):  # up to Blender 4.1
+        assert mat.shadow_method == "CLIP", (mat.name, mat.shadow_method)
+    else:  # Eevee Next
+        assert mat.use_transparent_shadow, mat.name
+    return tex
+
+
+def check_sapling_materials(parent):
+    """A Sapling tree's bark and leaf materials: the GLB's textures, packed."""
+    curves = [o for o in parent.children_recursive if o.type == "CURVE"]
+    leaves = [o for o in parent.children_recursive if o.type == "MESH"]
+    assert curves and leaves, parent.name
+    bark = curves[0].data.materials[0]
+    tex, _ = texture_of(bark)
+    assert tex.image.packed_file and tex.image.size[0] == 256, tex.image
+    assert all(o.data.materials[0] == bark for o in curves)
+    leaf = leaves[0].data.materials[0]
+    img = check_leaf_clip(leaf).image
+    assert img.packed_file and img.channels == 4, img
+    px = _np.array(img.pixels[:]).reshape(-1, 4)
+    assert px[:, 3].min() == 0.0 and px[:, 3].max() == 1.0, "the leaf has no alpha mask"
+    step(f"{parent.name}: materials {bark.name!r} and {leaf.name!r} (clip, shadow clip)")
+
+
 def check_hierarchy(kind):
     """The last prediction: one empty named after its species (not the fallback "tree"),
     the tree's objects under it, everything in the TreeSketch collection."""
@@ -190,12 +234,23 @@ if SAPLING:
     n_leaves = len(leaves[0].data.polygons)
     step(f"Sapling tree from the bundled drawing: {splines} splines, {n_leaves} leaves")
     first = check_hierarchy("Sapling tree")
+    check_sapling_materials(first)
     assert settings.species_text, "the panel does not say the species in words"
     # a second prediction, of the species picked: its own preset in Sapling's menu, its
     # own parent, named after that species; the panel says it in words
-    settings.species = "oak"
+    # refined this time: the CLI's current best tree shows while it refines
+    settings.species, settings.refine, settings.budget = "oak", True, 6
+    meshes_before = set(bpy.data.meshes)
     assert bpy.ops.treesketch.predict(wait=True) == {"FINISHED"}, settings.status
+    settings.refine, settings.budget = False, 0
+    assert settings.previews >= 1, "no preview shown while refining"
+    assert not [o for o in bpy.data.objects if o.name.startswith("TreeSketch preview")]
+    used = {o.data for o in bpy.data.objects if o.data is not None}
+    orphans = [m.name for m in set(bpy.data.meshes) - meshes_before if m not in used]
+    assert not orphans, f"the previews left meshes behind: {orphans}"
+    step(f"refined: {settings.previews} preview(s) shown, gone when the tree arrived")
     second = check_hierarchy("second Sapling tree")
+    check_sapling_materials(second)
     assert second.name != first.name
     assert second.name.split(".")[0] == "oak", second.name
     assert settings.species_text.startswith("an oak"), settings.species_text
@@ -222,6 +277,7 @@ if SAPLING:
     before = roots()
     assert bpy.ops.treesketch.apply_controls() == {"FINISHED"}, settings.status
     edited = check_hierarchy("edited Sapling tree")
+    check_sapling_materials(edited)
     after = roots()  # the edited tree took the old one's place (Blender may reuse its name)
     assert len(after) == len(before) and before[-1] not in after, (before, after)
     more = sum(len(o.data.splines) for o in bpy.data.objects if o.type == "CURVE")
@@ -308,6 +364,7 @@ images = {
     if n.type == "TEX_IMAGE" and n.image
 }
 assert len(images) == 2 and all(i.packed_file for i in images), "textures not packed"
+check_leaf_clip(next(o for o in meshes if o.name.startswith("leaves")).data.materials[0])
 step(f"GLB from a Grease Pencil drawing: z {lo:.2f}..{hi:.2f}; {len(images)} textures packed")
 # 3b'. the height control: the GLB tree grown again, 7 m tall
 bpy.context.scene.treesketch_controls.height = 7.0

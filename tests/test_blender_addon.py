@@ -37,7 +37,9 @@ def test_cli_command(backend, tmp_path):
     assert cmd[cmd.index("--out") + 1] == str(tmp_path / "tree.glb")
     assert cmd[cmd.index("--preset") + 1] == str(tmp_path / "tree_sapling.py")
     assert cmd[cmd.index("--budget") + 1] == "20"
-    assert "--no-refine" in backend.cli_command("t", "d.png", out, refine=False)
+    assert cmd[cmd.index("--preview") + 1] == str(tmp_path / "preview")
+    plain = backend.cli_command("t", "d.png", out, refine=False)
+    assert "--no-refine" in plain and "--preview" not in plain  # the estimate is the result
     with pytest.raises(backend.PredictError, match="preferences"):
         backend.run_cli([str(tmp_path / "missing"), "predict"])
 
@@ -437,3 +439,38 @@ def test_post_predict_asks_the_service_for_the_species_meant(backend, tmp_path):
     assert meant["species"] == "fir" and meant["species_text"].startswith("a fir")
     assert (tmp_path / "f.glb").read_bytes()[:4] == b"glTF"
     assert free["species"] == "palm" and free["species_text"].startswith("a palm")
+
+
+# ------------------------------------------- issue 28, part 5: the Blender hand-off
+def test_preview_watch_shows_each_new_tree_at_most_every_two_seconds(backend, tmp_path):
+    watch = backend.PreviewWatch(tmp_path / "preview")
+    assert watch.every == 2.0 and watch.poll(now=0.0) is None  # nothing written yet
+    (tmp_path / "preview").mkdir()
+    glb = tmp_path / "preview" / "tree.glb"
+    glb.write_bytes(b"glTF first")
+    assert watch.poll(now=1.0) == glb  # the first estimate: at once
+    assert watch.poll(now=5.0) is None  # the same file: nothing new
+    glb.write_bytes(b"glTF a better tree")
+    assert watch.poll(now=6.0) == glb
+    glb.write_bytes(b"glTF a still better tree")
+    assert watch.poll(now=7.5) is None  # new, but within 2 s of the last shown
+    assert watch.poll(now=8.0) == glb and watch.shown == 3
+
+
+def test_glb_textures_are_the_exported_pngs(backend, tmp_path):
+    from weberpenn import build_mesh, grow
+    from weberpenn.export import TEXTURE_SIZE, export_mesh
+    from weberpenn.textures import bark_texture, leaf_texture
+
+    mesh = build_mesh(grow(species.sample("oak", 1)), species="oak")
+    found = backend.glb_textures(export_mesh(mesh, tmp_path / "t.glb"))
+    assert sorted(found) == ["bark", "leaf"]
+    for name, made in (("bark", bark_texture), ("leaf", leaf_texture)):
+        img = Image.open(io.BytesIO(found[name]))
+        want = made("oak", TEXTURE_SIZE)
+        assert img.mode == want.mode and np.array_equal(np.asarray(img), np.asarray(want))
+    flat = backend.glb_textures(export_mesh(mesh, tmp_path / "f.glb", textures=False))
+    assert flat == {}
+    (tmp_path / "x.glb").write_bytes(b"PK\x03\x04 not a GLB at all")
+    with pytest.raises(backend.PredictError, match="cannot read the textures"):
+        backend.glb_textures(tmp_path / "x.glb")

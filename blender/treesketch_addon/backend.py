@@ -3,7 +3,9 @@ turning pen strokes into a drawing.  Plain Python and numpy (Blender's own Pytho
 both), so the project's test suite checks it without Blender.
 
 - :func:`cli_command` / :func:`run_cli`: ``treesketch predict IMAGE --out X.glb --params
-  X.json --preset X.py`` in the project's venv, its output lines handed to a callback.
+  X.json --preset X.py --preview DIR`` in the project's venv, its output lines handed to a
+  callback; while it refines, the CLI keeps the current best tree in ``DIR/tree.glb``
+  (the first estimate at once), which :class:`PreviewWatch` says when to show.
 - :func:`post_predict`: the service's ``POST /predict`` (multipart ``sketch``), then the
   GLB it names is downloaded.  Only from the configured service: plain http(s), the same
   origin (scheme, host, port) for the GLB and any redirect, never ``file://`` or another
@@ -13,6 +15,8 @@ both), so the project's test suite checks it without Blender.
 - :func:`strokes_png`: pen strokes (lists of 2-D points) drawn black on white as a PNG,
   framed the way the project's reader expects (tree filling the canvas, base at the
   bottom).
+- :func:`glb_textures`: the PNG each material of a GLB carries (``bark``, ``leaf``), for
+  the materials of a Sapling tree (Sapling makes none).
 - :func:`numpy_bool_alias`: puts back ``numpy.bool``, which the glTF importer of Blender
   3.4 (Debian's) still calls though numpy 1.24 removed it.
 - :func:`plain_error`: one line a person can read from an exception (an operator's
@@ -65,7 +69,9 @@ __all__ = [
     "species_of",
     "species_text_of",
     "PredictError",
+    "PreviewWatch",
     "cli_command",
+    "glb_textures",
     "multipart_body",
     "post_predict",
     "progress_fraction",
@@ -92,11 +98,12 @@ class Outputs:
     glb: Path
     params: Path
     preset: Path
+    preview: Path  # the folder the CLI keeps the current best tree in while it refines
 
     @classmethod
     def in_folder(cls, folder: str | os.PathLike[str], stem: str = "tree") -> Outputs:
         d = Path(folder)
-        return cls(d / f"{stem}.glb", d / f"{stem}.json", d / f"{stem}_sapling.py")
+        return cls(d / f"{stem}.glb", d / f"{stem}.json", d / f"{stem}_sapling.py", d / "preview")
 
 
 def cli_command(
@@ -115,8 +122,10 @@ def cli_command(
     cmd += ["--params", str(outputs.params), "--preset", str(outputs.preset)]
     if not refine:
         cmd.append("--no-refine")
-    elif budget is not None:
-        cmd += ["--budget", str(int(budget))]
+    else:  # without a refinement the first estimate is the result: nothing to preview
+        cmd += ["--preview", str(outputs.preview)]
+        if budget is not None:
+            cmd += ["--budget", str(int(budget))]
     if max_faces is not None:
         cmd += ["--max-faces", str(int(max_faces))]
     if species:
@@ -432,6 +441,77 @@ def progress_fraction(line: str) -> float | None:
     if not m or int(m.group(2)) == 0:
         return None
     return min(int(m.group(1)) / int(m.group(2)), 1.0)
+
+
+PREVIEW_EVERY = 2.0  # seconds between two previews shown (the first shows at once)
+
+
+class PreviewWatch:
+    """When to show the CLI's preview tree (``--preview DIR``: ``DIR/tree.glb``, replaced
+    whole each time): :meth:`poll` returns the file when it is new since the last one
+    shown and at least ``every`` seconds have passed since then, else None.  The CLI
+    writes at most one every 2 s itself; the add-on's own pause keeps a slow import
+    from following a fast refinement tree by tree."""
+
+    def __init__(self, folder: str | os.PathLike[str], every: float = PREVIEW_EVERY) -> None:
+        self.path = Path(folder) / "tree.glb"
+        self.every = float(every)
+        self.seen: tuple[int, int] | None = None  # (mtime_ns, size) of the last shown
+        self.last = -float("inf")
+        self.shown = 0  # previews returned so far
+
+    def poll(self, now: float | None = None) -> Path | None:
+        now = time.monotonic() if now is None else now
+        if now - self.last < self.every:
+            return None
+        try:
+            st = self.path.stat()
+        except OSError:
+            return None
+        stamp = (st.st_mtime_ns, st.st_size)
+        if stamp == self.seen:
+            return None
+        self.seen, self.last = stamp, now
+        self.shown += 1
+        return self.path
+
+
+MAX_GLB_JSON_BYTES = 16 * 1024 * 1024
+
+
+def glb_textures(path: str | os.PathLike[str]) -> dict[str, bytes]:
+    """{material name: the image bytes of its base colour texture} of a binary glTF
+    (what our exporter writes: ``bark`` and ``leaf``, PNGs inside the file).  A material
+    without a texture is left out; a file that is not a GLB is a PredictError."""
+    try:
+        data = Path(path).read_bytes()
+        magic, _version, length = struct.unpack_from("<4sII", data, 0)
+        if magic != b"glTF" or length > len(data):
+            raise ValueError("not a binary glTF")
+        n, kind = struct.unpack_from("<I4s", data, 12)
+        if kind != b"JSON" or n > MAX_GLB_JSON_BYTES:
+            raise ValueError("no JSON chunk first")
+        doc = json.loads(data[20 : 20 + n])
+        binary = b""
+        at = 20 + ((n + 3) & ~3)
+        if at + 8 <= len(data):
+            m, kind = struct.unpack_from("<I4s", data, at)
+            if kind == b"BIN\x00":
+                binary = data[at + 8 : at + 8 + m]
+        out = {}
+        for mat in doc.get("materials", []):
+            ref = mat.get("pbrMetallicRoughness", {}).get("baseColorTexture")
+            if ref is None:
+                continue
+            image = doc["images"][doc["textures"][ref["index"]]["source"]]
+            view = doc["bufferViews"][image["bufferView"]]
+            start = view.get("byteOffset", 0)
+            out[str(mat.get("name", f"material{len(out)}"))] = binary[
+                start : start + view["byteLength"]
+            ]
+    except (OSError, ValueError, KeyError, IndexError, TypeError, struct.error) as exc:
+        raise PredictError(f"{path}: cannot read the textures of the GLB ({exc})") from None
+    return out
 
 
 def numpy_bool_alias() -> bool:
