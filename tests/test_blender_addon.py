@@ -1,10 +1,13 @@
 """Tests of the Blender add-on's Blender-free part (blender/treesketch_addon/backend.py)
-and its zip; the add-on inside Blender is checked by `make blender-test`."""
+and its zip; the add-on inside Blender is checked by `make blender-test`
+(scripts/blender_test.sh), which the last test here runs when Blender is installed."""
 
 from __future__ import annotations
 
 import importlib.util
 import io
+import shutil
+import subprocess
 import sys
 import zipfile
 from pathlib import Path
@@ -474,3 +477,23 @@ def test_glb_textures_are_the_exported_pngs(backend, tmp_path):
     (tmp_path / "x.glb").write_bytes(b"PK\x03\x04 not a GLB at all")
     with pytest.raises(backend.PredictError, match="cannot read the textures"):
         backend.glb_textures(tmp_path / "x.glb")
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(
+    shutil.which("blender") is None or not (ROOT / ".venv" / "bin" / "treesketch").exists(),
+    reason="needs Blender (make blender-test installs Debian's) and the project's .venv",
+)
+def test_the_addon_in_blender_headless():
+    """`make blender-test` itself: the GLB in Blender's importer, the add-on end to end
+    (Sapling trees dressed, leaves' shadows clipped, the preview while refining)."""
+    res = subprocess.run(
+        ["bash", str(ROOT / "scripts" / "blender_test.sh")],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=900,
+        check=False,
+    )
+    assert res.returncode == 0, res.stdout[-4000:] + res.stderr[-4000:]
+    assert "ALL OK" in res.stdout and "materials 'TreeSketch bark" in res.stdout, res.stdout
