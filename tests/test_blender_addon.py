@@ -479,6 +479,40 @@ def test_glb_textures_are_the_exported_pngs(backend, tmp_path):
         backend.glb_textures(tmp_path / "x.glb")
 
 
+# ----------------------------------------------- issue 29: two views from Grease Pencil
+def test_view_layers_front_first_and_refusals(backend):
+    assert backend.view_layers(["GP_Layer", "ink"]) == []  # one drawing, from the front
+    assert backend.view_layers(["right", "Lines", " Front "]) == [
+        (" Front ", "front"),
+        ("right", "right"),
+    ]
+    with pytest.raises(backend.PredictError, match="no Front"):
+        backend.view_layers(["Right", "Back"])
+    with pytest.raises(backend.PredictError, match="two Grease Pencil layers are the Right"):
+        backend.view_layers(["Front", "Right", "RIGHT"])
+
+
+def test_views_follow_the_renderers_yaw(backend):
+    """Each view's screen-right axis is the renderer's at that yaw (``render.camera``):
+    Blender's Right view (camera at +X looking along -X, +Y on the right) is yaw 90."""
+    from render.camera import Camera, Framing
+
+    framing = Framing(0.0, 1.0, 0.5)
+    for view, (yaw, (rx, ry)) in backend.VIEWS.items():
+        right, up, forward = Camera(framing, yaw).basis()
+        assert np.allclose(right, [rx, ry, 0.0]) and np.allclose(up, [0, 0, 1]), view
+    _, _, forward = Camera(framing, backend.VIEWS["right"][0]).basis()
+    assert np.allclose(forward, [-1.0, 0.0, 0.0])  # looking along -X: Blender's Right view
+
+
+def test_cli_command_sends_the_other_views(backend, tmp_path):
+    out = backend.Outputs.in_folder(tmp_path)
+    cmd = backend.cli_command("t", "front.png", out, views=[("right.png", 90.0)])
+    assert cmd[:3] == ["t", "predict", "front.png"]
+    assert cmd[cmd.index("--view") + 1] == "right.png@90"
+    assert "--view" not in backend.cli_command("t", "front.png", out)
+
+
 @pytest.mark.slow
 @pytest.mark.skipif(
     shutil.which("blender") is None or not (ROOT / ".venv" / "bin" / "treesketch").exists(),

@@ -107,7 +107,12 @@ class TREESKETCH_Settings(bpy.types.PropertyGroup):
         name="Drawing",
         items=[
             ("IMAGE", "Image file", "A PNG/JPEG of a tree, dark lines on white"),
-            ("GPENCIL", "Grease Pencil", "The active Grease Pencil object, seen from the front"),
+            (
+                "GPENCIL",
+                "Grease Pencil",
+                "The active Grease Pencil object, seen from the front; layers named Front, "
+                "Right, Back, Left are drawings of one tree from those views",
+            ),
         ],
         default="IMAGE",
     )
@@ -222,12 +227,15 @@ def _remove_tree(name: str) -> None:
 GPENCIL_TYPES = ("GPENCIL", "GREASEPENCIL")  # Blender < 4.3, Blender 4.3+ (GPv3)
 
 
-def _gpencil_strokes(obj) -> list:
-    """World-space strokes of a Grease Pencil object seen from the front (x, z)."""
+def _gpencil_strokes(obj, layers=None, right=(1.0, 0.0)) -> list:
+    """World-space strokes of a Grease Pencil object's visible layers (``layers``: only
+    those names) as seen in a view whose screen right is the world axis ``right`` (x, y)
+    and up +Z: the Front view's (x, z) by default."""
     mw = obj.matrix_world
+    rx, ry = right
     out = []
     for layer in obj.data.layers:
-        if layer.hide:
+        if layer.hide or (layers is not None and _layer_name(layer) not in layers):
             continue
         if obj.type == "GPENCIL":  # legacy Grease Pencil: frames hold strokes of points
             frame = layer.active_frame
@@ -238,31 +246,58 @@ def _gpencil_strokes(obj) -> list:
             strokes = [[p.position for p in s.points] for s in drawing.strokes] if drawing else []
         for pts in strokes:
             world = [mw @ co for co in pts]
-            out.append([(p.x, p.z) for p in world])
+            out.append([(rx * p.x + ry * p.y, p.z) for p in world])
     return out
 
 
-def drawing_file(context, folder: Path) -> Path:
-    """The drawing to send: the image file, or the Grease Pencil drawing rendered to PNG."""
+def _layer_name(layer) -> str:
+    return layer.info if hasattr(layer, "info") else layer.name  # legacy GP: .info
+
+
+def drawing_files(context, folder: Path) -> list[tuple[Path, float]]:
+    """The drawings to send, each with its yaw relative to the first: the image file; or
+    the Grease Pencil drawing rendered to PNG, one per layer named after a view (Front,
+    Right, Back, Left: ``backend.VIEWS``), else all its layers as one Front view."""
     settings = context.scene.treesketch
     if settings.source == "IMAGE":
         path = Path(bpy.path.abspath(settings.image_path))
         if not path.is_file():
             raise backend.PredictError(f"no image file at {path}")
-        return path
+        return [(path, 0.0)]
     obj = context.active_object
     if obj is None or obj.type not in GPENCIL_TYPES:
         raise backend.PredictError("make a Grease Pencil drawing the active object first")
-    path = folder / "drawing.png"
-    path.write_bytes(backend.strokes_png(_gpencil_strokes(obj)))
-    return path
+    named = backend.view_layers(_layer_name(layer) for layer in obj.data.layers)
+    if not named:
+        path = folder / "drawing.png"
+        path.write_bytes(backend.strokes_png(_gpencil_strokes(obj)))
+        return [(path, 0.0)]
+    out = []
+    for layer, view in named:
+        yaw, right = backend.VIEWS[view]
+        strokes = _gpencil_strokes(obj, {layer}, right)
+        if not strokes:
+            raise backend.PredictError(
+                f"the Grease Pencil layer {layer!r} (the {view.title()} view) is empty or hidden"
+            )
+        path = folder / f"{view}.png"
+        path.write_bytes(backend.strokes_png(strokes))
+        out.append((path, yaw))
+    return out
 
 
-def prediction_job(context, image: Path, out: backend.Outputs):
+def prediction_job(context, drawings: list[tuple[Path, float]], out: backend.Outputs):
     """A function ``job(on_line, cancel) -> (species, species in words)`` that runs the
     prediction with the backend chosen in the preferences; it reads every setting now, so
-    it can run in a thread without touching Blender's data."""
+    it can run in a thread without touching Blender's data.  ``drawings``: the views of
+    the tree, (file, yaw relative to the first)."""
     prefs, settings = _prefs(context), context.scene.treesketch
+    image = drawings[0][0]
+    if len(drawings) > 1 and prefs.backend != "CLI":
+        raise backend.PredictError(
+            f"{len(drawings)} views drawn, and the service takes one drawing: hide all but "
+            "the Front layer, or run with the project CLI (add-on preferences)"
+        )
     refine = bool(settings.refine)
     budget = int(settings.budget) or None  # 0: the project's one default
     species = None if settings.species == AUTO else str(settings.species)
@@ -274,6 +309,7 @@ def prediction_job(context, image: Path, out: backend.Outputs):
             refine=refine,
             budget=budget,
             species=species,
+            views=drawings[1:],
         )
 
         def run(on_line=None, cancel=None):
@@ -523,23 +559,21 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
         settings = context.scene.treesketch
         settings.species_text = ""  # an earlier prediction's words would mislead
         folder = Path(tempfile.mkdtemp(prefix="treesketch-"))
+        self._folder, self._out = folder, backend.Outputs.in_folder(folder)
         try:
             if settings.result == "SAPLING" and _prefs(context).backend == "CLI":
                 _enable_sapling()  # before the prediction, not after a minute of it
-            image = drawing_file(context, folder)
+            job = prediction_job(context, drawing_files(context, folder), self._out)
         except backend.PredictError as exc:
             shutil.rmtree(folder, ignore_errors=True)
             settings.status = str(exc)
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
-        self._folder = folder
-        self._out = backend.Outputs.in_folder(folder)
         # the CLI keeps the current best tree there while it refines (the service's
         # one-request path has none)
         self._watch = backend.PreviewWatch(self._out.preview)
         self._lines = queue.Queue()
         self._error = None
-        job = prediction_job(context, image, self._out)
 
         def work():
             try:
@@ -755,6 +789,14 @@ class TREESKETCH_PT_panel(bpy.types.Panel):
             layout.label(
                 text=obj.name if ok else "select a Grease Pencil drawing", icon="GREASEPENCIL"
             )
+            if ok:
+                try:
+                    named = backend.view_layers(_layer_name(la) for la in obj.data.layers)
+                    text = "views: " + ", ".join(v.title() for _, v in named) if named else ""
+                except backend.PredictError as exc:
+                    text = str(exc)[:80]
+                if text:
+                    layout.label(text=text)
         layout.prop(settings, "species")
         layout.prop(settings, "result", expand=True)
         row = layout.row()

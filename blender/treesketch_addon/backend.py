@@ -15,6 +15,9 @@ both), so the project's test suite checks it without Blender.
 - :func:`strokes_png`: pen strokes (lists of 2-D points) drawn black on white as a PNG,
   framed the way the project's reader expects (tree filling the canvas, base at the
   bottom).
+- :data:`VIEWS` / :func:`view_layers`: Grease Pencil layers named after Blender's views
+  (Front, Right, Back, Left) are drawings of one tree from those sides, sent as the
+  views of one prediction (``--view FILE@YAW``).
 - :func:`glb_textures`: the PNG each material of a GLB carries (``bark``, ``leaf``), for
   the materials of a Sapling tree (Sapling makes none).
 - :func:`numpy_bool_alias`: puts back ``numpy.bool``, which the glTF importer of Blender
@@ -70,6 +73,7 @@ __all__ = [
     "species_text_of",
     "PredictError",
     "PreviewWatch",
+    "VIEWS",
     "cli_command",
     "glb_textures",
     "multipart_body",
@@ -78,6 +82,7 @@ __all__ = [
     "read_preset",
     "run_cli",
     "strokes_png",
+    "view_layers",
 ]
 
 _ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
@@ -115,10 +120,14 @@ def cli_command(
     budget: int | None = None,
     max_faces: int | None = None,
     species: str | None = None,
+    views: Sequence[tuple[str | os.PathLike[str], float]] = (),
 ) -> list[str]:
     """The ``treesketch predict`` command line for one drawing (``species``: the one the
-    person means; None lets the drawing decide)."""
+    person means; None lets the drawing decide; ``views``: more drawings of the same
+    tree, each with its yaw in degrees relative to ``image``)."""
     cmd = [str(treesketch), "predict", str(image), "--out", str(outputs.glb)]
+    for path, yaw in views:
+        cmd += ["--view", f"{path}@{float(yaw):g}"]
     cmd += ["--params", str(outputs.params), "--preset", str(outputs.preset)]
     if not refine:
         cmd.append("--no-refine")
@@ -430,6 +439,43 @@ def strokes_png(strokes: Iterable[np.ndarray], size: int = 512, pen: float = 2.0
         ok = (cx >= 0) & (cx < size) & (cy >= 0) & (cy < size)
         img[cy[ok], cx[ok]] = 0
     return _png(img)
+
+
+# Blender's views of a tree standing on +Z -> (yaw in degrees relative to the Front view,
+# the world axis (x, y) that points right on the screen).  The project's yaw turns the
+# camera about the trunk, counter-clockwise seen from above (``render.camera``: yaw 0
+# looks along +Y, image right +X; yaw 90 looks along -X, image right +Y): Blender's Right
+# view (numpad 3) is yaw 90; ``render.camera.VIEWS`` calls that side "left", the tree's
+# own left as it faces the Front view.
+VIEWS: dict[str, tuple[float, tuple[float, float]]] = {
+    "front": (0.0, (1.0, 0.0)),
+    "right": (90.0, (0.0, 1.0)),
+    "back": (180.0, (-1.0, 0.0)),
+    "left": (270.0, (0.0, -1.0)),
+}
+
+
+def view_layers(names: Iterable[str]) -> list[tuple[str, str]]:
+    """The layers named after a view (any case, surrounding spaces ignored), as (layer
+    name, view) in the order the prediction takes them: Front first, then Right, Back,
+    Left.  None named so: [] (the whole drawing is one view from the front).  Views named
+    without a Front, or one view named twice, are a PredictError."""
+    found: dict[str, str] = {}
+    for name in names:
+        view = name.strip().lower()
+        if view in VIEWS:
+            if view in found:
+                raise PredictError(
+                    f"two Grease Pencil layers are the {view.title()} view: "
+                    f"{found[view]!r} and {name!r}; keep one"
+                )
+            found[view] = name
+    if found and "front" not in found:
+        raise PredictError(
+            f"the Grease Pencil layers name the {', '.join(v.title() for v in found)} view but "
+            "no Front: draw the tree in a layer named Front too (the views are turned from it)"
+        )
+    return [(found[v], v) for v in VIEWS if v in found]
 
 
 _FRACTION = re.compile(r"(\d+)\s*/\s*(\d+)")
