@@ -16,6 +16,11 @@
    prediction's Sapling preset gets a name of its own; a species picked in the panel is
    the tree's, and the panel says the species in words; a broken preset is reported by
    the operator in plain words.
+4. The trees are dressed (issue 28, part 5): a Sapling tree gets bark and leaf materials
+   with the GLB's textures (packed), the leaves alpha-clipped in Eevee, their shadows
+   too; the imported GLB's leaves clip their shadows as well.  While the CLI refines,
+   its current best tree shows in the scene (a preview, gone when the tree arrives,
+   leaving no data behind).
 """
 
 import json
@@ -156,6 +161,45 @@ assert sorted(i.identifier for i in items[1:]) == sorted(s["name"] for s in ship
 step(f"add-on installed, panel draws {len(log)} items; species: {[i.name for i in items]}")
 
 
+def texture_of(mat):
+    """The image node feeding the material's Principled BSDF's base colour."""
+    bsdf = next(n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
+    links = bsdf.inputs["Base Color"].links
+    assert links and links[0].from_node.type == "TEX_IMAGE", f"{mat.name}: no texture"
+    return links[0].from_node, bsdf
+
+
+def check_leaf_clip(mat):
+    """Leaves clipped by their texture's alpha, in the render and in Eevee's shadows."""
+    tex, bsdf = texture_of(mat)
+    alpha = bsdf.inputs["Alpha"].links
+    assert alpha and alpha[0].from_node == tex and alpha[0].from_socket.name == "Alpha", mat.name
+    assert mat.blend_method == "CLIP", (mat.name, mat.blend_method)
+    assert abs(mat.alpha_threshold - 0.5) < 1e-6, mat.alpha_threshold
+    if hasattr(mat, "shadow_method"):  # up to Blender 4.1
+        assert mat.shadow_method == "CLIP", (mat.name, mat.shadow_method)
+    else:  # Eevee Next
+        assert mat.use_transparent_shadow, mat.name
+    return tex
+
+
+def check_sapling_materials(parent):
+    """A Sapling tree's bark and leaf materials: the GLB's textures, packed."""
+    curves = [o for o in parent.children_recursive if o.type == "CURVE"]
+    leaves = [o for o in parent.children_recursive if o.type == "MESH"]
+    assert curves and leaves, parent.name
+    bark = curves[0].data.materials[0]
+    tex, _ = texture_of(bark)
+    assert tex.image.packed_file and tex.image.size[0] == 256, tex.image
+    assert all(o.data.materials[0] == bark for o in curves)
+    leaf = leaves[0].data.materials[0]
+    img = check_leaf_clip(leaf).image
+    assert img.packed_file and img.channels == 4, img
+    px = _np.array(img.pixels[:]).reshape(-1, 4)
+    assert px[:, 3].min() == 0.0 and px[:, 3].max() == 1.0, "the leaf has no alpha mask"
+    step(f"{parent.name}: materials {bark.name!r} and {leaf.name!r} (clip, shadow clip)")
+
+
 def check_hierarchy(kind):
     """The last prediction: one empty named after its species (not the fallback "tree"),
     the tree's objects under it, everything in the TreeSketch collection."""
@@ -190,12 +234,23 @@ if SAPLING:
     n_leaves = len(leaves[0].data.polygons)
     step(f"Sapling tree from the bundled drawing: {splines} splines, {n_leaves} leaves")
     first = check_hierarchy("Sapling tree")
+    check_sapling_materials(first)
     assert settings.species_text, "the panel does not say the species in words"
     # a second prediction, of the species picked: its own preset in Sapling's menu, its
     # own parent, named after that species; the panel says it in words
-    settings.species = "oak"
+    # refined this time: the CLI's current best tree shows while it refines
+    settings.species, settings.refine, settings.budget = "oak", True, 6
+    meshes_before = set(bpy.data.meshes)
     assert bpy.ops.treesketch.predict(wait=True) == {"FINISHED"}, settings.status
+    settings.refine, settings.budget = False, 0
+    assert settings.previews >= 1, "no preview shown while refining"
+    assert not [o for o in bpy.data.objects if o.name.startswith("TreeSketch preview")]
+    used = {o.data for o in bpy.data.objects if o.data is not None}
+    orphans = [m.name for m in set(bpy.data.meshes) - meshes_before if m not in used]
+    assert not orphans, f"the previews left meshes behind: {orphans}"
+    step(f"refined: {settings.previews} preview(s) shown, gone when the tree arrived")
     second = check_hierarchy("second Sapling tree")
+    check_sapling_materials(second)
     assert second.name != first.name
     assert second.name.split(".")[0] == "oak", second.name
     assert settings.species_text.startswith("an oak"), settings.species_text
@@ -216,18 +271,34 @@ if SAPLING:
     ctl.branch_count = 2.0
     coll = bpy.data.collections["TreeSketch"]
 
-    def roots():
-        return [o.as_pointer() for o in coll.objects if o.parent is None]
+    marks = iter(range(1, 1_000_000))
 
-    before = roots()
+    def roots():
+        """Each tree's mark (a new tree gets one now): Blender may give a new object a
+        removed one's name, and its memory too."""
+        out = []
+        for o in coll.objects:
+            if o.parent is None:
+                if "ts_test" not in o:
+                    o["ts_test"] = next(marks)
+                out.append(o["ts_test"])
+        return out
+
+    def shown():
+        roots()
+        return bpy.data.objects[settings.last_tree]["ts_test"]
+
+    before, old = roots(), shown()
     assert bpy.ops.treesketch.apply_controls() == {"FINISHED"}, settings.status
     edited = check_hierarchy("edited Sapling tree")
-    after = roots()  # the edited tree took the old one's place (Blender may reuse its name)
-    assert len(after) == len(before) and before[-1] not in after, (before, after)
+    check_sapling_materials(edited)
+    after = roots()  # the edited tree took the old one's place
+    assert len(after) == len(before) and old not in after and shown() != old, (before, after)
     more = sum(len(o.data.splines) for o in bpy.data.objects if o.type == "CURVE")
     assert more > splines, (more, splines)
+    old = shown()
     assert bpy.ops.treesketch.variant() == {"FINISHED"}, settings.status
-    assert ctl.seed >= 0 and len(roots()) == len(before) and after[-1] not in roots()
+    assert ctl.seed >= 0 and len(roots()) == len(before) and old not in roots()
     step(f"controls: branch count x2 gives {more} splines (was {splines}); variant {ctl.seed}")
 else:
     lo, hi = world_z([o for o in bpy.data.objects if o.type == "MESH"])
@@ -263,36 +334,57 @@ if SAPLING:
     prefs.cli_path = CLI
     step("a broken preset: the operator reports it plainly")
 
+
 # 3b. a Grease Pencil drawing -> the GLB
+def new_gpencil():
+    if bpy.app.version >= (4, 3, 0):  # Grease Pencil v3
+        bpy.ops.object.grease_pencil_add(type="EMPTY")
+    else:  # Blender up to 4.2: legacy Grease Pencil
+        bpy.ops.object.gpencil_add(type="EMPTY")
+    return bpy.context.active_object
+
+
+def gpencil_layer(gp, name=None):
+    """A function adding a stroke of world points (x, y, z) to the Grease Pencil object's
+    layer ``name`` (made now), or to its active layer."""
+    if bpy.app.version >= (4, 3, 0):
+        layer = gp.data.layers.new(name) if name else gp.data.layers.active
+        layer = layer or gp.data.layers.new("ink")
+        drawing = (layer.current_frame() or layer.frames.new(1)).drawing
+
+        def stroke(points):
+            drawing.add_strokes([len(points)])
+            for p, co in zip(drawing.strokes[-1].points, points, strict=True):
+                p.position = co
+
+    else:
+        layer = gp.data.layers.new(name) if name else gp.data.layers.active
+        frame = layer.frames[0] if len(layer.frames) else layer.frames.new(1)
+
+        def stroke(points):
+            s = frame.strokes.new()
+            s.points.add(len(points))
+            for p, co in zip(s.points, points, strict=True):
+                p.co = co
+
+    return stroke
+
+
+def ring(cx, cz, rx, rz):
+    return [(cx + rx * _np.cos(a), cz + rz * _np.sin(a)) for a in _np.linspace(0, 2 * _np.pi, 60)]
+
+
 clear()
-if bpy.app.version >= (4, 3, 0):  # Grease Pencil v3
-    bpy.ops.object.grease_pencil_add(type="EMPTY")
-    gp = bpy.context.active_object
-    layer = gp.data.layers.active or gp.data.layers.new("ink")
-    drawing = (layer.current_frame() or layer.frames.new(1)).drawing
+ink = gpencil_layer(new_gpencil())
 
-    def stroke(points):
-        drawing.add_strokes([len(points)])
-        for p, (x, z) in zip(drawing.strokes[-1].points, points, strict=True):
-            p.position = (x, 0.0, z)
 
-else:  # Blender up to 4.2: legacy Grease Pencil
-    bpy.ops.object.gpencil_add(type="EMPTY")
-    gp = bpy.context.active_object
-    frames = gp.data.layers.active.frames
-    frame = frames[0] if len(frames) else frames.new(1)
-
-    def stroke(points):
-        s = frame.strokes.new()
-        s.points.add(len(points))
-        for p, (x, z) in zip(s.points, points, strict=True):
-            p.co = (x, 0.0, z)
+def stroke(points):  # seen from the front: (x, z) on the plane y = 0
+    ink([(x, 0.0, z) for x, z in points])
 
 
 stroke([(-0.15, 0.0), (-0.1, 1.5)])  # trunk, two lines
 stroke([(0.15, 0.0), (0.1, 1.5)])
-ring = [(1.3 * _np.cos(a), 2.6 + 1.2 * _np.sin(a)) for a in _np.linspace(0, 2 * _np.pi, 60)]
-stroke(ring)  # crown outline
+stroke(ring(0.0, 2.6, 1.3, 1.2))  # crown outline
 settings.source, settings.result = "GPENCIL", "GLB"
 assert bpy.ops.treesketch.predict(wait=True) == {"FINISHED"}, settings.status
 meshes = [o for o in bpy.data.objects if o.type == "MESH"]
@@ -308,6 +400,7 @@ images = {
     if n.type == "TEX_IMAGE" and n.image
 }
 assert len(images) == 2 and all(i.packed_file for i in images), "textures not packed"
+check_leaf_clip(next(o for o in meshes if o.name.startswith("leaves")).data.materials[0])
 step(f"GLB from a Grease Pencil drawing: z {lo:.2f}..{hi:.2f}; {len(images)} textures packed")
 # 3b'. the height control: the GLB tree grown again, 7 m tall
 bpy.context.scene.treesketch_controls.height = 7.0
@@ -316,4 +409,67 @@ glb_tree = check_hierarchy("edited GLB")
 lo7, hi7 = world_z([o for o in glb_tree.children_recursive if o.type == "MESH"])
 assert abs(hi7 - lo7 - 7.0) < 0.03 * 7.0, (lo7, hi7)
 step(f"controls: height 7 m -> {hi7 - lo7:.2f} m")
+
+# 3d. two views (issue 29): Grease Pencil layers Front and Right are drawings of one tree
+# from Blender's Front and Right views, sent as two views (Right: yaw 90, the camera at
+# +X looking along -X, +Y to the right on screen).  A stand-in CLI keeps what it was given.
+spy_dir = Path(GLB).with_name("spy")
+spy_dir.mkdir()
+spy = Path(GLB).with_name("spy_treesketch")
+spy.write_text(
+    "#!/bin/sh\n"
+    f'printf "%s\\n" "$@" > {spy_dir}/args\n'
+    f'for a in "$@"; do case "$a" in *.png|*.png@*) cp "${{a%@*}}" {spy_dir}/;; esac; done\n'
+    f'exec {CLI} "$@"\n'
+)
+spy.chmod(0o755)
+prefs.cli_path = str(spy)
+clear()
+gp = new_gpencil()
+front, right = gpencil_layer(gp, "Front"), gpencil_layer(gp, "Right")
+front([(x, 0.0, z) for x, z in [(-0.15, 0.0), (-0.1, 1.5)]])
+front([(x, 0.0, z) for x, z in [(0.15, 0.0), (0.1, 1.5)]])
+front([(x, 0.0, z) for x, z in ring(0.0, 2.6, 1.3, 1.2)])
+# from the right the crown leans to +Y: right of the trunk on that screen
+right([(0.0, y, z) for y, z in [(-0.1, 0.0), (-0.1, 1.5)]])
+right([(0.0, y, z) for y, z in [(0.1, 0.0), (0.1, 1.5)]])
+right([(0.0, y, z) for y, z in ring(1.0, 2.6, 1.0, 1.2)])
+log = []
+panel.draw(type("P", (), {"layout": Layout(log)})(), bpy.context)
+assert ("label", "views: Front, Right") in log, log
+assert bpy.ops.treesketch.predict(wait=True) == {"FINISHED"}, settings.status
+args = (spy_dir / "args").read_text().splitlines()
+assert Path(args[1]).name == "front.png", args  # (the program is not in "$@")
+assert Path(args[args.index("--view") + 1]).name == "right.png@90", args
+assert args.count("--view") == 1, args
+check_hierarchy("two views")
+
+
+def ink_columns(path, rows):
+    """Mean column of the ink in the given fraction of rows from the bottom (0..1)."""
+    img = bpy.data.images.load(str(path))
+    w, h = img.size
+    px = _np.array(img.pixels[:]).reshape(h, w, -1)[..., 0]  # Blender: bottom row first
+    ys, xs = _np.nonzero(px[int(rows[0] * h) : int(rows[1] * h)] < 0.5)
+    bpy.data.images.remove(img)
+    return xs.mean() / w
+
+
+trunk_front = ink_columns(spy_dir / "front.png", (0.05, 0.3))
+trunk_right = ink_columns(spy_dir / "right.png", (0.05, 0.3))
+assert abs(trunk_front - 0.5) < 0.02, trunk_front  # symmetric: the trunk in the middle
+assert trunk_right < 0.4, trunk_right  # the crown to the right (+Y): the trunk left of middle
+step(f"two views sent: front.png and right.png@90 (trunk at {trunk_right:.2f} of the width)")
+# views named without a Front: refused before any work, in plain words
+clear()
+gpencil_layer(new_gpencil(), "Right")([(0.0, 0.0, 0.0), (0.0, 0.1, 1.0)])
+(spy_dir / "args").unlink()
+try:
+    bpy.ops.treesketch.predict(wait=True)
+    raise AssertionError("views without a Front were not refused")
+except RuntimeError as exc:
+    assert "no Front" in str(exc) and "Traceback" not in str(exc), exc
+assert not (spy_dir / "args").exists(), "the CLI ran"
+prefs.cli_path = CLI
+step("views without a Front: refused before any work")
 step(f"ALL OK (Blender {bpy.app.version_string})")

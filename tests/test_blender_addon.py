@@ -1,10 +1,13 @@
 """Tests of the Blender add-on's Blender-free part (blender/treesketch_addon/backend.py)
-and its zip; the add-on inside Blender is checked by `make blender-test`."""
+and its zip; the add-on inside Blender is checked by `make blender-test`
+(scripts/blender_test.sh), which the last test here runs when Blender is installed."""
 
 from __future__ import annotations
 
 import importlib.util
 import io
+import shutil
+import subprocess
 import sys
 import zipfile
 from pathlib import Path
@@ -37,7 +40,9 @@ def test_cli_command(backend, tmp_path):
     assert cmd[cmd.index("--out") + 1] == str(tmp_path / "tree.glb")
     assert cmd[cmd.index("--preset") + 1] == str(tmp_path / "tree_sapling.py")
     assert cmd[cmd.index("--budget") + 1] == "20"
-    assert "--no-refine" in backend.cli_command("t", "d.png", out, refine=False)
+    assert cmd[cmd.index("--preview") + 1] == str(tmp_path / "preview")
+    plain = backend.cli_command("t", "d.png", out, refine=False)
+    assert "--no-refine" in plain and "--preview" not in plain  # the estimate is the result
     with pytest.raises(backend.PredictError, match="preferences"):
         backend.run_cli([str(tmp_path / "missing"), "predict"])
 
@@ -437,3 +442,92 @@ def test_post_predict_asks_the_service_for_the_species_meant(backend, tmp_path):
     assert meant["species"] == "fir" and meant["species_text"].startswith("a fir")
     assert (tmp_path / "f.glb").read_bytes()[:4] == b"glTF"
     assert free["species"] == "palm" and free["species_text"].startswith("a palm")
+
+
+# ------------------------------------------- issue 28, part 5: the Blender hand-off
+def test_preview_watch_shows_each_new_tree_at_most_every_two_seconds(backend, tmp_path):
+    watch = backend.PreviewWatch(tmp_path / "preview")
+    assert watch.every == 2.0 and watch.poll(now=0.0) is None  # nothing written yet
+    (tmp_path / "preview").mkdir()
+    glb = tmp_path / "preview" / "tree.glb"
+    glb.write_bytes(b"glTF first")
+    assert watch.poll(now=1.0) == glb  # the first estimate: at once
+    assert watch.poll(now=5.0) is None  # the same file: nothing new
+    glb.write_bytes(b"glTF a better tree")
+    assert watch.poll(now=6.0) == glb
+    glb.write_bytes(b"glTF a still better tree")
+    assert watch.poll(now=7.5) is None  # new, but within 2 s of the last shown
+    assert watch.poll(now=8.0) == glb and watch.shown == 3
+
+
+def test_glb_textures_are_the_exported_pngs(backend, tmp_path):
+    from weberpenn import build_mesh, grow
+    from weberpenn.export import TEXTURE_SIZE, export_mesh
+    from weberpenn.textures import bark_texture, leaf_texture
+
+    mesh = build_mesh(grow(species.sample("oak", 1)), species="oak")
+    found = backend.glb_textures(export_mesh(mesh, tmp_path / "t.glb"))
+    assert sorted(found) == ["bark", "leaf"]
+    for name, made in (("bark", bark_texture), ("leaf", leaf_texture)):
+        img = Image.open(io.BytesIO(found[name]))
+        want = made("oak", TEXTURE_SIZE)
+        assert img.mode == want.mode and np.array_equal(np.asarray(img), np.asarray(want))
+    flat = backend.glb_textures(export_mesh(mesh, tmp_path / "f.glb", textures=False))
+    assert flat == {}
+    (tmp_path / "x.glb").write_bytes(b"PK\x03\x04 not a GLB at all")
+    with pytest.raises(backend.PredictError, match="cannot read the textures"):
+        backend.glb_textures(tmp_path / "x.glb")
+
+
+# ----------------------------------------------- issue 29: two views from Grease Pencil
+def test_view_layers_front_first_and_refusals(backend):
+    assert backend.view_layers(["GP_Layer", "ink"]) == []  # one drawing, from the front
+    assert backend.view_layers(["right", "Lines", " Front "]) == [
+        (" Front ", "front"),
+        ("right", "right"),
+    ]
+    with pytest.raises(backend.PredictError, match="no Front"):
+        backend.view_layers(["Right", "Back"])
+    with pytest.raises(backend.PredictError, match="two Grease Pencil layers are the Right"):
+        backend.view_layers(["Front", "Right", "RIGHT"])
+
+
+def test_views_follow_the_renderers_yaw(backend):
+    """Each view's screen-right axis is the renderer's at that yaw (``render.camera``):
+    Blender's Right view (camera at +X looking along -X, +Y on the right) is yaw 90."""
+    from render.camera import Camera, Framing
+
+    framing = Framing(0.0, 1.0, 0.5)
+    for view, (yaw, (rx, ry)) in backend.VIEWS.items():
+        right, up, forward = Camera(framing, yaw).basis()
+        assert np.allclose(right, [rx, ry, 0.0]) and np.allclose(up, [0, 0, 1]), view
+    _, _, forward = Camera(framing, backend.VIEWS["right"][0]).basis()
+    assert np.allclose(forward, [-1.0, 0.0, 0.0])  # looking along -X: Blender's Right view
+
+
+def test_cli_command_sends_the_other_views(backend, tmp_path):
+    out = backend.Outputs.in_folder(tmp_path)
+    cmd = backend.cli_command("t", "front.png", out, views=[("right.png", 90.0)])
+    assert cmd[:3] == ["t", "predict", "front.png"]
+    assert cmd[cmd.index("--view") + 1] == "right.png@90"
+    assert "--view" not in backend.cli_command("t", "front.png", out)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(
+    shutil.which("blender") is None or not (ROOT / ".venv" / "bin" / "treesketch").exists(),
+    reason="needs Blender (make blender-test installs Debian's) and the project's .venv",
+)
+def test_the_addon_in_blender_headless():
+    """`make blender-test` itself: the GLB in Blender's importer, the add-on end to end
+    (Sapling trees dressed, leaves' shadows clipped, the preview while refining)."""
+    res = subprocess.run(
+        ["bash", str(ROOT / "scripts" / "blender_test.sh")],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=900,
+        check=False,
+    )
+    assert res.returncode == 0, res.stdout[-4000:] + res.stderr[-4000:]
+    assert "ALL OK" in res.stdout and "materials 'TreeSketch bark" in res.stdout, res.stdout

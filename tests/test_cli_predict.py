@@ -184,3 +184,19 @@ def test_a_bad_view_fails_before_work(tmp_path, sketch_png, view: str, message: 
     assert res.exit_code != 0
     assert message in res.output and "Traceback" not in res.output
     assert not (tmp_path / "out").exists()
+
+
+def test_preview_keeps_the_current_best_tree(tmp_path, sketch_png) -> None:
+    """``--preview DIR``: the tree the refinement holds now, for the Blender add-on (the
+    first estimate at once; the service's writer, at most one every 2 s)."""
+    preview = tmp_path / "preview"
+    res = runner.invoke(
+        app, _args(tmp_path, sketch_png, "--budget", "4", "--preview", str(preview))
+    )
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in preview.iterdir()) == ["sketch.png", "tree.glb"]
+    assert (preview / "tree.glb").read_bytes()[:4] == b"glTF"
+    blocked = tmp_path / "file"
+    blocked.write_text("not a folder")
+    res = runner.invoke(app, _args(tmp_path, sketch_png, "--preview", str(blocked)))
+    assert res.exit_code == 2 and "--preview" in res.output

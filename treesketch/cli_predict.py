@@ -97,6 +97,13 @@ def predict_command(
         "shipped (checkpoints/shape_embed.pt), none (the hand-made shape distance alone) or "
         "a checkpoint file.",
     ),
+    preview_dir: Path | None = typer.Option(
+        None,
+        "--preview",
+        help="While it refines, keep the current best tree in this folder (tree.glb, light, "
+        "and sketch.png): the first estimate at once, then at most one every 2 s (the "
+        "Blender add-on shows it).",
+    ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
     """Turn a sketch of a tree into a 3D tree: a first estimate (TSN), refined so the
@@ -147,6 +154,11 @@ def predict_command(
             {
                 "--out": mesh_paths(out, textures=textures),
                 **{opt: [p] for opt, p, _ in named[1:] if p is not None},
+                **(
+                    {}
+                    if preview_dir is None
+                    else {"--preview": [preview_dir / "tree.glb", preview_dir / "sketch.png"]}
+                ),
             }
         )
     except OutputError as exc:
@@ -191,11 +203,19 @@ def predict_command(
         transient=False,
     )
     task = bar.add_task("refine", total=settings.budget, loss="-")
+    preview = None
+    if preview_dir is not None:
+        # the service's writer: the page's preview and the add-on's are one tree
+        from .service.preview import PreviewWriter
+
+        preview = PreviewWriter(preview_dir)
 
     def on_progress(p: Progress) -> None:
         # the run's whole plan (every candidate species) and a distance that only falls
         loss = "-" if math.isnan(p.best_loss) else f"{p.best_loss:.4f}"
         bar.update(task, total=max(1, p.budget), completed=p.evaluations, loss=loss)
+        if preview is not None:
+            preview.offer(p)
 
     try:
         with bar:

@@ -107,7 +107,12 @@ class TREESKETCH_Settings(bpy.types.PropertyGroup):
         name="Drawing",
         items=[
             ("IMAGE", "Image file", "A PNG/JPEG of a tree, dark lines on white"),
-            ("GPENCIL", "Grease Pencil", "The active Grease Pencil object, seen from the front"),
+            (
+                "GPENCIL",
+                "Grease Pencil",
+                "The active Grease Pencil object, seen from the front; layers named Front, "
+                "Right, Back, Left are drawings of one tree from those views",
+            ),
         ],
         default="IMAGE",
     )
@@ -143,6 +148,7 @@ class TREESKETCH_Settings(bpy.types.PropertyGroup):
     last_tree: StringProperty(default="")  # the parent empty of the tree on show
     progress: FloatProperty(name="Progress", default=0.0, min=0.0, max=1.0, subtype="FACTOR")
     running: BoolProperty(default=False)
+    previews: IntProperty(default=0)  # trees the running prediction has shown so far
 
 
 def _control_group(rows: list) -> type:
@@ -189,23 +195,47 @@ def _reset_controls(context) -> None:
 
 
 def _remove_tree(name: str) -> None:
-    """The tree on show (its parent empty and everything under it)."""
+    """The tree on show (its parent empty and everything under it), and the meshes,
+    curves, materials and images only it used (a preview replaced every 2 s must not
+    pile up in the file)."""
     parent = bpy.data.objects.get(name)
     if parent is None:
         return
-    for o in [parent, *parent.children_recursive]:
+    objects = [parent, *parent.children_recursive]
+    datas = {o.data for o in objects if o.data is not None}
+    mats = {m for d in datas for m in getattr(d, "materials", []) if m is not None}
+    images = {
+        n.image
+        for m in mats
+        if m.node_tree
+        for n in m.node_tree.nodes
+        if n.type == "TEX_IMAGE" and n.image
+    }
+    for o in objects:
         bpy.data.objects.remove(o, do_unlink=True)
+    for kind, blocks in (
+        (bpy.data.meshes, [d for d in datas if isinstance(d, bpy.types.Mesh)]),
+        (bpy.data.curves, [d for d in datas if isinstance(d, bpy.types.Curve)]),
+        (bpy.data.materials, mats),
+        (bpy.data.images, images),
+    ):
+        for block in blocks:
+            if block.users == 0:
+                kind.remove(block)
 
 
 GPENCIL_TYPES = ("GPENCIL", "GREASEPENCIL")  # Blender < 4.3, Blender 4.3+ (GPv3)
 
 
-def _gpencil_strokes(obj) -> list:
-    """World-space strokes of a Grease Pencil object seen from the front (x, z)."""
+def _gpencil_strokes(obj, layers=None, right=(1.0, 0.0)) -> list:
+    """World-space strokes of a Grease Pencil object's visible layers (``layers``: only
+    those names) as seen in a view whose screen right is the world axis ``right`` (x, y)
+    and up +Z: the Front view's (x, z) by default."""
     mw = obj.matrix_world
+    rx, ry = right
     out = []
     for layer in obj.data.layers:
-        if layer.hide:
+        if layer.hide or (layers is not None and _layer_name(layer) not in layers):
             continue
         if obj.type == "GPENCIL":  # legacy Grease Pencil: frames hold strokes of points
             frame = layer.active_frame
@@ -216,31 +246,58 @@ def _gpencil_strokes(obj) -> list:
             strokes = [[p.position for p in s.points] for s in drawing.strokes] if drawing else []
         for pts in strokes:
             world = [mw @ co for co in pts]
-            out.append([(p.x, p.z) for p in world])
+            out.append([(rx * p.x + ry * p.y, p.z) for p in world])
     return out
 
 
-def drawing_file(context, folder: Path) -> Path:
-    """The drawing to send: the image file, or the Grease Pencil drawing rendered to PNG."""
+def _layer_name(layer) -> str:
+    return layer.info if hasattr(layer, "info") else layer.name  # legacy GP: .info
+
+
+def drawing_files(context, folder: Path) -> list[tuple[Path, float]]:
+    """The drawings to send, each with its yaw relative to the first: the image file; or
+    the Grease Pencil drawing rendered to PNG, one per layer named after a view (Front,
+    Right, Back, Left: ``backend.VIEWS``), else all its layers as one Front view."""
     settings = context.scene.treesketch
     if settings.source == "IMAGE":
         path = Path(bpy.path.abspath(settings.image_path))
         if not path.is_file():
             raise backend.PredictError(f"no image file at {path}")
-        return path
+        return [(path, 0.0)]
     obj = context.active_object
     if obj is None or obj.type not in GPENCIL_TYPES:
         raise backend.PredictError("make a Grease Pencil drawing the active object first")
-    path = folder / "drawing.png"
-    path.write_bytes(backend.strokes_png(_gpencil_strokes(obj)))
-    return path
+    named = backend.view_layers(_layer_name(layer) for layer in obj.data.layers)
+    if not named:
+        path = folder / "drawing.png"
+        path.write_bytes(backend.strokes_png(_gpencil_strokes(obj)))
+        return [(path, 0.0)]
+    out = []
+    for layer, view in named:
+        yaw, right = backend.VIEWS[view]
+        strokes = _gpencil_strokes(obj, {layer}, right)
+        if not strokes:
+            raise backend.PredictError(
+                f"the Grease Pencil layer {layer!r} (the {view.title()} view) is empty or hidden"
+            )
+        path = folder / f"{view}.png"
+        path.write_bytes(backend.strokes_png(strokes))
+        out.append((path, yaw))
+    return out
 
 
-def prediction_job(context, image: Path, out: backend.Outputs):
+def prediction_job(context, drawings: list[tuple[Path, float]], out: backend.Outputs):
     """A function ``job(on_line, cancel) -> (species, species in words)`` that runs the
     prediction with the backend chosen in the preferences; it reads every setting now, so
-    it can run in a thread without touching Blender's data."""
+    it can run in a thread without touching Blender's data.  ``drawings``: the views of
+    the tree, (file, yaw relative to the first)."""
     prefs, settings = _prefs(context), context.scene.treesketch
+    image = drawings[0][0]
+    if len(drawings) > 1 and prefs.backend != "CLI":
+        raise backend.PredictError(
+            f"{len(drawings)} views drawn, and the service takes one drawing: hide all but "
+            "the Front layer, or run with the project CLI (add-on preferences)"
+        )
     refine = bool(settings.refine)
     budget = int(settings.budget) or None  # 0: the project's one default
     species = None if settings.species == AUTO else str(settings.species)
@@ -252,6 +309,7 @@ def prediction_job(context, image: Path, out: backend.Outputs):
             refine=refine,
             budget=budget,
             species=species,
+            views=drawings[1:],
         )
 
         def run(on_line=None, cancel=None):
@@ -298,24 +356,130 @@ def add_result(
         turn = preset_yaw if yaw is None else yaw
         if _prefs(context).copy_presets:
             _copy_to_sapling_menu(out.preset, species)
+        new = [o for o in bpy.data.objects if o not in before]
+        if out.glb.is_file():  # the same textures as the GLB's (Sapling makes no material)
+            _sapling_materials(new, backend.glb_textures(out.glb), species, out.glb.parent)
     else:
-        images = set(bpy.data.images)
-        backend.numpy_bool_alias()  # Blender 3.4's importer calls np.bool
-        try:
-            bpy.ops.import_scene.gltf(filepath=str(out.glb))
-        except RuntimeError as exc:
-            raise backend.PredictError(
-                f"Blender's glTF importer could not read the tree: {backend.plain_error(exc)}"
-            ) from None
-        for img in set(bpy.data.images) - images:
-            if img.source == "FILE" and not img.packed_file:
-                img.pack()  # the prediction's folder is removed afterwards
+        _import_glb(out.glb)
         # a predicted GLB already faces the drawn view; an edit's from the service does not
         turn = 0.0 if yaw is None else yaw
     new = [o for o in bpy.data.objects if o not in before]
     parent = _collect(context, new, species or "tree")
     parent.rotation_euler.z -= math.radians(turn)
     return [parent, *new]
+
+
+LEAF_ALPHA_THRESHOLD = 0.5  # as the GLB's alphaCutoff
+
+
+def _import_glb(path: Path) -> None:
+    """Blender's glTF importer on our GLB; its images packed (the prediction's folder is
+    removed afterwards) and its alpha-masked leaves made to cast clipped shadows."""
+    images, materials = set(bpy.data.images), set(bpy.data.materials)
+    backend.numpy_bool_alias()  # Blender 3.4's importer calls np.bool
+    try:
+        bpy.ops.import_scene.gltf(filepath=str(path))
+    except RuntimeError as exc:
+        raise backend.PredictError(
+            f"Blender's glTF importer could not read the tree: {backend.plain_error(exc)}"
+        ) from None
+    for img in set(bpy.data.images) - images:
+        if img.source == "FILE" and not img.packed_file:
+            img.pack()
+    for mat in set(bpy.data.materials) - materials:
+        # the importer clips the leaves' alpha (glTF MASK) but leaves their shadows
+        # opaque: a crown of dark squares in Eevee
+        if mat.blend_method == "CLIP":
+            _alpha_clip(mat, mat.alpha_threshold)
+
+
+def _alpha_clip(mat, threshold: float = LEAF_ALPHA_THRESHOLD) -> None:
+    """Alpha-clipped surface and shadows in Eevee (Cycles reads the BSDF's Alpha)."""
+    mat.blend_method = "CLIP"  # deprecated from 4.2, where it still sets the render method
+    mat.alpha_threshold = threshold
+    if hasattr(mat, "shadow_method"):  # up to Blender 4.1
+        mat.shadow_method = "CLIP"
+    if hasattr(mat, "use_transparent_shadow"):  # Eevee Next, 4.2+
+        mat.use_transparent_shadow = True
+
+
+def _load_png(data: bytes, name: str, folder: Path):
+    """A packed Blender image from PNG bytes (written to ``folder`` to be read)."""
+    path = folder / f"{bpy.path.clean_name(name)}.png"
+    path.write_bytes(data)
+    img = bpy.data.images.load(str(path))
+    img.name = name
+    img.pack()
+    return img
+
+
+def _textured_material(name: str, image, roughness: float):
+    """A Principled material whose base colour is ``image``; returns the material, its
+    nodes and links, the image node, the BSDF and a Texture Coordinate node (unlinked:
+    the caller says how the UVs reach the image)."""
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    bsdf = nodes["Principled BSDF"]
+    bsdf.inputs["Roughness"].default_value = roughness
+    tex = nodes.new("ShaderNodeTexImage")
+    tex.image = image
+    links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+    uv = nodes.new("ShaderNodeTexCoord")
+    return mat, nodes, links, tex, bsdf, uv
+
+
+def _sapling_materials(objects: list, textures: dict, species, folder: Path) -> None:
+    """Bark and leaf materials with the GLB's textures on a new Sapling tree: the bark
+    on its curves (Sapling's curve UVs run along each branch in u, 0..1, and around it in
+    v: turned to our bark's u around, v along, repeated along the trunk's length by its
+    length over girth), the leaves alpha-clipped, shadows too (Sapling's ``leafUV`` is
+    our leaf texture's square)."""
+    label = species or "tree"
+    curves = [o for o in objects if o.type == "CURVE"]
+    leaves = [o for o in objects if o.type == "MESH"]
+    if "bark" in textures and curves:
+        img = _load_png(textures["bark"], f"TreeSketch bark ({label})", folder)
+        mat, nodes, links, tex, bsdf, uv = _textured_material(img.name, img, 0.9)
+        split = nodes.new("ShaderNodeSeparateXYZ")
+        turn = nodes.new("ShaderNodeCombineXYZ")
+        along = nodes.new("ShaderNodeMath")
+        along.operation = "MULTIPLY"
+        along.inputs[1].default_value = _bark_repeats(curves[0])
+        links.new(uv.outputs["UV"], split.inputs[0])
+        links.new(split.outputs["Y"], turn.inputs["X"])
+        links.new(split.outputs["X"], along.inputs[0])
+        links.new(along.outputs[0], turn.inputs["Y"])
+        links.new(turn.outputs[0], tex.inputs["Vector"])
+        # the bark's cracks as a little relief
+        bump = nodes.new("ShaderNodeBump")
+        bump.inputs["Strength"].default_value = 0.4
+        links.new(tex.outputs["Color"], bump.inputs["Height"])
+        links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
+        for o in curves:
+            o.data.materials.clear()
+            o.data.materials.append(mat)
+    if "leaf" in textures and leaves:
+        img = _load_png(textures["leaf"], f"TreeSketch leaf ({label})", folder)
+        mat, nodes, links, tex, bsdf, uv = _textured_material(img.name, img, 0.6)
+        links.new(uv.outputs["UV"], tex.inputs["Vector"])
+        links.new(tex.outputs["Alpha"], bsdf.inputs["Alpha"])
+        _alpha_clip(mat)
+        mat.use_backface_culling = False  # one quad per leaf, seen from both sides
+        for o in leaves:
+            o.data.materials.clear()
+            o.data.materials.append(mat)
+
+
+def _bark_repeats(curve) -> float:
+    """How many times the bark repeats along a branch: the trunk's (the first spline's)
+    length over its girth, so its bark is not stretched (1..64)."""
+    spline = curve.data.splines[0]
+    pts = [p.co.xyz for p in spline.bezier_points] or [p.co.xyz for p in spline.points]
+    radii = [p.radius for p in spline.bezier_points] or [p.radius for p in spline.points]
+    length = sum((b - a).length for a, b in zip(pts[:-1], pts[1:], strict=True))
+    girth = 2.0 * math.pi * max(radii[0] * max(curve.data.bevel_depth, 1e-6), 1e-6)
+    return float(min(max(round(length / girth), 1), 64))
 
 
 def _collect(context, objects: list, name: str):
@@ -389,33 +553,27 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
     _cancel = False
     _species = None
     _species_text = None
+    _preview = ""  # the parent empty of the tree shown while it refines
 
     def execute(self, context):
         settings = context.scene.treesketch
         settings.species_text = ""  # an earlier prediction's words would mislead
         folder = Path(tempfile.mkdtemp(prefix="treesketch-"))
+        self._folder, self._out = folder, backend.Outputs.in_folder(folder)
         try:
             if settings.result == "SAPLING" and _prefs(context).backend == "CLI":
                 _enable_sapling()  # before the prediction, not after a minute of it
-            image = drawing_file(context, folder)
+            job = prediction_job(context, drawing_files(context, folder), self._out)
         except backend.PredictError as exc:
             shutil.rmtree(folder, ignore_errors=True)
             settings.status = str(exc)
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
-        self._folder = folder
-        self._out = backend.Outputs.in_folder(folder)
-        if self.wait or bpy.app.background:
-            try:
-                job = prediction_job(context, image, self._out)
-                self._species, self._species_text = job(on_line=lambda s: print("treesketch:", s))
-            except (backend.PredictError, RuntimeError) as exc:
-                shutil.rmtree(folder, ignore_errors=True)
-                return self._failed(settings, exc)
-            return self._finish(context)
+        # the CLI keeps the current best tree there while it refines (the service's
+        # one-request path has none)
+        self._watch = backend.PreviewWatch(self._out.preview)
         self._lines = queue.Queue()
         self._error = None
-        job = prediction_job(context, image, self._out)
 
         def work():
             try:
@@ -426,31 +584,69 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
                 self._error = exc
 
         settings.running, settings.progress, settings.status = True, 0.0, "starting..."
+        settings.previews = 0
+        # the prediction runs in a thread; Blender's data is touched only here, on the
+        # main thread: by the modal timer, or by the loop below in the foreground
         self._thread = threading.Thread(target=work, daemon=True)
         self._thread.start()
+        if self.wait or bpy.app.background:
+            while self._thread.is_alive():
+                self._thread.join(0.25)
+                self._update(context, echo=True)
+            return self._done(context)
         wm = context.window_manager
         self._timer = wm.event_timer_add(0.25, window=context.window)
         wm.modal_handler_add(self)
         return {"RUNNING_MODAL"}
 
     def modal(self, context, event):
-        settings = context.scene.treesketch
         if event.type == "ESC":
             self._cancel = True
         if event.type != "TIMER":
             return {"PASS_THROUGH"}
-        while not self._lines.empty():
-            line = self._lines.get()
-            settings.status = line[:80]
-            frac = backend.progress_fraction(line)
-            if frac is not None:
-                settings.progress = frac
+        self._update(context)
         for area in context.screen.areas if context.screen else []:
             area.tag_redraw()
         if self._thread.is_alive():
             return {"RUNNING_MODAL"}
         context.window_manager.event_timer_remove(self._timer)
+        return self._done(context)
+
+    def _update(self, context, echo: bool = False) -> None:
+        """The CLI's new lines into the panel, and its newest tree into the scene."""
+        settings = context.scene.treesketch
+        while not self._lines.empty():
+            line = self._lines.get()
+            if echo:
+                print("treesketch:", line)
+            settings.status = line[:80]
+            frac = backend.progress_fraction(line)
+            if frac is not None:
+                settings.progress = frac
+        path = self._watch.poll()
+        if path is None:
+            return
+        try:
+            self._show_preview(context, path)
+        except (backend.PredictError, RuntimeError, OSError) as exc:
+            # a preview that cannot be shown is no reason to stop the prediction
+            print("treesketch: preview not shown:", backend.plain_error(exc))
+
+    def _show_preview(self, context, path: Path) -> None:
+        """The refinement's current best tree in place of the last one shown (a light
+        GLB, also when the result is to be a Sapling tree: Sapling builds slower)."""
+        _remove_tree(self._preview)
+        before = set(bpy.data.objects)
+        _import_glb(path)
+        new = [o for o in bpy.data.objects if o not in before]
+        self._preview = _collect(context, new, "TreeSketch preview").name
+        context.scene.treesketch.previews = self._watch.shown
+
+    def _done(self, context) -> set:
+        settings = context.scene.treesketch
         settings.running = False
+        _remove_tree(self._preview)
+        self._preview = ""
         if self._error is not None:
             shutil.rmtree(self._folder, ignore_errors=True)
             return self._failed(settings, self._error)
@@ -593,6 +789,14 @@ class TREESKETCH_PT_panel(bpy.types.Panel):
             layout.label(
                 text=obj.name if ok else "select a Grease Pencil drawing", icon="GREASEPENCIL"
             )
+            if ok:
+                try:
+                    named = backend.view_layers(_layer_name(la) for la in obj.data.layers)
+                    text = "views: " + ", ".join(v.title() for _, v in named) if named else ""
+                except backend.PredictError as exc:
+                    text = str(exc)[:80]
+                if text:
+                    layout.label(text=text)
         layout.prop(settings, "species")
         layout.prop(settings, "result", expand=True)
         row = layout.row()

@@ -3,7 +3,9 @@ turning pen strokes into a drawing.  Plain Python and numpy (Blender's own Pytho
 both), so the project's test suite checks it without Blender.
 
 - :func:`cli_command` / :func:`run_cli`: ``treesketch predict IMAGE --out X.glb --params
-  X.json --preset X.py`` in the project's venv, its output lines handed to a callback.
+  X.json --preset X.py --preview DIR`` in the project's venv, its output lines handed to a
+  callback; while it refines, the CLI keeps the current best tree in ``DIR/tree.glb``
+  (the first estimate at once), which :class:`PreviewWatch` says when to show.
 - :func:`post_predict`: the service's ``POST /predict`` (multipart ``sketch``), then the
   GLB it names is downloaded.  Only from the configured service: plain http(s), the same
   origin (scheme, host, port) for the GLB and any redirect, never ``file://`` or another
@@ -13,6 +15,11 @@ both), so the project's test suite checks it without Blender.
 - :func:`strokes_png`: pen strokes (lists of 2-D points) drawn black on white as a PNG,
   framed the way the project's reader expects (tree filling the canvas, base at the
   bottom).
+- :data:`VIEWS` / :func:`view_layers`: Grease Pencil layers named after Blender's views
+  (Front, Right, Back, Left) are drawings of one tree from those sides, sent as the
+  views of one prediction (``--view FILE@YAW``).
+- :func:`glb_textures`: the PNG each material of a GLB carries (``bark``, ``leaf``), for
+  the materials of a Sapling tree (Sapling makes none).
 - :func:`numpy_bool_alias`: puts back ``numpy.bool``, which the glTF importer of Blender
   3.4 (Debian's) still calls though numpy 1.24 removed it.
 - :func:`plain_error`: one line a person can read from an exception (an operator's
@@ -65,13 +72,17 @@ __all__ = [
     "species_of",
     "species_text_of",
     "PredictError",
+    "PreviewWatch",
+    "VIEWS",
     "cli_command",
+    "glb_textures",
     "multipart_body",
     "post_predict",
     "progress_fraction",
     "read_preset",
     "run_cli",
     "strokes_png",
+    "view_layers",
 ]
 
 _ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
@@ -92,11 +103,12 @@ class Outputs:
     glb: Path
     params: Path
     preset: Path
+    preview: Path  # the folder the CLI keeps the current best tree in while it refines
 
     @classmethod
     def in_folder(cls, folder: str | os.PathLike[str], stem: str = "tree") -> Outputs:
         d = Path(folder)
-        return cls(d / f"{stem}.glb", d / f"{stem}.json", d / f"{stem}_sapling.py")
+        return cls(d / f"{stem}.glb", d / f"{stem}.json", d / f"{stem}_sapling.py", d / "preview")
 
 
 def cli_command(
@@ -108,15 +120,21 @@ def cli_command(
     budget: int | None = None,
     max_faces: int | None = None,
     species: str | None = None,
+    views: Sequence[tuple[str | os.PathLike[str], float]] = (),
 ) -> list[str]:
     """The ``treesketch predict`` command line for one drawing (``species``: the one the
-    person means; None lets the drawing decide)."""
+    person means; None lets the drawing decide; ``views``: more drawings of the same
+    tree, each with its yaw in degrees relative to ``image``)."""
     cmd = [str(treesketch), "predict", str(image), "--out", str(outputs.glb)]
+    for path, yaw in views:
+        cmd += ["--view", f"{path}@{float(yaw):g}"]
     cmd += ["--params", str(outputs.params), "--preset", str(outputs.preset)]
     if not refine:
         cmd.append("--no-refine")
-    elif budget is not None:
-        cmd += ["--budget", str(int(budget))]
+    else:  # without a refinement the first estimate is the result: nothing to preview
+        cmd += ["--preview", str(outputs.preview)]
+        if budget is not None:
+            cmd += ["--budget", str(int(budget))]
     if max_faces is not None:
         cmd += ["--max-faces", str(int(max_faces))]
     if species:
@@ -423,6 +441,43 @@ def strokes_png(strokes: Iterable[np.ndarray], size: int = 512, pen: float = 2.0
     return _png(img)
 
 
+# Blender's views of a tree standing on +Z -> (yaw in degrees relative to the Front view,
+# the world axis (x, y) that points right on the screen).  The project's yaw turns the
+# camera about the trunk, counter-clockwise seen from above (``render.camera``: yaw 0
+# looks along +Y, image right +X; yaw 90 looks along -X, image right +Y): Blender's Right
+# view (numpad 3) is yaw 90; ``render.camera.VIEWS`` calls that side "left", the tree's
+# own left as it faces the Front view.
+VIEWS: dict[str, tuple[float, tuple[float, float]]] = {
+    "front": (0.0, (1.0, 0.0)),
+    "right": (90.0, (0.0, 1.0)),
+    "back": (180.0, (-1.0, 0.0)),
+    "left": (270.0, (0.0, -1.0)),
+}
+
+
+def view_layers(names: Iterable[str]) -> list[tuple[str, str]]:
+    """The layers named after a view (any case, surrounding spaces ignored), as (layer
+    name, view) in the order the prediction takes them: Front first, then Right, Back,
+    Left.  None named so: [] (the whole drawing is one view from the front).  Views named
+    without a Front, or one view named twice, are a PredictError."""
+    found: dict[str, str] = {}
+    for name in names:
+        view = name.strip().lower()
+        if view in VIEWS:
+            if view in found:
+                raise PredictError(
+                    f"two Grease Pencil layers are the {view.title()} view: "
+                    f"{found[view]!r} and {name!r}; keep one"
+                )
+            found[view] = name
+    if found and "front" not in found:
+        raise PredictError(
+            f"the Grease Pencil layers name the {', '.join(v.title() for v in found)} view but "
+            "no Front: draw the tree in a layer named Front too (the views are turned from it)"
+        )
+    return [(found[v], v) for v in VIEWS if v in found]
+
+
 _FRACTION = re.compile(r"(\d+)\s*/\s*(\d+)")
 
 
@@ -432,6 +487,77 @@ def progress_fraction(line: str) -> float | None:
     if not m or int(m.group(2)) == 0:
         return None
     return min(int(m.group(1)) / int(m.group(2)), 1.0)
+
+
+PREVIEW_EVERY = 2.0  # seconds between two previews shown (the first shows at once)
+
+
+class PreviewWatch:
+    """When to show the CLI's preview tree (``--preview DIR``: ``DIR/tree.glb``, replaced
+    whole each time): :meth:`poll` returns the file when it is new since the last one
+    shown and at least ``every`` seconds have passed since then, else None.  The CLI
+    writes at most one every 2 s itself; the add-on's own pause keeps a slow import
+    from following a fast refinement tree by tree."""
+
+    def __init__(self, folder: str | os.PathLike[str], every: float = PREVIEW_EVERY) -> None:
+        self.path = Path(folder) / "tree.glb"
+        self.every = float(every)
+        self.seen: tuple[int, int] | None = None  # (mtime_ns, size) of the last shown
+        self.last = -float("inf")
+        self.shown = 0  # previews returned so far
+
+    def poll(self, now: float | None = None) -> Path | None:
+        now = time.monotonic() if now is None else now
+        if now - self.last < self.every:
+            return None
+        try:
+            st = self.path.stat()
+        except OSError:
+            return None
+        stamp = (st.st_mtime_ns, st.st_size)
+        if stamp == self.seen:
+            return None
+        self.seen, self.last = stamp, now
+        self.shown += 1
+        return self.path
+
+
+MAX_GLB_JSON_BYTES = 16 * 1024 * 1024
+
+
+def glb_textures(path: str | os.PathLike[str]) -> dict[str, bytes]:
+    """{material name: the image bytes of its base colour texture} of a binary glTF
+    (what our exporter writes: ``bark`` and ``leaf``, PNGs inside the file).  A material
+    without a texture is left out; a file that is not a GLB is a PredictError."""
+    try:
+        data = Path(path).read_bytes()
+        magic, _version, length = struct.unpack_from("<4sII", data, 0)
+        if magic != b"glTF" or length > len(data):
+            raise ValueError("not a binary glTF")
+        n, kind = struct.unpack_from("<I4s", data, 12)
+        if kind != b"JSON" or n > MAX_GLB_JSON_BYTES:
+            raise ValueError("no JSON chunk first")
+        doc = json.loads(data[20 : 20 + n])
+        binary = b""
+        at = 20 + ((n + 3) & ~3)
+        if at + 8 <= len(data):
+            m, kind = struct.unpack_from("<I4s", data, at)
+            if kind == b"BIN\x00":
+                binary = data[at + 8 : at + 8 + m]
+        out = {}
+        for mat in doc.get("materials", []):
+            ref = mat.get("pbrMetallicRoughness", {}).get("baseColorTexture")
+            if ref is None:
+                continue
+            image = doc["images"][doc["textures"][ref["index"]]["source"]]
+            view = doc["bufferViews"][image["bufferView"]]
+            start = view.get("byteOffset", 0)
+            out[str(mat.get("name", f"material{len(out)}"))] = binary[
+                start : start + view["byteLength"]
+            ]
+    except (OSError, ValueError, KeyError, IndexError, TypeError, struct.error) as exc:
+        raise PredictError(f"{path}: cannot read the textures of the GLB ({exc})") from None
+    return out
 
 
 def numpy_bool_alias() -> bool:
