@@ -34,6 +34,10 @@ fi
 if ! command -v npm >/dev/null 2>&1; then
     apt_install "the web page's three.js" npm
 fi
+# the Blender add-on's headless test (make test runs it) and `make blender-test`
+if ! command -v blender >/dev/null 2>&1 || ! dpkg -s python3-numpy >/dev/null 2>&1; then
+    apt_install "Blender 3.4 for the add-on's test" blender python3-numpy
+fi
 if command -v npm >/dev/null 2>&1 && [ ! -f treesketch/service/static/node_modules/three/build/three.module.js ]; then
     echo "setup: installing three.js for the web page (npm ci)"
     (cd treesketch/service/static && npm ci --no-audit --no-fund --loglevel=error)
