@@ -41,7 +41,6 @@ from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import numpy as np  # noqa: E402
 
@@ -196,13 +195,13 @@ def pipeline(args: argparse.Namespace) -> None:
 def detector(args: argparse.Namespace) -> None:
     """The network's "is it a tree?" alone (no refinement) on the benchmark's drawings:
     hand-style tree doodles (seeds below 1000), doodles of other things (seeds from
-    1000), the simple non-tree pictures of ``bench_drawings`` (noise, circles, squares,
-    text, spirals, grids, stars...: kinds the detector was never fitted on) and
+    1000), the simple non-tree pictures of ``eval.pictures.non_trees`` (noise, circles,
+    squares, text, spirals, grids, stars...; the detector is fitted on other seeds of some
+    of these kinds, ``scripts/fit_tree_detector.py``) and
     ``examples/hand``; the share each judges wrongly at the pipeline's limit."""
-    import bench_drawings
     from PIL import Image
 
-    from eval import doodles
+    from eval import doodles, pictures
     from render.reader import SketchError
     from treesketch.estimators import load_estimator
     from treesketch.pipeline import TREE_PROBABILITY_LIMIT, load_sketch, prepare_input
@@ -215,7 +214,7 @@ def detector(args: argparse.Namespace) -> None:
                                 for s in species.SPECIES for k in range(args.per_species)]),
         "other doodles": (False, [(f"{kind}{k}", doodles.nontree_doodle(kind, 1000 + k))
                                   for kind in doodles.NONTREE_KINDS for k in range(args.per_kind)]),
-        "simple pictures": (False, bench_drawings.non_trees(0)),
+        "simple pictures": (False, pictures.non_trees(0)),
         "examples/hand": (True, [(p.stem, np.asarray(Image.open(p).convert("L")))
                                  for p in sorted((root / "examples" / "hand").glob("*.png"))]),
     }  # fmt: skip
