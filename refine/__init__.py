@@ -1,10 +1,19 @@
 """Refinement: the sketch distance and the nlopt search over a species' unfixed values."""
 
-from .objective import SearchSpace, SketchObjective, SketchTarget, sketch_distance
+from .objective import (
+    OtherView,
+    PreparedDrawing,
+    SearchSpace,
+    SketchObjective,
+    SketchTarget,
+    sketch_distance,
+)
 from .search import Cancelled, RefineResult, RefineSettings, guess_species, refine
 
 __all__ = [
     "Cancelled",
+    "OtherView",
+    "PreparedDrawing",
     "RefineResult",
     "RefineSettings",
     "SearchSpace",

@@ -38,6 +38,7 @@ from .shape import ShapeTarget
 
 __all__ = [
     "METRICS",
+    "OtherView",
     "PreparedDrawing",
     "SearchSpace",
     "SketchObjective",
@@ -249,6 +250,17 @@ class PreparedDrawing:
         )
 
 
+@dataclass(frozen=True)
+class OtherView:
+    """Another drawing of the same tree: ``drawing`` prepared like the first, seen from
+    ``yaw`` degrees about the trunk relative to the first view (the renderer's sense: the
+    first view at yaw ``y`` and this one at ``y + yaw``); ``None``: not known, searched
+    (``refine.search.refine`` picks it at the start)."""
+
+    drawing: PreparedDrawing
+    yaw: float | None = 90.0
+
+
 # --------------------------------------------------------------------------- search space
 
 
@@ -416,8 +428,14 @@ class SketchObjective:
     trace: list[tuple[int, float, float]] = field(default_factory=list)  # (eval, loss, best)
     fast: bool = True
     embedder: Any = None  # refine.embed.ShapeEmbedder: the one that made the target's embedding
+    # the other drawings of the tree: (target, yaw relative to the first view); the sketch
+    # distance is the mean over every view, so one view and several share one scale
+    others: tuple[tuple[Any, float], ...] = ()
     _cache: dict[tuple[float, ...], float] = field(default_factory=dict, repr=False)
     _sketch_losses: dict[tuple[float, ...], float] = field(default_factory=dict, repr=False)
+    _view_losses: dict[tuple[float, ...], tuple[float, ...]] = field(
+        default_factory=dict, repr=False
+    )
     _scene_key: tuple[float, ...] | None = field(default=None, repr=False)
     _renderer: Any = field(default=None, repr=False)
     render_seconds: float = 0.0
@@ -425,8 +443,9 @@ class SketchObjective:
     def key(self, x: Sequence[float]) -> tuple[float, ...]:
         return tuple(round(float(v), self.decimals) for v in np.clip(x, 0.0, 1.0))
 
-    def sketch_at(self, x: Sequence[float]) -> np.ndarray:
-        """The uint8 sketch of the tree at ``x`` (at the target's size)."""
+    def sketch_at(self, x: Sequence[float], turn: float = 0.0) -> np.ndarray:
+        """The uint8 sketch of the tree at ``x`` (at the target's size), seen from the
+        point's yaw turned by ``turn`` degrees (another view's)."""
         from render.sketch import SketchRenderer, sketch_mesh
 
         k = self.key(x)
@@ -440,18 +459,31 @@ class SketchObjective:
             else:
                 self._renderer = SketchRenderer(build_mesh(skeleton, species=name))
             self._scene_key = scene_key
-        return self._renderer.sketch(self.space.yaw(x), self.target.size)
+        return self._renderer.sketch((self.space.yaw(x) + turn) % 360.0, self.target.size)
 
-    def loss_of_sketch(self, img: np.ndarray) -> float:
-        """Distance of a candidate's rendered sketch to the target (framed as the target
-        was; a tree too small to draw anything gets the largest distance)."""
-        size = self.target.size
+    def loss_of_sketch(self, img: np.ndarray, target: Any = None) -> float:
+        """Distance of a candidate's rendered sketch to the target (or another view's
+        ``target``), framed as the target was; a tree too small to draw anything gets
+        the largest distance."""
+        target = self.target if target is None else target
+        size = target.size
         try:
             cand = make_target(framed(img, size), size, self.metric, self.embedder)
         except SketchError:
             blank = np.full((size, size), 255, np.uint8)
-            return self.target.distance(make_target(blank, size, self.metric, self.embedder))
-        return self.target.distance(cand)
+            return target.distance(make_target(blank, size, self.metric, self.embedder))
+        return target.distance(cand)
+
+    def view_losses_at(self, x: Sequence[float]) -> tuple[float, ...]:
+        """The sketch distance of every view (the first, then the others) at ``x``."""
+        first = self.loss_of_sketch(self.sketch_at(x))
+        rest = [self.loss_of_sketch(self.sketch_at(x, turn), t) for t, turn in self.others]
+        return (first, *rest)
+
+    def view_losses(self, x: Sequence[float]) -> tuple[float, ...]:
+        """Every view's sketch distance at ``x`` (remembered when it was evaluated)."""
+        k = self.key(x)
+        return self._view_losses[k] if k in self._view_losses else self.view_losses_at(k)
 
     def penalty(self, x: Sequence[float]) -> float:
         """``yaw_weight * (turn / 180)^2`` for a searched yaw ``turn`` degrees away from
@@ -480,11 +512,13 @@ class SketchObjective:
         if hit is not None:
             return hit
         t0 = time.perf_counter()
-        sketch_loss = self.loss_of_sketch(self.sketch_at(k))
+        views = self.view_losses_at(k)
+        sketch_loss = float(np.mean(views)) if len(views) > 1 else views[0]
         self.render_seconds += time.perf_counter() - t0
         loss = sketch_loss + self.penalty(k)
         self._cache[k] = loss
         self._sketch_losses[k] = sketch_loss
+        self._view_losses[k] = views
         self.evaluations += 1
         if loss < self.best_loss:
             self.best_loss = loss

@@ -29,7 +29,7 @@ import numpy as np
 from weberpenn import TreeParams, species
 from weberpenn.params import SPECS
 
-from .objective import METRICS, PreparedDrawing, SearchSpace, SketchObjective
+from .objective import METRICS, OtherView, PreparedDrawing, SearchSpace, SketchObjective
 
 __all__ = [
     "ALGORITHMS",
@@ -92,6 +92,12 @@ class RefineResult:
     species: str = ""
     start_yaw: float = 0.0
     stopped_by: str = ""
+    # the other views (``refine(views=...)``): their yaws relative to the first, as given
+    # or as searched, and every view's sketch distance (the first's first) at the start
+    # and at the result; ``loss_before``/``loss_after`` are the means
+    view_yaws: tuple[float, ...] = ()
+    view_losses_before: tuple[float, ...] = ()
+    view_losses_after: tuple[float, ...] = ()
 
     @property
     def improvement(self) -> float:
@@ -262,6 +268,7 @@ def refine(
     cancel: Callable[[], bool] | None = None,
     embedder: Any = None,
     on_best: OnBest | None = None,
+    views: Sequence[OtherView] = (),
 ) -> RefineResult:
     """Refine ``initial_params`` so its sketch matches ``sketch`` (see the module text and
     :class:`RefineSettings`).
@@ -280,6 +287,11 @@ def refine(
     shows while the search runs).  ``loss_before`` /
     ``loss_after`` are the sketch distance; the start point is always evaluated, whatever
     the time limit, so both are finite.
+
+    ``views``: other drawings of the same tree (``refine.objective.OtherView``, prepared
+    like ``sketch``), each at its yaw relative to the first; the distance minimised is the
+    mean over all views.  A view whose yaw is None gets the turn (every 15 degrees) at
+    which the start tree fits it best, before the search starts.
     """
     import nlopt
 
@@ -301,6 +313,12 @@ def refine(
             embedder = cfg.load_embedder()
         drawing = PreparedDrawing.create(sketch, cfg.size, cfg.metric, embedder)
     embedder, target = drawing.embedder, drawing.target
+    for v in views:
+        v.drawing.check(cfg.size, cfg.metric)
+        if v.drawing.embedder is not embedder:
+            raise ValueError("every view must be prepared with the same embedder")
+        if v.yaw is not None and not _finite(v.yaw):
+            raise ValueError(f"a view's yaw must be a finite number of degrees, got {v.yaw!r}")
     deadline = None if cfg.time_limit is None else t0 + float(cfg.time_limit)
     if yaw is None and not cfg.search_yaw:
         yaw = 0.0
@@ -321,6 +339,9 @@ def refine(
         fast=cfg.fast_sketch,
         embedder=embedder,
     )
+    if views:
+        turns = _view_turns(obj, space.from_params(initial_params, yaw or 0.0), views)
+        obj.others = tuple((v.drawing.target, t) for v, t in zip(views, turns, strict=True))
     stopped = ["tolerance"]
 
     def out_of_budget() -> str | None:
@@ -417,8 +438,14 @@ def refine(
     else:
         loss_after = obj.best_sketch_loss  # <= best objective <= objective at the start
         best_params, best_yaw = obj.best_params, obj.best_yaw
+    best_key = x0 if obj.best_x is None else obj.best_x
     if loss_after > loss_before:  # the view penalty traded sketch match for the front view
         loss_after, best_params, best_yaw = loss_before, space.to_params(x0), start_yaw
+        best_key = x0
+    view_before = view_after = ()
+    if views:
+        view_before = tuple(obj.view_losses(x0))
+        view_after = tuple(obj.view_losses(best_key))
     return RefineResult(
         params=best_params,
         yaw=float(best_yaw),
@@ -430,7 +457,24 @@ def refine(
         species=name,
         start_yaw=float(start_yaw),
         stopped_by=stopped[0],
+        view_yaws=tuple(float(t) for _, t in obj.others),
+        view_losses_before=view_before,
+        view_losses_after=view_after,
     )
+
+
+def _view_turns(obj: SketchObjective, x: np.ndarray, views: Sequence[OtherView]) -> list[float]:
+    """Each view's yaw relative to the first: as given, or (None) the turn of the start
+    tree, every 15 degrees, whose sketch is nearest that drawing (one tree grown, only
+    re-drawn; no evaluation of the budget)."""
+    turns = []
+    for v in views:
+        if v.yaw is not None:
+            turns.append(float(v.yaw) % 360.0)
+            continue
+        losses = [obj.loss_of_sketch(obj.sketch_at(x, t), v.drawing.target) for t in START_YAWS]
+        turns.append(START_YAWS[int(np.argmin(losses))])
+    return turns
 
 
 def _nlopt_reason(code: int) -> str:

@@ -23,6 +23,13 @@ def predict_command(
     out: Path = typer.Option(
         ..., "--out", "-o", help="Mesh file to write: .glb (branches and leaves) or .obj."
     ),
+    view: list[str] = typer.Option(
+        [],
+        "--view",
+        help="Another drawing of the same tree from another side, FILE@DEGREES (the turn "
+        "about the trunk from the first drawing: side.png@90) or FILE@? (angle not known: "
+        "found by the refinement); repeatable (at most 3). Two views pin the tree in depth.",
+    ),
     no_refine: bool = typer.Option(
         False, "--no-refine", help="Skip the refinement: TSN's estimate only."
     ),
@@ -111,6 +118,7 @@ def predict_command(
         check_height,
         load_sketch,
     )
+    from .views import SketchView, as_views, parse_view
 
     # every option first: nothing is read, estimated or refined before they all pass
     outputs = {
@@ -163,6 +171,9 @@ def predict_command(
             species_name = wp_species.canonical(species_name)
         export = ExportOptions(face_view, max_faces, textures).validate()
         image = load_sketch(sketch)
+        others = [parse_view(v) for v in view]
+        drawing = [image, *[SketchView(load_sketch(v.source), v.yaw) for v in others]]
+        as_views(drawing)  # the number of views, now
         pipeline = Pipeline(load_estimator(estimator, checkpoint=checkpoint, data=data), settings)
     except (SketchError, ValueError) as exc:
         fail(_option_message(str(exc)))
@@ -188,7 +199,12 @@ def predict_command(
 
     try:
         with bar:
-            result = pipeline.run(image, height=height, progress=on_progress, species=species_name)
+            result = pipeline.run(
+                drawing if others else image,
+                height=height,
+                progress=on_progress,
+                species=species_name,
+            )
         written = write_outputs(result, outputs, export)
     except (SketchError, ValueError) as exc:
         fail(str(exc))
@@ -203,6 +219,12 @@ def predict_command(
     if r is not None:
         line += f" ({r.evaluations} trees, {r.seconds:.1f} s, stopped by {r.stopped_by})"
     typer.echo(line)
+    for i, v in enumerate(result.views[1:], start=2):
+        how = "found" if v.searched else "given"
+        typer.echo(
+            f"view {i}: yaw {v.yaw:.0f} ({how}); sketch distance "
+            f"{v.loss_before:.4f} -> {v.loss_after:.4f}"
+        )
     if result.candidates:
         typer.echo(f"it is {result.species_text}")
         for c in result.candidates:

@@ -60,7 +60,7 @@ def png_bytes(img: np.ndarray) -> bytes:
 
 def compare_image(result: Any, size: int = 256) -> np.ndarray:
     """Side by side: input sketch | first estimate's sketch | refined sketch | colour render
-    (RGB uint8, captioned)."""
+    (RGB uint8, captioned); one row per view when the tree was drawn from several sides."""
     from PIL import Image, ImageDraw
 
     from render.sketch import SketchRenderer
@@ -68,23 +68,49 @@ def compare_image(result: Any, size: int = 256) -> np.ndarray:
     def grey(img: np.ndarray) -> Image.Image:
         return Image.fromarray(np.asarray(img, np.uint8)).convert("RGB").resize((size, size))
 
-    colour = SketchRenderer(result.tree_mesh, species=result.species).colour(
-        result.yaw, size, supersample=2
-    )
-    panels = [
-        ("input sketch", grey(result.input_sketch)),
-        (f"{result.estimator} ({result.losses['before']:.3f})", grey(result.sketch_before)),
-        (f"refined ({result.losses['after']:.3f})", grey(result.sketch_after)),
-        (f"{result.species}, yaw {result.yaw:.0f}", Image.fromarray(colour).convert("RGB")),
-    ]
+    renderer = SketchRenderer(result.tree_mesh, species=result.species)
+    views = result.views or ()
+    rows = []
+    for i in range(max(1, len(views))):
+        turn = views[i].yaw if views else 0.0
+        yaw = (result.yaw + turn) % 360.0
+        colour = renderer.colour(yaw, size, supersample=2)
+        if i == 0:
+            before, after = result.losses["before"], result.losses["after"]
+            side = ""
+        else:
+            before, after = views[i].loss_before, views[i].loss_after
+            side = f"view {i + 1} (+{turn:.0f}) "
+        rows.append(
+            [
+                (
+                    side + "input sketch",
+                    grey(views[i].input_sketch if views else result.input_sketch),
+                ),
+                (
+                    f"{result.estimator} ({before:.3f})",
+                    grey(views[i].sketch_before if views else result.sketch_before),
+                ),
+                (
+                    f"refined ({after:.3f})",
+                    grey(views[i].sketch_after if views else result.sketch_after),
+                ),
+                (f"{result.species}, yaw {yaw:.0f}", Image.fromarray(colour).convert("RGB")),
+            ]
+        )
     cap = 18
-    out = Image.new("RGB", (size * len(panels), size + cap), (255, 255, 255))
+    height = size + cap
+    out = Image.new("RGB", (size * len(rows[0]), height * len(rows)), (255, 255, 255))
     draw = ImageDraw.Draw(out)
-    for i, (title, im) in enumerate(panels):
-        out.paste(im, (i * size, cap))
-        draw.text((i * size + 4, 3), title, fill=(0, 0, 0))
-        if i:
-            draw.line([(i * size, 0), (i * size, size + cap)], fill=(180, 180, 180))
+    for r, panels in enumerate(rows):
+        top = r * height
+        for i, (title, im) in enumerate(panels):
+            out.paste(im, (i * size, top + cap))
+            draw.text((i * size + 4, top + 3), title, fill=(0, 0, 0))
+            if i:
+                draw.line([(i * size, top), (i * size, top + height)], fill=(180, 180, 180))
+        if r:
+            draw.line([(0, top), (size * len(panels), top)], fill=(180, 180, 180))
     return np.asarray(out)
 
 

@@ -15,6 +15,7 @@ raises :class:`SketchError`; anything else (a circle, noise) gives a result whos
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import time
@@ -24,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from refine.objective import PreparedDrawing, framed
+from refine.objective import OtherView, PreparedDrawing, framed
 from refine.search import Cancelled, RefineResult, RefineSettings
 from refine.search import refine as refine_search
 from refine.shape import ShapeTarget, line_distance
@@ -35,6 +36,7 @@ from weberpenn import species as wp_species
 from .estimate import Estimate, Estimator
 from .estimators import load_estimator
 from .species_choice import Candidate, describe, posterior
+from .views import SketchView, ViewResult, as_views, fuse_estimates
 
 __all__ = [
     "LOW_CONFIDENCE_INK",
@@ -47,6 +49,8 @@ __all__ = [
     "RefineSettings",
     "Result",
     "SketchError",
+    "SketchView",
+    "ViewResult",
     "check_height",
     "load_sketch",
     "planned_evaluations",
@@ -151,6 +155,8 @@ class Result:
     warning: str | None = None
     extras: dict[str, Any] = field(default_factory=dict)
     candidates: tuple[Candidate, ...] = ()  # best first: the species it could be
+    # every drawing of the tree (the first is the fields above); one for one drawing
+    views: tuple[ViewResult, ...] = ()
 
     @property
     def species_text(self) -> str:
@@ -182,6 +188,7 @@ class Result:
             "timings": dict(self.timings),
             "evaluations": 0 if r is None else int(r.evaluations),
             "stopped_by": None if r is None else r.stopped_by,
+            **({"views": [v.summary() for v in self.views]} if len(self.views) > 1 else {}),
             **{k: v for k, v in self.extras.items() if isinstance(v, int | float | str | dict)},
         }
 
@@ -295,6 +302,47 @@ def _share(cfg: RefineSettings, i: int, n: int) -> RefineSettings:
     return cfg.replace(budget=cfg.budget if i == 0 else max(8, cfg.budget // 2), time_limit=limit)
 
 
+def _read_views(views: list[SketchView]) -> list[np.ndarray]:
+    """Every view read and prepared (all before any estimate: a bad second drawing is
+    refused before the first is worked on); an error names the view when there are
+    several."""
+    imgs = []
+    for i, v in enumerate(views):
+        try:
+            imgs.append(prepare_input(load_sketch(v.source)))
+        except SketchError as exc:
+            if len(views) == 1:
+                raise
+            raise SketchError(f"view {i + 1} of {len(views)}: {exc}") from None
+    return imgs
+
+
+def _view_turns(
+    views: list[SketchView],
+    refined: RefineResult | None,
+    drawings: list[PreparedDrawing],
+    mesh: Any,
+    yaw: float,
+) -> list[float]:
+    """The other views' yaws relative to the first: as the refinement used them, else as
+    given; a view of unknown yaw and no refinement: the turn of the first estimate's
+    tree whose sketch is nearest that drawing (every 15 degrees)."""
+    if refined is not None and refined.view_yaws:
+        return list(refined.view_yaws)
+    from refine.search import START_YAWS
+    from render.sketch import SketchRenderer
+
+    out = []
+    for v, d in zip(views[1:], drawings[1:], strict=True):
+        if v.yaw is not None:
+            out.append(float(v.yaw))
+            continue
+        r = SketchRenderer(mesh)
+        dist = [d.distance(r.sketch((yaw + t) % 360.0, d.size)) for t in START_YAWS]
+        out.append(START_YAWS[int(np.argmin(dist))])
+    return out
+
+
 class Pipeline:
     """An estimator and the refinement settings; :meth:`run` turns a sketch into a tree."""
 
@@ -316,8 +364,10 @@ class Pipeline:
         return Pipeline(self.estimator, self.settings.replace(**changes))
 
     def estimate(self, sketch: Any) -> Estimate:
-        """The first estimate alone (read, prepared, estimated; nothing refined)."""
-        return self.estimator.estimate(prepare_input(load_sketch(sketch)))
+        """The first estimate alone (read, prepared, estimated; nothing refined); several
+        views (as :meth:`run` takes them) give the estimate fused over all."""
+        imgs = _read_views(as_views(sketch))
+        return fuse_estimates([self.estimator.estimate(img) for img in imgs])
 
     def run(
         self,
@@ -328,6 +378,13 @@ class Pipeline:
         species: str | None = None,
     ) -> Result:
         """Sketch (path, bytes, image or array) -> :class:`Result` (see the module text).
+
+        ``sketch`` may also be several drawings of the tree: a list whose first item is
+        the first view (a source) and whose others are ``(source, yaw)`` pairs or
+        :class:`SketchView` (yaw in degrees about the trunk relative to the first view;
+        None: not known, found by the refinement).  The estimator reads every view (its
+        outputs fused, ``treesketch.views.fuse_estimates``), the refinement minimises the
+        mean distance over all views, and ``Result.views`` keeps each view's sketches.
 
         ``height`` (metres) rescales the tree; ``progress`` is told of each stage and each
         refinement evaluation, with the current best tree (:class:`Progress`: the first
@@ -368,15 +425,19 @@ class Pipeline:
         timings: dict[str, float] = {}
         t = time.perf_counter()
         tell("read")
-        img = prepare_input(load_sketch(sketch))
-        # the drawing as every comparison of this run sees it (each species' search, the
+        views = as_views(sketch)
+        imgs = _read_views(views)
+        img = imgs[0]
+        # each drawing as every comparison of this run sees it (each species' search, the
         # first estimate's distance, the line distance): framed and prepared once
-        drawing = PreparedDrawing.create(img, cfg.size, cfg.metric, self.embedder)
+        drawings = [PreparedDrawing.create(im, cfg.size, cfg.metric, self.embedder) for im in imgs]
+        drawing = drawings[0]
+        others = [OtherView(d, v.yaw) for d, v in zip(drawings[1:], views[1:], strict=True)]
         timings["prepare"] = time.perf_counter() - t
 
         t = time.perf_counter()
         tell("estimate")
-        est = self.estimator.estimate(img)
+        est = fuse_estimates([self.estimator.estimate(im) for im in imgs])
         yaw0 = 0.0 if est.yaw is None else float(est.yaw)
         timings["estimate"] = time.perf_counter() - t
         best = _CurrentBest(est.species_scores or {est.species: 1.0})
@@ -410,12 +471,14 @@ class Pipeline:
                     cancel=cancel,
                     embedder=self.embedder,
                     on_best=lambda p, y, loss, c=candidate: best.offer(p, y, loss, c),
+                    views=others,
                 )
                 done += rr.evaluations
                 tried[candidate] = rr.loss_after
                 refined[candidate] = rr
                 if i == 0:
                     yaw0, loss0 = rr.start_yaw, rr.loss_before
+                    views0 = rr.view_losses_before or (loss0,)
             # the network's scores and the synthesis distances decide together
             post = posterior(est.species_scores or {est.species: 1.0}, tried)
             if chosen is None:
@@ -440,10 +503,32 @@ class Pipeline:
         else:
             mesh1 = build_mesh(grow(params1), species=name)
             after = SketchRenderer(mesh1).sketch(yaw1, SKETCH_SIZE)
+        turns = _view_turns(views, result_refine, drawings, mesh0, yaw0)
+        view_results = [ViewResult(0.0, img, before, after, math.nan, math.nan)]
+        for i, turn in enumerate(turns, start=1):
+            b = SketchRenderer(mesh0).sketch((yaw0 + turn) % 360.0, SKETCH_SIZE)
+            a = (
+                b
+                if mesh1 is mesh0
+                else SketchRenderer(mesh1).sketch((yaw1 + turn) % 360.0, SKETCH_SIZE)
+            )
+            view_results.append(
+                ViewResult(turn, imgs[i], b, a, math.nan, math.nan, views[i].yaw is None)
+            )
         if result_refine is not None:
             loss_before, loss_after = loss0, result_refine.loss_after
+            per_before = views0
+            per_after = result_refine.view_losses_after or (loss_after,)
         else:
-            loss_before = loss_after = drawing.distance(before)
+            per_before = tuple(
+                d.distance(v.sketch_before) for d, v in zip(drawings, view_results, strict=True)
+            )
+            per_after = per_before
+            loss_before = loss_after = float(np.mean(per_before))
+        view_results = [
+            dataclasses.replace(v, loss_before=float(lb), loss_after=float(la))
+            for v, lb, la in zip(view_results, per_before, per_after, strict=True)
+        ]
         timings["render"] = time.perf_counter() - t
 
         current = mesh_height(mesh1)
@@ -453,7 +538,15 @@ class Pipeline:
             mesh1 = build_mesh(grow(params1), species=name)
             timings["height"] = time.perf_counter() - t
 
-        ink_after = _line_distance(drawing.shape, after)
+        # every view's unexplained ink, averaged as the shape distance is
+        ink_after = float(
+            np.mean(
+                [
+                    _line_distance(d.shape, v.sketch_after)
+                    for d, v in zip(drawings, view_results, strict=True)
+                ]
+            )
+        )
         limit = LOW_CONFIDENCE_LOSS if self.embedder is not None else LOW_CONFIDENCE_LOSS_SHAPE
         tree_like, warning = tree_likeness(loss_after, ink_after, limit)
         t = time.perf_counter()
@@ -484,6 +577,7 @@ class Pipeline:
             warning=warning,
             extras={"tried": tried} if tried else {},
             candidates=tuple(candidates),
+            views=tuple(view_results),
         )
 
     def _candidates(
