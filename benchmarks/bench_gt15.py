@@ -6,7 +6,9 @@ truth grown (``grow(gt)``, its own ``seed`` key) and meshed, its front sketch re
 sketch, then ``Pipeline("tsn", RefineSettings(...))`` refining with the drawings of each
 ``--views`` set: ``front`` (the front sketch alone, the default) or ``front,side`` (the
 front sketch and the side one, ``sketch(90, 256)``, given as seen 90 degrees from the
-first).  ``--views front front,side`` runs both, one view against two, in one run.  Every
+first; the network then reads both and its outputs are fused, a first estimate reported
+beside the front one's).  ``--views front front,side`` runs both, one view against two, in
+one run.  Every
 estimate carries the ground truth's ``seed`` key (the seed is not predicted; the paper
 grows its predictions with the ground truth's seed), so refinement searches the very
 generator draws it is measured with.
@@ -105,12 +107,6 @@ def _floors(gt, params, yaw: float, samples: int, seed_floor_d: dict) -> dict:
     return f
 
 
-def first_yaw(run: Any) -> float:
-    """The yaw refinement found for the first (front) drawing."""
-    views = getattr(run, "views", None)
-    return float(views[0].yaw) if views else float(run.yaw)
-
-
 def refine_views(
     pipe: Pipeline,
     sketches: dict[str, np.ndarray],
@@ -129,7 +125,7 @@ def refine_views(
     t0 = time.perf_counter()
     run = pipe.run(source, height=height)
     seconds = time.perf_counter() - t0
-    yaw = first_yaw(run)
+    yaw = float(run.yaw)  # the tree's yaw for the first (front) drawing
     r = run.refinement
     # the search's own dictionary, before the pipeline gives it a height (the ground
     # truth's with --known-height)
@@ -137,18 +133,32 @@ def refine_views(
     if r is not None and r.params != run.params:
         free_mesh = build_mesh(grow(r.params), species=run.species)
         searched = family(rotate_about_trunk(free_mesh, -yaw), gt_mesh, samples)
-    views = getattr(run, "views", None) or ()
+    # with several drawings the network reads each and its outputs are fused: that first
+    # estimate is a figure of its own (with one drawing it is the network alone's)
+    network = None
+    if len(names) > 1 and run.estimate is not None:
+        est = run.estimate
+        params0 = est.params if height is None else rescale_height(est.params, height)
+        yaw0 = 0.0 if est.yaw is None else float(est.yaw)
+        mesh0 = rotate_about_trunk(build_mesh(grow(params0), species=est.species), -yaw0)
+        network = {
+            "species": est.species,
+            "family": family(mesh0, gt_mesh, samples),
+            "floors": _floors(gt, params0, yaw0, samples, seed_floor_d),
+        }
     return {
         "views": list(names),
+        "network": network,
         "species_refined": run.species,
         "refined": family(rotate_about_trunk(run.tree_mesh, -yaw), gt_mesh, samples),
         "floors": _floors(gt, run.params, yaw, samples, seed_floor_d),
         "refined_unscaled": searched,
         "loss_before": run.losses["before"],
         "loss_after": run.losses["after"],
+        # each drawing's yaw relative to the first, its sketch distance before and after
         "view_losses": [
             {"yaw": float(v.yaw), "before": float(v.loss_before), "after": float(v.loss_after)}
-            for v in views
+            for v in run.views
         ],
         "yaw_found": yaw,
         "evaluations": None if r is None else r.evaluations,
@@ -235,6 +245,15 @@ def figures(recs: list[dict]) -> list[tuple[str, list[dict]]]:
     ]
     for key in recs[0]["runs"] if recs else ():
         runs = [r["runs"][key] for r in recs]
+        if all(x.get("network") for x in runs):
+            rows += [
+                (f"network alone, {key} (fused)", [x["network"]["family"] for x in runs]),
+                (
+                    "  floor: perfect values",
+                    [x["network"]["floors"]["perfect_values"] for x in runs],
+                ),
+                ("  floor: truth's view", [x["network"]["floors"]["aligned"] for x in runs]),
+            ]
         rows += [
             (f"refined, {key}", [x["refined"] for x in runs]),
             ("  floor: perfect values", [x["floors"]["perfect_values"] for x in runs]),
@@ -318,6 +337,12 @@ def markdown(recs: list[dict]) -> str:
             f"symmetric max {_f(mean)} (network alone "
             f"{_f(_mean([_max(r['tsn']) for r in recs]))}; the paper's figure {PAPER_MAX})."
         )
+        fused = [r["runs"][k].get("network") for r in recs]
+        if all(fused):
+            line += (
+                f" The network reading these drawings (fused): "
+                f"{_f(_mean([_max(x['family']) for x in fused]))}."
+            )
         if k == TARGET_VIEWS:
             met = b >= TARGET_BEATS and mean <= TARGET_MEAN
             line += (

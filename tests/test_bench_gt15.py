@@ -35,9 +35,9 @@ class _Pipe:
     def run(self, source, height=None):
         self.sources.append(source)
         n = len(source) if isinstance(source, list) else 1
+        # each view's yaw relative to the first (Result.views); the tree's own in Result.yaw
         views = tuple(
-            SimpleNamespace(yaw=self.yaw + 90.0 * i, loss_before=0.3, loss_after=0.1)
-            for i in range(n)
+            SimpleNamespace(yaw=90.0 * i, loss_before=0.3, loss_after=0.1) for i in range(n)
         )
         return SimpleNamespace(
             params=self.truth,
@@ -45,7 +45,8 @@ class _Pipe:
             tree_mesh=self.mesh,
             losses={"before": 0.3, "after": 0.1},
             yaw=self.yaw,
-            views=views if n > 1 else (),
+            views=views,
+            estimate=SimpleNamespace(params=self.truth, species="palm", yaw=None),
             refinement=None,
             extras={},
         )
@@ -71,7 +72,13 @@ def test_one_view_and_two_as_the_pipeline_takes_them(small):
     first, (second, yaw) = pipe.sources[1]
     assert first is front and second is side and yaw == 90.0
     assert one["yaw_found"] == two["yaw_found"] == 30.0
-    assert one["view_losses"] == [] and [v["yaw"] for v in two["view_losses"]] == [30.0, 120.0]
+    assert [v["yaw"] for v in one["view_losses"]] == [0.0]
+    assert [v["yaw"] for v in two["view_losses"]] == [0.0, 90.0]
+    # with two drawings the network's fused first estimate is measured too (here the
+    # truth's values at the front: no error at all)
+    assert one["network"] is None
+    assert two["network"]["family"]["combined"]["max_norm"] < 1e-9
+    assert two["network"]["floors"]["perfect_values"]["branches"]["max"] < 1e-9
     for rec in (one, two):
         assert set(rec["refined"]) == set(FAMILY_PARTS) and set(FAMILY) <= set(
             rec["refined"]["combined"]
@@ -112,10 +119,12 @@ def test_tables(small):
     assert "| combined (mean of 2) | ours max | MeshLab p->g |" in text
     assert "| branches (mean of 2) |" in text
     assert text.count("refined, front,side") == 2  # one row per part
+    assert text.count("network alone, front,side (fused)") == 2
+    assert "The network reading these drawings (fused): 0.0000." in text
     assert "better than the network alone on 0 of 2" in text
     assert "Issue 29's must-show" in text and "not met" in text
     rows = bench.figures(recs)
-    assert [r[0] for r in rows][:2] == ["seed floor", "network alone"] and len(rows) == 10
+    assert [r[0] for r in rows][:2] == ["seed floor", "network alone"] and len(rows) == 13
     mean = bench._mean([r["tsn"]["combined"]["max_norm"] for r in recs])
     assert f"| network alone | {mean:.4f} |" in text
     assert math.isnan(bench._mean([float("nan")]))
