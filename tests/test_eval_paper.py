@@ -30,7 +30,23 @@ def _results() -> PaperResults:
     d = Distance(1.0, 0.1, 0.05, 0.005, 20.0, 100, pred_to_gt_vertex=0.04, gt_to_pred_vertex=0.05)
     pub = [
         PublishedResult("0_acer_2.json", "maple", "maple", "maple", d, d, d, 0.5, 0.4, 0.0, 1.0),
-        PublishedResult("3_palm_3.json", "palm", "palm", "palm", d, d, d, 0.3, 0.2, 90.0, 1.0),
+        PublishedResult(
+            "3_palm_3.json",
+            "palm",
+            "palm",
+            "palm",
+            d,
+            d,
+            d,
+            0.3,
+            0.2,
+            90.0,
+            1.0,
+            d,
+            "palm",
+            0.1,
+            2.0,
+        ),
     ]
     gt = TreeParams(species.sample("palm", seed=1))
 
@@ -38,7 +54,14 @@ def _results() -> PaperResults:
         rows = [SweepRow(a, v, v, v, v, "ok", False, math.nan, math.nan, 0.1) for a in (0.0, 180.0)]
         return SweepResult(rows, gt)
 
-    sweeps = {"palm": {"file": "3_palm_3.json", "alone": sweep(0.04), "refined": sweep(0.03)}}
+    sweeps = {
+        "palm": {
+            "file": "3_palm_3.json",
+            "alone": sweep(0.04),
+            "refined": sweep(0.03),
+            "two views": sweep(0.02),
+        }
+    }
     acc = {"overall": 0.9, "per_species": {"maple": 1.0, "palm": 0.8}, "n": 10}
     return PaperResults(scores, acc, 10, 2, pub, sweeps, 12.0)
 
@@ -94,7 +117,15 @@ def test_write_stamps_every_output_and_replaces_the_folder(tmp_path):
     with (out / "rotation.csv").open() as f:
         runs = [(r["run"], r["angle"], r["hd_max_norm"]) for r in csv.DictReader(f)]
     assert runs == [("alone", "0", "0.04"), ("alone", "180", "0.04"),
-                    ("refined", "0", "0.03"), ("refined", "180", "0.03")]  # fmt: skip
+                    ("refined", "0", "0.03"), ("refined", "180", "0.03"),
+                    ("two views", "0", "0.02"), ("two views", "180", "0.02")]  # fmt: skip
+    # one view against two, and the whole family of 3D errors beside the floor
+    assert "two sketches" in md and "The 3D error as the field reports it" in md
+    assert "MeshLab one-sided" in md and "Metro symmetric max" in md
+    with (out / "published_trees.csv").open() as f:
+        pub = list(csv.DictReader(f))
+    assert pub[0]["two_views_max"] == "" and float(pub[1]["two_views_max"]) == 0.05
+    assert "refined_meshlab_pred_to_gt" in pub[0]
     for path in out.iterdir():
         if path.suffix != ".png":
             assert str(tmp_path) not in path.read_text(), path.name
