@@ -16,8 +16,9 @@ job's current best tree.
   from ``turn`` degrees about the trunk, relative to the side it was drawn from (the
   result's yaw + turn, as ``render.sketch.SketchRenderer.sketch`` turns; the page's
   "Draw from this side" shows it faintly under a new drawing of that side).  Drawn the
-  cheap way (``treesketch.trees.tree_sketch``: a tenth to a quarter of a second) and
-  cached by the browser: a finished job's tree never changes.
+  cheap way (``treesketch.trees.tree_sketch``: a median 0.18 s at 256 px, 0.30 s at 512
+  px on a busy 2-core machine) and cached by the browser: a finished job's tree never
+  changes.
 - ``GET /examples`` (names and links) and ``GET /examples/{name}``: the example drawings
   (the repository's ``examples/hand/``, when the service runs from a checkout);
   ``GET /help/controls.png``: pictures of what each control does (``docs/controls.png``).
