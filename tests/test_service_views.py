@@ -15,9 +15,9 @@ from fastapi.testclient import TestClient
 from PIL import Image
 from service_helpers import palm_sketch_png, png
 
-from treesketch.service import JobStore, Limits, ServiceConfig, create_app
+from treesketch.service import VIEW_ARTEFACTS, JobStore, Limits, ServiceConfig, create_app
 from treesketch.service.limits import LimitError, parse_options
-from treesketch.service.runner import VIEW_ARTEFACTS, JobOptions
+from treesketch.service.runner import JobOptions
 from treesketch.views import MAX_VIEWS
 
 ESTIMATOR = "service_helpers:palm_estimator"
