@@ -1,13 +1,16 @@
 """docs/web.png: a real screenshot of the page after a drawing was turned into a tree;
+docs/side.png: the page in "Draw from this side" mode (the 3D view turned, the tree's
+outline from there faint behind the pad, a second drawing begun over it);
 docs/edit.png: that tree in the 3D view, then after each of four edits with the sliders.
 
 Starts the service (the shipped TSN checkpoint, one worker) in this process, draws a tree
 with mouse strokes in headless Debian chromium (Playwright), submits it and waits for the
-result, then saves the screenshot; then moves four controls one after the other (each on
-top of the last) and puts the 3D view after each side by side.
+result, then saves the screenshot; then turns the 3D view, presses "Draw from this side", draws
+the start of a second drawing and saves that screenshot; then moves four controls one
+after the other (each on top of the last) and puts the 3D view after each side by side.
 
     PYTHONPATH=$PWD .venv/bin/python scripts/make_web_png.py --out docs/web.png \
-        --edit-out docs/edit.png
+        --side-out docs/side.png --edit-out docs/edit.png
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
 from service_helpers import serve  # noqa: E402
-from web_helpers import CHROMIUM, CHROMIUM_ARGS, draw_with_mouse  # noqa: E402
+from web_helpers import CHROMIUM, CHROMIUM_ARGS, draw_with_mouse, tree_strokes  # noqa: E402
 
 from treesketch.service import ServiceConfig, create_app  # noqa: E402
 from weberpenn.fileio import atomic_target  # noqa: E402
@@ -32,6 +35,7 @@ def main() -> None:
     ap.add_argument("--budget", type=int, default=None, help="default: the page's")
     ap.add_argument("--estimator", default="tsn")
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "web.png")
+    ap.add_argument("--side-out", type=Path, default=ROOT / "docs" / "side.png")
     ap.add_argument("--edit-out", type=Path, default=ROOT / "docs" / "edit.png")
     args = ap.parse_args()
 
@@ -56,9 +60,41 @@ def main() -> None:
                 page.screenshot(path=str(tmp), full_page=True, type="png")
             print(page.inner_text("#species"), page.inner_text("#confidence"))
             print(page.inner_text("#status"))
+            side(page, args.side_out)
             edits(page, args.edit_out)
             browser.close()
-    print(f"wrote {args.out} and {args.edit_out}")
+    print(f"wrote {args.out}, {args.side_out} and {args.edit_out}")
+
+
+def side(page, out: Path) -> None:
+    """The 3D view turned about 60 degrees, "Draw from this side", the crown and trunk of
+    a second drawing over the faint outline; then back to the first drawing."""
+    page.evaluate("window.scrollTo(0, 0)")
+    box = page.locator("#view canvas").bounding_box()
+    x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    page.mouse.move(x, y)
+    page.mouse.down()
+    page.mouse.move(x - box["height"] / 6, y, steps=8)  # a drag left: round to the right
+    page.mouse.up()
+    page.click("#draw-side")
+    page.wait_for_selector("body[data-guide=loaded]", timeout=60_000)
+    pad = page.locator("#pad").bounding_box()
+    k = pad["width"] / 512
+    for stroke in tree_strokes()[:3]:  # the crown outline and the trunk's two lines
+        page.mouse.move(pad["x"] + stroke[0][0] * k, pad["y"] + stroke[0][1] * k)
+        page.mouse.down()
+        for px, py in stroke[1:]:
+            page.mouse.move(pad["x"] + px * k, pad["y"] + py * k, steps=3)
+        page.mouse.up()
+    page.evaluate("window.scrollTo(0, 0)")
+    page.wait_for_timeout(300)
+    with atomic_target(out) as tmp:
+        page.screenshot(
+            path=str(tmp), type="png", clip={"x": 0, "y": 0, "width": 1200, "height": 900}
+        )
+    print(page.inner_text("#side-note"))
+    page.click("#side-exit")
+    page.click("#reset-view")
 
 
 EDITS = (  # (control, value, caption): each on top of the ones before

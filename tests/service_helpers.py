@@ -26,6 +26,23 @@ class PalmEstimator:
 palm_estimator = PalmEstimator()
 
 
+class LeaningPalmEstimator:
+    """A palm leaning 45 degrees, drawn from yaw 180: it leans left seen from one side and
+    right from the other (yaw 90: left, 270: right), and its result's yaw is not 0 (the
+    exported tree is turned to face the drawing).  No network, fast to grow."""
+
+    name = "leaning-palm"
+
+    def estimate(self, sketch: np.ndarray) -> Estimate:
+        from weberpenn.controls import apply_controls
+
+        params = apply_controls(species.sample("palm", 8), {"trunk_lean": 45.0})
+        return Estimate(params, "palm", {"palm": 1.0}, yaw=180.0)
+
+
+leaning_palm_estimator = LeaningPalmEstimator()
+
+
 def png(img: np.ndarray) -> bytes:
     from PIL import Image
 

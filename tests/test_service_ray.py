@@ -167,6 +167,27 @@ def test_cancel_a_running_job(client: TestClient, sketch: bytes) -> None:
     assert client.get("/health").json()["busy"] == 0
 
 
+def test_two_drawings_of_one_tree(client: TestClient, sketch: bytes) -> None:
+    """A job of two drawings: both cross to the actor, the front writes every view's
+    sketches."""
+    side = palm_sketch_png(5)
+    r = client.post(
+        "/jobs",
+        files=[
+            ("sketch", ("a.png", sketch, "image/png")),
+            ("sketch", ("b.png", side, "image/png")),
+        ],
+        data={"yaw": ["0", "90"], "budget": "2"},
+    )
+    assert r.status_code == 202, r.text
+    body = wait_for(client, r.json()["id"], finished)
+    assert body["state"] == "done", body["error"]
+    assert [v["yaw"] for v in body["result"]["views"]] == [0.0, 90.0]
+    for name in ("view2_before.png", "view2_after.png"):
+        got = client.get(body["links"][name])
+        assert got.status_code == 200 and got.content[:8] == b"\x89PNG\r\n\x1a\n", name
+
+
 def test_a_jobs_own_failure_is_reported_not_retried(client: TestClient) -> None:
     blank = png(np.full((64, 64), 255, np.uint8))
     body = wait_for(client, submit(client, blank), finished)

@@ -15,14 +15,14 @@ CHROMIUM_ARGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--no
 
 
 @contextlib.contextmanager
-def palm_service(data: Path) -> Iterator[str]:
-    """A real server on ``data`` with one worker and the palm test estimator (no network
+def palm_service(data: Path, estimator: str = "service_helpers:palm_estimator") -> Iterator[str]:
+    """A real server on ``data`` with one worker and a palm test estimator (no network
     to load); yields its base URL."""
     from service_helpers import serve
 
     from treesketch.service import ServiceConfig, create_app
 
-    config = ServiceConfig(data=data, workers=1, estimator="service_helpers:palm_estimator")
+    config = ServiceConfig(data=data, workers=1, estimator=estimator)
     with serve(create_app(config)) as url:
         yield url
 

@@ -4,7 +4,8 @@ The Ray pool (``ray_pool``) calls, from its dispatcher thread:
 
 - ``ready()`` -> ``{"node", "actor", "pid", "error"}``, answered once the estimator is loaded
   (``error``: why it could not be; None when it is);
-- ``run(job_id, options, sketch)`` -> ``{"state": "done", "summary", "files"}``,
+- ``run(job_id, options, drawings)`` (the job's drawings' bytes, in order) ->
+  ``{"state": "done", "summary", "files"}``,
   ``{"state": "cancelled"}`` or ``{"state": "failed", "message", "input"}`` (``input``: the
   sketch or an option was at fault, not the program);
 - ``poll(job_id)`` -> the job's latest progress (the dict the API shows) or None;
@@ -69,7 +70,7 @@ class JobActor:
         with self._lock:
             self._cancelled.add(job_id)
 
-    def run(self, job_id: str, options: dict[str, Any], sketch: bytes) -> dict[str, Any]:
+    def run(self, job_id: str, options: dict[str, Any], drawings: list[bytes]) -> dict[str, Any]:
         from treesketch import Cancelled
 
         from .runner import JobOptions
@@ -89,7 +90,7 @@ class JobActor:
 
         try:
             opts = JobOptions.from_dict(options)
-            files, summary = self.runner.run(sketch, opts, progress, cancelled)
+            files, summary = self.runner.run(drawings, opts, progress, cancelled)
             summary = json.loads(json.dumps(summary, default=float))  # plain JSON types
             summary["timings"]["job"] = time.perf_counter() - t0
             return {"state": "done", "summary": summary, "files": files}

@@ -26,12 +26,12 @@ from refine.search import DEFAULT_BUDGET
 
 from .guards import LOOPBACK_HOSTS, AccessGuard, RedactTokens
 from .interactive import add_interactive_routes
-from .limits import LimitError, Limits, check_image, parse_options, read_form
+from .limits import MAX_VIEWS, LimitError, Limits, check_images, parse_options, read_form
 from .owner import DataOwner
 from .pool import WorkerPool, default_workers
 from .preview import PREVIEW_FILES
 from .ray_pool import RayWorkerPool
-from .runner import ARTEFACTS
+from .runner import ARTEFACTS, VIEW_ARTEFACTS, view_artefacts
 from .store import Job, JobStore, StorageFull
 
 __all__ = ["ServiceConfig", "create_app"]
@@ -70,10 +70,19 @@ class ServiceConfig:
         return tuple(dict.fromkeys((self.estimator, *self.estimators)))
 
 
-def _links(job_id: str) -> dict[str, str]:
-    base = f"/jobs/{job_id}"
+def _views(job: Job) -> int:
+    """How many drawings a job has (its options' yaws are those after the first)."""
+    return 1 + len(job.options.get("yaws") or ())
+
+
+def _links(job: Job) -> dict[str, str]:
+    base = f"/jobs/{job.id}"
     links = {"self": base, "events": f"{base}/events"}
     links.update({name: f"{base}/{name}" for name in ARTEFACTS})
+    # a job of several drawings: each later view's sketches
+    links.update(
+        {name: f"{base}/{name}" for v in range(2, _views(job) + 1) for name in view_artefacts(v)}
+    )
     # the current best tree while the job runs (interactive.py)
     links.update({f"preview/{name}": f"{base}/preview/{name}" for name in PREVIEW_FILES})
     return links
@@ -103,7 +112,7 @@ def _view(job: Job, position: int | None, live: dict[str, Any] | None) -> dict[s
         "options": job.options,
         "progress": progress,
         "error": job.error,
-        "links": _links(job.id),
+        "links": _links(job),
     }
     if job.state == "done":
         out["result"] = job.summary
@@ -229,14 +238,16 @@ def create_app(config: ServiceConfig) -> FastAPI:
         if problem:  # before the body is read
             raise HTTPException(507 if store.check() is None else 503, problem)
         refused: LimitError | None = None
-        data: bytes | None = None
+        drawings: list[bytearray] = []
         try:
-            fields, data = await read_form(
+            fields, drawings = await read_form(
                 request.headers.get("content-type", ""),
                 request.headers.get("content-length"),
                 request.stream(),
                 config.limits,
             )
+            if not drawings:
+                raise LimitError(422, "no sketch: send the image as a file field named 'sketch'")
             options = parse_options(
                 fields,
                 config.limits,
@@ -244,21 +255,23 @@ def create_app(config: ServiceConfig) -> FastAPI:
                 config.estimator,
                 config.default_budget,
                 config.default_time_limit,
+                views=len(drawings),
             )
-            if data is None:
-                raise LimitError(422, "no sketch: send the image as a file field named 'sketch'")
-            await run_in_threadpool(check_image, data, config.limits)
+            # every drawing, before the job is queued
+            await run_in_threadpool(check_images, drawings, config.limits)
         except LimitError as exc:
             # a fresh error, raised out here: the caught one's traceback holds the upload's
             # bytes (and a reference cycle may keep it until a full garbage collection)
             refused = LimitError(exc.status, str(exc))
         if refused is not None:
-            if isinstance(data, bytearray):  # read_form's own buffer: free it, whoever holds it
+            for data in drawings:  # read_form's own buffers: free them, whoever holds them
                 data.clear()
             headers = {"Connection": "close"} if refused.status == 413 else None
             raise HTTPException(refused.status, str(refused), headers=headers)
         try:
-            job = await run_in_threadpool(store.create, data, options.to_dict(), config.max_queue)
+            job = await run_in_threadpool(
+                store.create, drawings, options.to_dict(), config.max_queue
+            )
         except StorageFull as exc:
             raise HTTPException(507, str(exc)) from exc
         if job is None:
@@ -323,6 +336,8 @@ def create_app(config: ServiceConfig) -> FastAPI:
             "estimators": list(config.allowed_estimators),
             "limits": {
                 "max_upload_bytes": config.limits.max_upload_bytes,
+                "max_body_bytes": config.limits.max_body_bytes,
+                "max_views": MAX_VIEWS,
                 "max_pixels": config.limits.max_pixels,
                 "max_budget": config.limits.max_budget,
                 "default_budget": config.default_budget,
@@ -387,9 +402,12 @@ def create_app(config: ServiceConfig) -> FastAPI:
 
     @app.get("/jobs/{job_id}/{name}")
     async def artefact(job_id: str, name: str) -> Response:
-        if name not in ARTEFACTS:
+        if name not in ARTEFACTS and name not in VIEW_ARTEFACTS:
             raise HTTPException(404, f"no artefact {name!r}; there are {', '.join(ARTEFACTS)}")
         job = await get_job(job_id)
+        media = ARTEFACTS.get(name) or VIEW_ARTEFACTS[name]
+        if name in VIEW_ARTEFACTS and name not in _links(job):
+            raise HTTPException(404, f"job {job_id} has {_views(job)} drawing(s): no {name}")
         if job.state == "expired":
             raise HTTPException(410, f"job {job_id} has expired; its files were removed")
         if job.state != "done":
@@ -399,7 +417,7 @@ def create_app(config: ServiceConfig) -> FastAPI:
             raise HTTPException(410, f"job {job_id}'s {name} is gone")
         return FileResponse(
             path,
-            media_type=ARTEFACTS[name],
+            media_type=media,
             filename=f"{job_id[:8]}_{name}",
             content_disposition_type="attachment" if not name.endswith(".png") else "inline",
         )
@@ -425,7 +443,7 @@ def create_app(config: ServiceConfig) -> FastAPI:
                 "id": job.id,
                 **job.summary,
                 "glb": f"/jobs/{job.id}/tree.glb",
-                "links": _links(job.id),
+                "links": _links(job),
                 "seconds": time.monotonic() - t0,
             }
         input_error = bool(job.summary and job.summary.get("input_error"))

@@ -5,17 +5,19 @@ body over the cap is refused (413) as soon as the count passes it, and nothing i
 to disk (Starlette's own form parser would spool the whole file to a temporary folder
 first).  It also counts parts (a form has a handful: MAX_PARTS) and part-header bytes,
 parses in the thread pool (a body of many tiny parts must not hold the event loop),
-takes the ``sketch`` part with or without a ``filename=`` (RFC 7578 makes it optional)
-and refuses a body cut off before its closing boundary.  ``check_image(data)`` reads only the image header: pixel count, aspect ratio and
-decompression bombs are refused before anything is decoded.  ``parse_options`` turns the
-form fields into ``JobOptions`` or a 422 naming the bad field.
+takes each ``sketch`` part (one per drawing of the tree, at most ``MAX_VIEWS``) with or
+without a ``filename=`` (RFC 7578 makes it optional) and refuses a body cut off before its
+closing boundary.  ``check_image(data)`` reads only the image header: pixel count, aspect
+ratio and decompression bombs are refused before anything is decoded (``check_images``:
+every drawing, an error naming the view).  ``parse_options`` turns the form fields (a
+``yaw`` per drawing among them) into ``JobOptions`` or a 422 naming the bad field.
 """
 
 from __future__ import annotations
 
 import io
 import math
-from collections.abc import AsyncIterator, Collection, Mapping
+from collections.abc import AsyncIterator, Collection, Mapping, Sequence
 from dataclasses import dataclass
 
 from python_multipart.multipart import MultipartParser, parse_options_header
@@ -24,20 +26,24 @@ from starlette.concurrency import run_in_threadpool
 from refine.search import DEFAULT_BUDGET
 from render import reader
 from treesketch.pipeline import MAX_HEIGHT
+from treesketch.views import MAX_VIEWS, parse_yaw
 
 from .runner import JobOptions
 
 __all__ = [
+    "MAX_VIEWS",
     "Limits",
     "LimitError",
     "check_image",
+    "check_images",
     "parse_options",
     "read_form",
 ]
 
 FIELD_BYTES = 1024  # a form field (a number, a flag) is never longer
-FORM_OVERHEAD = 64 * 1024  # boundaries, part headers and fields on top of the file
-MAX_PARTS = 16  # the sketch and the options (six known), with room to spare
+FORM_OVERHEAD = 64 * 1024  # boundaries, part headers and fields on top of the files
+# every drawing and its yaw (MAX_VIEWS of each) and the options (seven known), with room
+MAX_PARTS = 24
 PARSE_BATCH = 256 * 1024  # bytes handed to the parser's thread at a time
 HEADER_BYTES = 4096  # one part's headers (a Content-Disposition and a Content-Type)
 
@@ -46,7 +52,10 @@ HEADER_BYTES = 4096  # one part's headers (a Content-Disposition and a Content-T
 class Limits:
     """The service's limits; the image ones default to the sketch reader's own."""
 
-    max_upload_bytes: int = reader.MAX_BYTES
+    max_upload_bytes: int = reader.MAX_BYTES  # one image
+    # the whole body: two full-size pictures, or four of half that (a drawing made on the
+    # page is some 30 KB); what one request may hold in memory while it is read
+    max_body_bytes: int = 2 * reader.MAX_BYTES
     max_pixels: int = reader.MAX_PIXELS
     max_aspect: float = reader.MAX_ASPECT
     min_side: int = reader.MIN_SIDE
@@ -76,9 +85,12 @@ async def read_form(
     stream: AsyncIterator[bytes],
     limits: Limits,
     file_field: str = "sketch",
-) -> tuple[dict[str, str], bytes | None]:
-    """(text fields, the file's bytes or None) of a multipart body, read chunk by chunk."""
+    max_files: int = MAX_VIEWS,
+) -> tuple[dict[str, list[str]], list[bytearray]]:
+    """(every value of each text field in order, every file's bytes in order) of a
+    multipart body, read chunk by chunk; more than ``max_files`` files is a 422."""
     cap = limits.max_upload_bytes
+    body_cap = max(cap, limits.max_body_bytes) + FORM_OVERHEAD
     mtype, params = parse_options_header(content_type)
     if mtype != b"multipart/form-data" or b"boundary" not in params:
         raise LimitError(
@@ -89,8 +101,10 @@ async def read_form(
             declared = int(content_length)
         except ValueError:
             raise LimitError(400, f"bad Content-Length {content_length!r}") from None
-        if declared > cap + FORM_OVERHEAD:
-            raise LimitError(413, f"the upload ({declared} bytes) is over {cap} bytes")
+        if declared > body_cap:
+            raise LimitError(
+                413, f"the upload ({declared} bytes) is over {body_cap - FORM_OVERHEAD} bytes"
+            )
 
     parts: list[_Part] = []
     header: list[bytes] = [b"", b""]
@@ -126,6 +140,12 @@ async def read_form(
         part = parts[-1]
         _, disp = parse_options_header(part.headers.get("content-disposition", ""))
         part.name = disp.get(b"name", b"").decode("utf-8", "replace")
+        # refused as soon as the part begins: its bytes are never read
+        if part.name == file_field and sum(p.name == file_field for p in parts) > max_files:
+            raise LimitError(
+                422,
+                f"at most {max_files} drawings of one tree ('{file_field}' parts) in one job",
+            )
 
     def on_part_data(data: bytes, start: int, end: int) -> None:
         part = parts[-1]
@@ -165,8 +185,8 @@ async def read_form(
     try:
         async for chunk in stream:
             total += len(chunk)
-            if total > cap + FORM_OVERHEAD:
-                raise LimitError(413, f"the upload is over {cap} bytes")
+            if total > body_cap:
+                raise LimitError(413, f"the upload is over {body_cap - FORM_OVERHEAD} bytes")
             # parse in the thread pool, a batch at a time (a hop per 64 KB chunk costs
             # more than the parsing of a plain file part)
             pending += chunk
@@ -190,14 +210,14 @@ async def read_form(
         chunk = b""
         raise
 
-    fields: dict[str, str] = {}
-    file: bytes | None = None
+    fields: dict[str, list[str]] = {}
+    files: list[bytearray] = []
     for part in parts:
         if part.name == file_field:
-            file = part.data  # no copy of up to 10 MB: a bytearray reads as bytes do
+            files.append(part.data)  # no copy of up to 10 MB: a bytearray reads as bytes do
         elif part.name:
-            fields[part.name] = part.data.decode("utf-8", "replace").strip()
-    return fields, file
+            fields.setdefault(part.name, []).append(part.data.decode("utf-8", "replace").strip())
+    return fields, files
 
 
 def check_image(data: bytes, limits: Limits) -> tuple[int, int]:
@@ -243,6 +263,20 @@ def check_image(data: bytes, limits: Limits) -> tuple[int, int]:
     return w, h
 
 
+def check_images(images: Sequence[bytes], limits: Limits) -> list[tuple[int, int]]:
+    """:func:`check_image` of every drawing of a job, in order; when there are several, an
+    error names the view (``view 2: ...``, the first drawing is view 1)."""
+    if len(images) == 1:
+        return [check_image(images[0], limits)]
+    sizes = []
+    for i, data in enumerate(images, 1):
+        try:
+            sizes.append(check_image(data, limits))
+        except LimitError as exc:
+            raise LimitError(exc.status, f"view {i}: {exc}") from None
+    return sizes
+
+
 def _number(fields: Mapping[str, str], name: str, kind: type) -> float | int | None:
     text = fields.get(name, "").strip()
     if text == "" or text.lower() in ("none", "null"):
@@ -269,21 +303,63 @@ def _flag(fields: Mapping[str, str], name: str, default: bool) -> bool:
     raise LimitError(422, f"{name} must be true or false, got {text!r}")
 
 
+def _yaws(values: Sequence[str], views: int) -> tuple[float | None, ...]:
+    """The yaws of the drawings after the first, from the form's ``yaw`` fields: one per
+    drawing (the first's 0 or empty) or one per drawing after the first; ``?`` or empty:
+    not known (the refinement finds it)."""
+    if views == 1 and not values:
+        return ()
+    if len(values) == views:
+        first, values = values[0], values[1:]
+        try:
+            yaw0 = parse_yaw(first)
+        except ValueError as exc:
+            raise LimitError(422, f"yaw of view 1: {exc}") from None
+        if first.strip() not in ("", "0") and yaw0 != 0.0:
+            raise LimitError(
+                422,
+                f"yaw of view 1 must be 0 or empty (the other views' yaws are relative to "
+                f"it), got {first[:40]!r}",
+            )
+    elif len(values) != views - 1:
+        raise LimitError(
+            422,
+            f"{views} drawings and {len(values)} 'yaw' fields: send one 'yaw' per drawing, "
+            "in the same order (the first 0, '?' for a side not known)",
+        )
+    out = []
+    for i, text in enumerate(values, 2):
+        try:
+            out.append(parse_yaw(text))
+        except ValueError as exc:
+            raise LimitError(422, f"yaw of view {i}: {exc}") from None
+    return tuple(out)
+
+
 def parse_options(
-    fields: Mapping[str, str],
+    form: Mapping[str, str | Sequence[str]],
     limits: Limits,
     estimators: Collection[str],
     default_estimator: str,
     default_budget: int = DEFAULT_BUDGET,
     default_time_limit: float = 50.0,
+    views: int = 1,
 ) -> JobOptions:
-    """Validated job options from form fields; LimitError(422) naming the first bad one."""
+    """Validated job options from form fields (a value, or every value of a field in
+    order: an option given twice takes the last, ``yaw`` takes one per drawing) for a job
+    of ``views`` drawings; LimitError(422) naming the first bad one."""
     known = {"refine", "budget", "time_limit", "height", "estimator", "max_faces", "species"}
-    unknown = sorted(set(fields) - known)
+    unknown = sorted(set(form) - known - {"yaw"})
     if unknown:
         raise LimitError(
-            422, f"unknown option(s) {', '.join(unknown)}; known: {', '.join(sorted(known))}"
+            422,
+            f"unknown option(s) {', '.join(unknown)}; known: {', '.join(sorted(known | {'yaw'}))}",
         )
+    if not 1 <= views <= MAX_VIEWS:
+        raise LimitError(422, f"a job takes 1 to {MAX_VIEWS} drawings of one tree, got {views}")
+    every = {k: [v] if isinstance(v, str) else list(v) for k, v in form.items()}
+    yaws = _yaws(every.pop("yaw", []), views)
+    fields = {k: v[-1] for k, v in every.items() if v}
     budget = _number(fields, "budget", int)
     budget = default_budget if budget is None else int(budget)
     if not 1 <= budget <= limits.max_budget:
@@ -319,6 +395,7 @@ def parse_options(
         estimator=estimator,
         max_faces=None if max_faces is None else int(max_faces),
         species=species_name,
+        yaws=yaws,
     )
     try:
         options.settings()  # the pipeline's own check, before the job is queued

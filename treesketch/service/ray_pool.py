@@ -7,7 +7,7 @@ dispatcher is the only writer of job states once a job runs; progress is kept in
 for the events stream and saved to the store at most once a second; retention sweeps run
 from the same thread.  How things cross to an actor:
 
-- the job: its options and the uploaded sketch's bytes go with the ``run`` call;
+- the job: its options and the uploaded drawings' bytes go with the ``run`` call;
 - progress: the dispatcher polls each busy actor (``poll``) every ``POLL_EVERY`` seconds;
 - cancel: ``cancel(job_id)`` raises the actor's flag for that job, seen at the next
   evaluation; an actor that has not stopped ``cancel_grace`` seconds later is killed;
@@ -33,6 +33,7 @@ from typing import Any
 
 from .pool import LOAD_ATTEMPTS, RESPAWN_BACKOFF
 from .progress import LiveProgress
+from .runner import JobOptions
 from .store import JobStore, is_full
 
 __all__ = ["MAX_ATTEMPTS", "RayWorkerPool"]
@@ -240,7 +241,8 @@ class RayWorkerPool:
             if job is None:
                 return
             try:
-                sketch = self.store.upload_path(job.id).read_bytes()
+                views = JobOptions.from_dict(job.options).views
+                drawings = self.store.read_uploads(job.id, views)
             except OSError as exc:
                 self.store.fail(job.id, f"the uploaded sketch is gone: {exc}")
                 continue
@@ -249,7 +251,7 @@ class RayWorkerPool:
             with self._lock:
                 a.job, a.attempt, a.cancel_at = job.id, attempt, None
                 a.polled_at = time.monotonic()
-            a.run_ref = a.handle.run.remote(job.id, job.options, sketch)
+            a.run_ref = a.handle.run.remote(job.id, job.options, drawings)
 
     def _check(self, i: int) -> None:
         a = self._actors[i]

@@ -3,8 +3,9 @@
 This is the only module of the service that touches the pipeline, through the seam:
 ``treesketch.Pipeline(estimator, settings).run(sketch, height, progress, cancel)`` and
 ``treesketch.result_files``.  A :class:`Runner` loads its estimator once per worker
-process; ``Runner.run`` turns a stored sketch and the job's options into artefact bytes
-and the result's summary.
+process; ``Runner.run`` turns a job's stored drawings (one, or several views of the tree
+whose yaws are in the options) and its options into artefact bytes and the result's
+summary.
 
 An estimator ``spec`` is whatever ``treesketch.load_estimator`` takes (``"tsn"``,
 ``"template"``, a checkpoint path) or ``"package.module:name"`` naming an estimator
@@ -15,14 +16,23 @@ service).
 from __future__ import annotations
 
 import importlib
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 from refine.search import DEFAULT_BUDGET
+from treesketch.views import MAX_VIEWS
 
-__all__ = ["ARTEFACTS", "VIEW_GLB", "JobOptions", "Runner", "load_estimator_spec"]
+__all__ = [
+    "ARTEFACTS",
+    "VIEW_ARTEFACTS",
+    "VIEW_GLB",
+    "JobOptions",
+    "Runner",
+    "load_estimator_spec",
+    "view_artefacts",
+]
 
 # file name -> (output kind of treesketch.result_files, media type), in the page's order
 ARTEFACT_KINDS: dict[str, tuple[str, str]] = {
@@ -44,6 +54,18 @@ ARTEFACTS: dict[str, str] = {name: media for name, (_, media) in ARTEFACT_KINDS.
 }
 
 
+def view_artefacts(view: int) -> tuple[str, str]:
+    """The file names of view ``view``'s (2 and up) first-estimate and result sketches."""
+    return f"view{view}_before.png", f"view{view}_after.png"
+
+
+# a job of several drawings also has each later view's sketches (view 1's are
+# sketch_before.png and sketch_after.png)
+VIEW_ARTEFACTS: dict[str, str] = {
+    name: "image/png" for v in range(2, MAX_VIEWS + 1) for name in view_artefacts(v)
+}
+
+
 @dataclass(frozen=True)
 class JobOptions:
     """A job's options, validated (see ``limits.parse_options``)."""
@@ -55,13 +77,29 @@ class JobOptions:
     estimator: str = "tsn"  # a spec the server allows
     max_faces: int | None = None  # the exported tree's triangle budget (weberpenn.lod)
     species: str | None = None  # the species the user means (None: the drawing decides)
+    # the yaw of each drawing after the first, relative to it (None: searched); () for
+    # a job of one drawing
+    yaws: tuple[float | None, ...] = ()
+
+    @property
+    def views(self) -> int:
+        """How many drawings the job has."""
+        return 1 + len(self.yaws)
 
     def to_dict(self) -> dict[str, Any]:
-        return asdict(self)
+        d = asdict(self)
+        if not self.yaws:  # a job of one drawing is stored and shown as before
+            del d["yaws"]
+        else:
+            d["yaws"] = list(self.yaws)
+        return d
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> JobOptions:
-        return cls(**{k: v for k, v in d.items() if k in cls.__dataclass_fields__})
+        known = {k: v for k, v in d.items() if k in cls.__dataclass_fields__}
+        if "yaws" in known:
+            known["yaws"] = tuple(known["yaws"])
+        return cls(**known)
 
     def settings(self) -> Any:
         """The pipeline's ``RefineSettings`` for these options (validated)."""
@@ -110,20 +148,32 @@ class Runner:
 
     def run(
         self,
-        sketch: bytes,
+        sketch: bytes | Sequence[bytes],
         options: JobOptions,
         progress: Callable[[Any], None],
         cancel: Callable[[], bool],
     ) -> tuple[dict[str, bytes], dict[str, Any]]:
-        """(artefacts by file name, summary) of one job.  Raises ``treesketch.Cancelled``
+        """(artefacts by file name, summary) of one job: ``sketch`` is its drawing, or its
+        drawings in order (as many as ``options.views``).  Raises ``treesketch.Cancelled``
         within one evaluation of ``cancel()`` turning True, ``ValueError``
         (``SketchError``) for a sketch or option the pipeline rejects."""
         from treesketch import Pipeline, result_files
         from treesketch.trees import VIEW_FACES, light_glb
 
+        drawings = [sketch] if isinstance(sketch, bytes | bytearray) else list(sketch)
+        if len(drawings) != options.views:  # the service's own fault, never the input's
+            raise RuntimeError(
+                f"the job has {len(drawings)} drawing(s) but {options.views} view(s) in its options"
+            )
+        # one drawing goes in as it always did; several as the pipeline's list of views
+        source: Any = (
+            drawings[0]
+            if len(drawings) == 1
+            else [drawings[0], *zip(drawings[1:], options.yaws, strict=True)]
+        )
         pipeline = Pipeline(self.estimator(options.estimator), options.settings())
         result = pipeline.run(
-            sketch,
+            source,
             height=options.height,
             progress=progress,
             cancel=cancel,
@@ -147,4 +197,8 @@ class Runner:
         for i, c in enumerate(result.candidates[:3], 1):
             if c.sketch is not None:
                 out[f"candidate{i}.png"] = png_bytes(c.sketch)
+        for i, view in enumerate(result.views[1:], 2):
+            before, after = view_artefacts(i)
+            out[before] = png_bytes(view.sketch_before)
+            out[after] = png_bytes(view.sketch_after)
         return out, result.summary()

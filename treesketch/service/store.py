@@ -3,7 +3,10 @@
 A job is one row: its options, its state, its latest progress and, when done, its
 summary (species, scores, parameters, distances, ...).  The artefacts (GLB, JSON,
 preset, PNGs) lie in ``results/<id>/``, written atomically by the worker that made them
-(by the front for a Ray actor's job); the uploaded sketch lies in ``uploads/<id>.img``.
+(by the front for a Ray actor's job); the uploaded sketch lies in ``uploads/<id>.img`` and
+a job of several drawings keeps the others beside it (``uploads/<id>.view2.img``, ...;
+:func:`upload_name`): all are written before the job's row, together or not at all, and
+removed with the first.
 
 States: ``queued`` -> ``running`` -> ``done`` | ``failed`` | ``cancelled``; a finished
 job whose artefacts were removed by the retention limits becomes ``expired`` (the API
@@ -33,13 +36,13 @@ import sqlite3
 import threading
 import time
 import uuid
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from weberpenn.fileio import atomic_write
+from weberpenn.fileio import write_together
 
 __all__ = [
     "FINISHED",
@@ -50,6 +53,7 @@ __all__ = [
     "StorageFull",
     "StoreError",
     "is_full",
+    "upload_name",
 ]
 
 STATES = ("queued", "running", "done", "failed", "cancelled", "expired")
@@ -58,6 +62,13 @@ FINISHED = ("done", "failed", "cancelled", "expired")
 ORPHAN_GRACE_S = 600.0
 _FULL_ERRNOS = (errno.ENOSPC, errno.EDQUOT)
 _JOB_ID = re.compile(r"[0-9a-f]{32}")  # uuid4().hex
+_UPLOAD = re.compile(r"([0-9a-f]{32})(?:\.view[0-9]{1,2})?\.img")  # upload_name's names
+
+
+def upload_name(job_id: str, view: int = 1) -> str:
+    """The file name of a job's drawing ``view`` (1: the first, the only one of most
+    jobs) in the uploads folder."""
+    return f"{job_id}.img" if view == 1 else f"{job_id}.view{view}.img"
 
 
 class StoreError(RuntimeError):
@@ -221,38 +232,52 @@ class JobStore:
             raise
 
     # -- paths -------------------------------------------------------------------------
-    def upload_path(self, job_id: str) -> Path:
-        return self.uploads / f"{job_id}.img"
+    def upload_path(self, job_id: str, view: int = 1) -> Path:
+        return self.uploads / upload_name(job_id, view)
+
+    def read_uploads(self, job_id: str, views: int) -> list[bytes]:
+        """The job's ``views`` drawings, in order (OSError when one is gone)."""
+        return [self.upload_path(job_id, v).read_bytes() for v in range(1, views + 1)]
+
+    def _remove_uploads(self, job_id: str) -> None:
+        """The job's drawings, every view's (a job id is hex: no glob pattern in it)."""
+        for path in [self.upload_path(job_id), *self.uploads.glob(f"{job_id}.view*.img")]:
+            path.unlink(missing_ok=True)
 
     def result_dir(self, job_id: str) -> Path:
         return self.results / job_id
 
     # -- writing -----------------------------------------------------------------------
-    def create(self, sketch_png: bytes, options: dict[str, Any], max_queued: int) -> Job | None:
-        """Queue a job (its sketch saved first); None when ``max_queued`` jobs already wait.
-        Raises StorageFull (leaving nothing behind) when the disk is full."""
+    def create(
+        self, sketch_png: bytes | Sequence[bytes], options: dict[str, Any], max_queued: int
+    ) -> Job | None:
+        """Queue a job (its drawing, or its drawings in order, saved first); None when
+        ``max_queued`` jobs already wait.  Raises StorageFull (leaving nothing behind) when
+        the disk is full."""
         job_id = uuid.uuid4().hex
+        drawings = [sketch_png] if isinstance(sketch_png, bytes | bytearray) else list(sketch_png)
+        size = sum(len(d) for d in drawings)
         try:
-            atomic_write(self.upload_path(job_id), sketch_png)
+            write_together({self.upload_path(job_id, v): d for v, d in enumerate(drawings, 1)})
             now = time.time()
             with self._db() as db:
                 db.execute("BEGIN IMMEDIATE")
                 (queued,) = db.execute("SELECT COUNT(*) FROM jobs WHERE state='queued'").fetchone()
                 if queued >= max_queued:
                     db.execute("ROLLBACK")
-                    self.upload_path(job_id).unlink(missing_ok=True)
+                    self._remove_uploads(job_id)
                     return None
                 (seq,) = db.execute("SELECT COALESCE(MAX(seq), 0) + 1 FROM jobs").fetchone()
                 db.execute(
                     "INSERT INTO jobs (id, seq, state, created, options, bytes) "
                     "VALUES (?,?,?,?,?,?)",
-                    (job_id, seq, "queued", now, json.dumps(options), len(sketch_png)),
+                    (job_id, seq, "queued", now, json.dumps(options), size),
                 )
                 db.execute("COMMIT")
         except (OSError, sqlite3.OperationalError) as exc:
             if not is_full(exc):
                 raise
-            self.upload_path(job_id).unlink(missing_ok=True)
+            self._remove_uploads(job_id)
             self.mark_full()
             raise StorageFull(
                 f"storage full: the data folder {self.root} has no space left"
@@ -372,7 +397,7 @@ class JobStore:
             expired.append(row["id"])
         for job_id in expired:
             shutil.rmtree(self.result_dir(job_id), ignore_errors=True)
-            self.upload_path(job_id).unlink(missing_ok=True)
+            self._remove_uploads(job_id)
             with self._db() as db:
                 db.execute("UPDATE jobs SET state='expired', bytes=0 WHERE id=?", (job_id,))
         self._remove_empty_results(now)
@@ -383,9 +408,16 @@ class JobStore:
         ORPHAN_GRACE_S only: a younger one may be a job being made or saved."""
         found: dict[str, list[Path]] = {}
         for path in [*self.results.iterdir(), *self.uploads.glob("*.img")]:
-            job_id = path.name.removesuffix(".img")
-            if not _JOB_ID.fullmatch(job_id):  # never anything the store did not make
-                continue
+            # never anything the store did not make
+            if path.parent == self.results:
+                if not _JOB_ID.fullmatch(path.name):
+                    continue
+                job_id = path.name
+            else:
+                upload = _UPLOAD.fullmatch(path.name)
+                if upload is None:
+                    continue
+                job_id = upload.group(1)
             try:
                 if now - path.stat().st_mtime < ORPHAN_GRACE_S:
                     continue

@@ -76,7 +76,7 @@ def worker_main(spec: str, conn: Connection, cancel: Any, root: str) -> None:
     from weberpenn.fileio import write_together
 
     from .runner import JobOptions, Runner
-    from .store import is_full
+    from .store import is_full, upload_name
 
     # below the HTTP front: a status poll must not wait behind a refinement for a core
     os.nice(WORKER_NICE)
@@ -103,8 +103,10 @@ def worker_main(spec: str, conn: Connection, cancel: Any, root: str) -> None:
         full = False
         try:
             opts = JobOptions.from_dict(options)
-            sketch = (uploads / f"{job_id}.img").read_bytes()
-            files, summary = runner.run(sketch, opts, progress, lambda: bool(cancel.value))
+            drawings = [
+                (uploads / upload_name(job_id, v)).read_bytes() for v in range(1, opts.views + 1)
+            ]
+            files, summary = runner.run(drawings, opts, progress, lambda: bool(cancel.value))
             summary = json.loads(json.dumps(summary, default=float))  # plain JSON types
             write_together({out / name: data for name, data in files.items()})
             summary["timings"]["job"] = time.perf_counter() - t0

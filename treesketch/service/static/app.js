@@ -1,5 +1,8 @@
 // The TreeSketch page: a drawing pad, the job API (POST /jobs, the events stream,
 // DELETE to cancel) and a three.js view of the resulting GLB.  Plain ES modules, no build.
+// "Draw from this side": the finished tree turned in the 3D view, its outline from there
+// (GET /jobs/{id}/outline.png) shown faintly behind the pad, and the next job sent with
+// every drawing of the tree, each with its turn from the first (the form's "yaw").
 import * as THREE from "three";
 import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
@@ -159,10 +162,13 @@ function setState(state) {
 
 async function submit(ev) {
   ev.preventDefault();
-  if (!drawn()) { say("The page is empty: draw a tree first."); return; }
+  if (!drawn()) { say(side ? "Draw the tree from this side first." : "The page is empty: draw a tree first."); return; }
   const blob = await new Promise((ok) => pad.toBlob(ok, "image/png"));
+  // drawing from another side: the tree's earlier drawings go too, the first at yaw 0
+  const views = side ? [...side.views, { blob, yaw: side.turn }] : [{ blob, yaw: 0 }];
   const form = new FormData();
-  form.append("sketch", blob, "sketch.png");
+  views.forEach((v, i) => form.append("sketch", v.blob, i === 0 ? "sketch.png" : `view${i + 1}.png`));
+  if (views.length > 1) for (const v of views) form.append("yaw", String(v.yaw));
   if ($("budget").value) form.append("budget", $("budget").value);
   form.append("refine", $("refine").checked ? "true" : "false");
   if ($("height").value) form.append("height", $("height").value);
@@ -187,6 +193,9 @@ async function submit(ev) {
     say(`Refused (${r.status}): ${body.detail || r.statusText}`);
     return;
   }
+  sentViews.set(body.id, views);
+  keepViews(body.id, views);
+  if (side) leaveSide(false);
   startJob(body);
   remember(body.id);
 }
@@ -288,6 +297,8 @@ function showResult(job) {
   }
   showCandidates(job);
   showFacts(null);
+  showViews(job);
+  updateSideButton();
   $("view-note").textContent = "";
   // the viewer's light tree; the GLB download keeps full detail
   loadModel(links["tree_view.glb"], framedJob !== job.id);
@@ -377,6 +388,7 @@ async function switchTo(i) {
     return;
   }
   setPreset(false);
+  updateSideButton();
   $("edit-status").textContent = `Growing the ${c.name}...`;
   await startEdit({ params: c.params, species: c.species }, true);
   if (mine !== switchCount || !edit) return;
@@ -441,7 +453,8 @@ async function refreshRecent() {
     const li = document.createElement("li");
     const a = document.createElement("a");
     a.href = `?job=${id}`;
-    const what = j.state === "done" ? j.result.species : j.state;
+    const drawings = j.options && j.options.yaws ? ` (${j.options.yaws.length + 1} drawings)` : "";
+    const what = (j.state === "done" ? j.result.species : j.state) + drawings;
     a.textContent = `${new Date(j.created * 1000).toLocaleString()}: ${what}`;
     if (id === jobId) a.setAttribute("aria-current", "true");
     li.append(a);
@@ -454,6 +467,7 @@ async function restoreFromUrl() {
   if (!id) return;
   const r = await api(`/jobs/${encodeURIComponent(id)}`).catch(() => null);
   if (!r || !r.ok) { say(`Job ${id} is not on this server.`); return; }
+  restoreViews(id);
   startJob(await r.json());
 }
 
@@ -563,7 +577,9 @@ function endEdit() {
   switchCount++;
   $("candidates-panel").hidden = true;
   $("edit-panel").hidden = true;
+  $("views-panel").hidden = true;
   delete document.body.dataset.edit;
+  updateSideButton();
 }
 
 // the controls that differ from the tree the drawing gave
@@ -605,6 +621,7 @@ async function runEdit() {
       edit.count += 1;
       document.body.dataset.edits = String(edit.count);
       setPreset(!edit.edited && !edit.switched);
+      updateSideButton();
       $("edit-status").textContent = `${Math.round(performance.now() - t0)} ms`;
       $("view-note").textContent = edit.edited ? "edited" : "";
     }
@@ -649,6 +666,7 @@ $("dl-json").addEventListener("click", (ev) => downloadEdited(ev, "application/j
 // ---- the 3D view ---------------------------------------------------------------------
 const view = $("view");
 let renderer = null, scene = null, camera = null, controls = null, model = null, ground = null;
+let modelFacesDrawing = true; // the model on show is a job's file, turned to face its drawing
 let framedJob = null; // the job whose tree the camera was framed on
 
 function render() { if (renderer) renderer.render(scene, camera); }
@@ -675,7 +693,7 @@ function setupView() {
   scene.add(ground);
   camera = new THREE.PerspectiveCamera(40, 1, 0.01, 1000);
   controls = new OrbitControls(camera, renderer.domElement);
-  controls.addEventListener("change", render);
+  controls.addEventListener("change", () => { render(); showTurn(); });
   new ResizeObserver(resize).observe(view);
   resize();
 }
@@ -713,6 +731,7 @@ function loadModel(source, frame = true) {
   const onLoad = (gltf) => {
     if (model) scene.remove(model);
     model = gltf.scene;
+    modelFacesDrawing = typeof source === "string";
     scene.add(model);
     let meshes = 0;
     model.traverse((o) => {
@@ -734,10 +753,11 @@ function loadModel(source, frame = true) {
     ground.scale.setScalar(Math.max(size.x, size.z, size.y * 0.5) * 0.75);
     ground.position.set((box.min.x + box.max.x) / 2, box.min.y - size.y * 0.002, (box.min.z + box.max.z) / 2);
     $("height-readout").textContent = `${size.y.toFixed(size.y < 10 ? 2 : 1)} m`;
-    if (frame) frameModel(); else render();
+    if (frame) frameModel(); else { render(); showTurn(); }
     document.body.dataset.meshes = String(meshes);
     document.body.dataset.loads = String(Number(document.body.dataset.loads || 0) + 1);
     document.body.dataset.model = "loaded";
+    updateSideButton();
   };
   const onError = (err) => {
     document.body.dataset.model = "failed";
@@ -745,6 +765,152 @@ function loadModel(source, frame = true) {
   };
   if (typeof source === "string") new GLTFLoader().load(source, onLoad, undefined, onError);
   else new GLTFLoader().parse(source, "", onLoad, onError);
+}
+
+// ---- drawing the tree from another side ------------------------------------------------
+const MAX_VIEWS = 4; // treesketch.views.MAX_VIEWS: drawings of one tree in one job
+const VIEWS_KEY = "treesketch.views"; // this tab's drawings of its latest jobs (a reload keeps them)
+const sentViews = new Map(); // job id -> the drawings sent: [{blob, yaw}], the first at 0
+let side = null; // drawing from another side: {job, turn, views, strokes, undone}
+
+// the 3D view's turn about the tree, degrees from the first drawing's side; positive:
+// the camera went round to its right.  A job's GLBs are turned to face the first drawing
+// (ExportOptions.face_view: the default front view shows the tree as drawn), and a camera
+// gone round by +t sees what SketchRenderer draws at the result's yaw + t: the drawing's
+// "yaw".  A tree grown by POST /trees (an edit) is not turned: its front is yaw 0.
+function currentTurn() {
+  const dx = camera.position.x - controls.target.x;
+  const dz = camera.position.z - controls.target.z;
+  const facing = modelFacesDrawing || !shownJob ? 0 : shownJob.result.yaw;
+  let t = (Math.atan2(dx, dz) * 180) / Math.PI - facing;
+  t = ((t % 360) + 540) % 360 - 180; // -180 <= t < 180
+  t = Math.round(t * 10) / 10;
+  return t === 0 ? 0 : t; // never -0
+}
+// a turn in words: -180 < t <= 180, signed
+function turnText(t) {
+  let d = (((t % 360) + 360) % 360);
+  if (d > 180) d -= 360;
+  if (Math.abs(d) < 0.05) return "the front (0°)";
+  return `${d > 0 ? "+" : "−"}${Math.abs(d).toFixed(Math.abs(d) % 1 ? 1 : 0)}°`;
+}
+function showTurn() { $("turn-readout").textContent = model ? turnText(currentTurn()) : "-"; }
+
+// walk round the tree by ``deg`` degrees (positive: to the right), for the keyboard
+function walk(deg) {
+  if (!model) return;
+  const off = camera.position.clone().sub(controls.target);
+  off.applyAxisAngle(new THREE.Vector3(0, 1, 0), (deg * Math.PI) / 180);
+  camera.position.copy(controls.target).add(off);
+  controls.update();
+}
+$("turn-left").onclick = () => walk(-15);
+$("turn-right").onclick = () => walk(15);
+
+// why the shown tree cannot be drawn from another side now, or null
+function sideProblem() {
+  if (!shownJob) return "Make a tree first, then turn it and draw it from another side";
+  const views = sentViews.get(shownJob.id);
+  if (!views) return "This tree's drawing is not kept in this tab: draw it and make the tree again to add another side";
+  if (views.length >= MAX_VIEWS) return `A tree takes at most ${MAX_VIEWS} drawings`;
+  if (edit && (edit.edited || edit.switched)) return "Show the drawing's own tree (the first candidate, controls reset) to draw it from another side";
+  if (!model || document.body.dataset.model !== "loaded") return "Wait for the 3D tree";
+  return null;
+}
+const SIDE_TITLE = $("draw-side").title;
+function updateSideButton() {
+  const why = sideProblem();
+  $("draw-side").disabled = Boolean(why) || side !== null;
+  $("draw-side").title = why || SIDE_TITLE;
+}
+
+$("draw-side").onclick = () => {
+  if (sideProblem() || side) return;
+  const job = shownJob;
+  const turn = currentTurn();
+  const views = sentViews.get(job.id);
+  side = { job: job.id, turn, views, strokes, undone };
+  strokes = [];
+  undone = [];
+  redraw();
+  document.body.dataset.mode = "side";
+  document.body.dataset.turn = String(turn);
+  document.body.dataset.guide = "loading";
+  const guide = $("guide");
+  guide.hidden = true;
+  guide.onload = () => { if (side) { guide.hidden = false; document.body.dataset.guide = "loaded"; } };
+  guide.onerror = () => { document.body.dataset.guide = "failed"; say("The tree's outline from this side could not be drawn: draw the side anyway."); };
+  guide.src = `/jobs/${job.id}/outline.png?turn=${turn}&size=512`;
+  $("side-note").textContent = `Drawing ${views.length + 1}: the tree seen from ${turnText(turn)}, its outline shown faintly. Draw over it, then press "Make the tree": ${views.length === 1 ? "both drawings go" : "all the drawings go"} together.`;
+  $("side-bar").hidden = false;
+  say(`Draw the tree as seen from ${turnText(turn)}.`);
+  updateSideButton();
+  if (phone()) $("draw-panel").scrollIntoView({ behavior: "smooth" });
+};
+
+// back to drawing one view; ``restore``: the pad shows what it had before
+function leaveSide(restore) {
+  if (!side) return;
+  if (restore) { strokes = side.strokes; undone = side.undone; redraw(); }
+  side = null;
+  $("guide").hidden = true;
+  $("guide").removeAttribute("src");
+  $("side-bar").hidden = true;
+  delete document.body.dataset.mode;
+  delete document.body.dataset.turn;
+  delete document.body.dataset.guide;
+  updateSideButton();
+}
+$("side-exit").onclick = () => { leaveSide(true); say("Back to the first drawing."); $("draw-side").focus(); };
+
+// the result's views: the refined tree's sketch from each drawing's side
+function showViews(job) {
+  const views = job.result.views || [];
+  const box = $("views");
+  box.replaceChildren();
+  views.forEach((v, i) => {
+    const fig = document.createElement("figure");
+    const im = document.createElement("img");
+    im.src = i === 0 ? job.links["sketch_after.png"] : job.links[`view${i + 1}_after.png`];
+    im.alt = `Sketch of the refined tree from the side of drawing ${i + 1}`;
+    const cap = document.createElement("figcaption");
+    const where = i === 0 ? "the front" : turnText(v.yaw) + (v.searched ? " (found)" : "");
+    cap.textContent = `drawing ${i + 1}: ${where}, distance ${v.loss_after.toFixed(3)}`;
+    fig.append(im, cap);
+    box.append(fig);
+  });
+  $("views-panel").hidden = views.length < 2;
+  document.body.dataset.views = String(Math.max(1, views.length));
+}
+
+// the drawings of a job kept in this tab (sessionStorage, the latest few jobs) so that a
+// reload can still add a side; in memory only when the storage is full or off
+const blobData = (blob) => new Promise((ok, fail) => {
+  const r = new FileReader();
+  r.onload = () => ok(r.result);
+  r.onerror = () => fail(r.error);
+  r.readAsDataURL(blob);
+});
+function dataBlob(url) {
+  const [head, b64] = url.split(",");
+  const bytes = Uint8Array.from(atob(b64), (c) => c.charCodeAt(0));
+  return new Blob([bytes], { type: head.slice(5).split(";")[0] });
+}
+async function keepViews(id, views) {
+  try {
+    const pngs = await Promise.all(views.map((v) => blobData(v.blob)));
+    const all = JSON.parse(sessionStorage.getItem(VIEWS_KEY) || "{}");
+    all[id] = views.map((v, i) => ({ png: pngs[i], yaw: v.yaw }));
+    const ids = Object.keys(all);
+    for (const old of ids.slice(0, Math.max(0, ids.length - 6))) delete all[old];
+    sessionStorage.setItem(VIEWS_KEY, JSON.stringify(all));
+  } catch { /* kept in memory only */ }
+}
+function restoreViews(id) {
+  try {
+    const kept = JSON.parse(sessionStorage.getItem(VIEWS_KEY) || "{}")[id];
+    if (kept) sentViews.set(id, kept.map((v) => ({ blob: dataBlob(v.png), yaw: v.yaw })));
+  } catch { /* none kept */ }
 }
 
 // ---- start ---------------------------------------------------------------------------
