@@ -16,7 +16,7 @@ from pathlib import Path
 
 import httpx
 import pytest
-from service_helpers import finished, palm_sketch_png, refining, serve, wait_for
+from service_helpers import finished, palm_sketch_png, refining, serve, submit, wait_for
 
 from treesketch.service import ServiceConfig, create_app
 
@@ -48,12 +48,6 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
 def http(server: str) -> Iterator[httpx.Client]:
     with httpx.Client(base_url=server, timeout=30) as c:
         yield c
-
-
-def submit(http: httpx.Client, sketch: bytes, **fields: str) -> str:
-    r = http.post("/jobs", files={"sketch": ("s.png", sketch, "image/png")}, data=fields)
-    assert r.status_code == 202, r.text
-    return r.json()["id"]
 
 
 def worker_idle(http: httpx.Client) -> bool:

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import httpx
 import pytest
-from service_helpers import finished, palm_sketch_png, refining, serve, wait_for
+from service_helpers import finished, palm_sketch_png, refining, serve, submit, wait_for
 
 from treesketch.service import JobStore, ServiceConfig, create_app
 from treesketch.service.limits import MAX_PARTS
@@ -39,12 +39,6 @@ def sketch() -> bytes:
 
 def config(data: Path, **kw: object) -> ServiceConfig:
     return ServiceConfig(data=data, workers=1, estimator=ESTIMATOR, **kw)  # type: ignore[arg-type]
-
-
-def submit(http: httpx.Client, sketch: bytes, **fields: str) -> str:
-    r = http.post("/jobs", files={"sketch": ("s.png", sketch, "image/png")}, data=fields)
-    assert r.status_code == 202, r.text
-    return r.json()["id"]
 
 
 def part(name: str, value: bytes, filename: str | None = None) -> bytes:
