@@ -1,5 +1,6 @@
-"""Fixtures of the page tests (``tests/test_web*.py``); their helpers are in
-``web_helpers.py``."""
+"""Fixtures shared by test modules: the service tests' drawing (``sketch``), and the page
+tests' (``tests/test_web*.py``) server, browser and page, whose helpers are in
+``web_helpers.py``.  A module may define its own fixture of the same name."""
 
 from __future__ import annotations
 
@@ -7,6 +8,14 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
+
+
+@pytest.fixture(scope="session")
+def sketch() -> bytes:
+    """A palm drawn by the renderer, as PNG bytes: what the service tests submit."""
+    from service_helpers import palm_sketch_png
+
+    return palm_sketch_png()
 
 
 @pytest.fixture(scope="module")

@@ -72,6 +72,17 @@ def serve(app: Any, log_level: str = "warning") -> Iterator[str]:
         sock.close()
 
 
+@contextlib.contextmanager
+def http_service(config: Any) -> Iterator[Any]:
+    """A real server of ``config``'s app (see :func:`serve`) and an httpx client on it."""
+    import httpx
+
+    from treesketch.service import create_app
+
+    with serve(create_app(config)) as url, httpx.Client(base_url=url, timeout=30) as http:
+        yield http
+
+
 def submit(http: Any, sketch: bytes, **fields: str) -> str:
     """``POST /jobs`` (an httpx client or a TestClient) with ``sketch`` and form ``fields``;
     the new job's id."""

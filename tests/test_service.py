@@ -13,23 +13,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
-from service_helpers import (
-    check_broken_estimator_is_reported,
-    finished,
-    palm_sketch_png,
-    png,
-    wait_for,
-)
+from service_helpers import check_broken_estimator_is_reported, finished, png, wait_for
 
 from treesketch.service import ARTEFACTS, JobStore, Limits, ServiceConfig, create_app
 from treesketch.service.limits import LimitError, read_form
 
 ESTIMATOR = "service_helpers:palm_estimator"
-
-
-@pytest.fixture(scope="module")
-def sketch() -> bytes:
-    return palm_sketch_png()
 
 
 @pytest.fixture(scope="module")

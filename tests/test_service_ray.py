@@ -18,7 +18,6 @@ from fastapi.testclient import TestClient
 from service_helpers import (
     check_broken_estimator_is_reported,
     finished,
-    palm_sketch_png,
     png,
     refining,
     submit,
@@ -45,11 +44,6 @@ def ray_session() -> Iterator[None]:
     finally:
         ex.close()
     assert not ray.is_initialized()
-
-
-@pytest.fixture(scope="module")
-def sketch() -> bytes:
-    return palm_sketch_png()
 
 
 @pytest.fixture(scope="module")
