@@ -10,7 +10,7 @@ from pathlib import Path
 import typer
 
 from . import cli_eval_paper, cli_eval_tsn
-from .cli_common import address_option, executor_option, fail, workers_option
+from .cli_common import address_option, executor_from, executor_option, fail, workers_option
 
 eval_app = typer.Typer(
     help="Evaluate: 1-RMSE tables, Hausdorff distance, rotation sweep, reports.",
@@ -47,8 +47,6 @@ def rotation(
     from eval.rotation import plot_cases, plot_sweep, rotation_sweep, write_csv, yaw_angles
     from weberpenn import ParamError, load_params
 
-    from .executor import ExecutorError, from_options
-
     try:
         gt = load_params(params)
         n = len(yaw_angles(step))
@@ -64,25 +62,20 @@ def rotation(
         pipeline = Pipeline(load_estimator("tsn", checkpoint=checkpoint), settings)
     except ValueError as e:
         fail(str(e))
-    try:
-        runner = from_options(executor, workers, address)
-    except ExecutorError as e:
-        fail(str(e))
-    try:
-        with tqdm(total=n, desc="rotation sweep", dynamic_ncols=True) as bar:
-            res = rotation_sweep(
-                gt,
-                pipeline,
-                step=step,
-                size=size,
-                samples=samples,
-                seed=seed,
-                progress=lambda i, total: bar.update(i - bar.n),
-                executor=runner,
-            )
-    finally:
-        if runner is not None:
-            runner.close()
+    with (
+        executor_from(executor, workers, address) as runner,
+        tqdm(total=n, desc="rotation sweep", dynamic_ncols=True) as bar,
+    ):
+        res = rotation_sweep(
+            gt,
+            pipeline,
+            step=step,
+            size=size,
+            samples=samples,
+            seed=seed,
+            progress=lambda i, total: bar.update(i - bar.n),
+            executor=runner,
+        )
     out.mkdir(parents=True, exist_ok=True)
     write_csv(res.rows, out / "rotation.csv")
     plot_sweep(res, out / "rotation.png")
@@ -142,7 +135,6 @@ def all_(
     from eval.scoring import tsn_scorer
 
     from .estimators import NNSEstimator, TSNEstimator
-    from .executor import ExecutorError, from_options
     from .pipeline import Pipeline
 
     extras = []
@@ -177,32 +169,26 @@ def all_(
         rot = []
     else:
         rot = [s.strip() for s in rotation_species.split(",") if s.strip()]
-    try:
-        runner = from_options(executor, workers, address)
-    except ExecutorError as e:
-        fail(str(e))
-    try:
-        path = build_report(
-            data,
-            out,
-            pipeline,
-            main,
-            extras,
-            per_species=per_species,
-            refine_budget=refine_budget,
-            rotation_step=rotation_step,
-            rotation_refine_budget=rotation_budget,
-            rotation_species=rot,
-            samples=samples,
-            max_sketches=max_sketches,
-            command="treesketch " + " ".join(shlex.quote(a) for a in sys.argv[1:]),
-            executor=runner,
-        )
-    except ValueError as e:
-        fail(str(e))
-    finally:
-        if runner is not None:
-            runner.close()
+    with executor_from(executor, workers, address) as runner:
+        try:
+            path = build_report(
+                data,
+                out,
+                pipeline,
+                main,
+                extras,
+                per_species=per_species,
+                refine_budget=refine_budget,
+                rotation_step=rotation_step,
+                rotation_refine_budget=rotation_budget,
+                rotation_species=rot,
+                samples=samples,
+                max_sketches=max_sketches,
+                command="treesketch " + " ".join(shlex.quote(a) for a in sys.argv[1:]),
+                executor=runner,
+            )
+        except ValueError as e:
+            fail(str(e))
     typer.echo(f"wrote {path}")
 
 
