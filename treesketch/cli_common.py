@@ -1,4 +1,5 @@
-"""What every command shares: the one error path (``fail``) and, for the commands whose
+"""What the commands share: the one error path (``fail``), the options several take
+(``--data`` a dataset, ``--checkpoint`` a TSN checkpoint), and, for the commands whose
 pieces run on an executor, their options (``--executor``, ``--workers``, ``--address``)
 and the executor they ask for (``executor_from``)."""
 
@@ -10,13 +11,31 @@ from typing import Any, NoReturn
 
 import typer
 
-__all__ = ["address_option", "executor_from", "executor_option", "fail", "workers_option"]
+__all__ = [
+    "address_option",
+    "checkpoint_option",
+    "dataset_option",
+    "executor_from",
+    "executor_option",
+    "fail",
+    "workers_option",
+]
 
 
 def fail(message: str, code: int = 2) -> NoReturn:
     """Print ``error: MESSAGE`` on stderr and exit with ``code`` (no traceback)."""
     typer.secho(f"error: {message}", fg=typer.colors.RED, err=True)
     raise typer.Exit(code)
+
+
+def dataset_option() -> Any:
+    """``--data``, required: a dataset folder."""
+    return typer.Option(..., "--data", help="Dataset folder (treesketch dataset build).")
+
+
+def checkpoint_option() -> Any:
+    """``--checkpoint``: a TSN checkpoint, None for the shipped one."""
+    return typer.Option(None, "--checkpoint", help="TSN checkpoint (default: the shipped one).")
 
 
 @contextlib.contextmanager

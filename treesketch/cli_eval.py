@@ -10,7 +10,15 @@ from pathlib import Path
 import typer
 
 from . import cli_eval_paper, cli_eval_tsn
-from .cli_common import address_option, executor_from, executor_option, fail, workers_option
+from .cli_common import (
+    address_option,
+    checkpoint_option,
+    dataset_option,
+    executor_from,
+    executor_option,
+    fail,
+    workers_option,
+)
 
 eval_app = typer.Typer(
     help="Evaluate: 1-RMSE tables, Hausdorff distance, rotation sweep, reports.",
@@ -31,9 +39,7 @@ def rotation(
     budget: int = typer.Option(
         20, "--budget", help="Refinement budget (tree evaluations) per angle."
     ),
-    checkpoint: Path | None = typer.Option(
-        None, "--checkpoint", help="TSN checkpoint (default: shipped)."
-    ),
+    checkpoint: Path | None = checkpoint_option(),
     size: int = typer.Option(256, "--size", help="Sketch size in pixels."),
     samples: int = typer.Option(10_000, "--samples", help="Hausdorff samples per direction."),
     seed: int = typer.Option(0, "--seed", help="Growth seed for both trees."),
@@ -90,11 +96,9 @@ def rotation(
 
 @eval_app.command("all")
 def all_(
-    data: Path = typer.Option(..., "--data", help="Dataset folder (treesketch dataset build)."),
+    data: Path = dataset_option(),
     out: Path = typer.Option(Path("reports"), "--out", help="Report folder."),
-    checkpoint: Path | None = typer.Option(
-        None, "--checkpoint", help="TSN checkpoint (default: shipped)."
-    ),
+    checkpoint: Path | None = checkpoint_option(),
     refine_budget: int = typer.Option(
         40, "--refine-budget", help="Refinement budget per tree (0: none)."
     ),

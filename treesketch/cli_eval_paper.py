@@ -12,7 +12,14 @@ from pathlib import Path
 
 import typer
 
-from .cli_common import address_option, executor_from, executor_option, fail, workers_option
+from .cli_common import (
+    address_option,
+    checkpoint_option,
+    executor_from,
+    executor_option,
+    fail,
+    workers_option,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_CACHE = Path("out") / "paper_cache"
@@ -28,9 +35,7 @@ def eval_paper(
     cache: Path = typer.Option(
         DEFAULT_CACHE, "--cache", help="Where the generated test data is kept between runs."
     ),
-    checkpoint: Path | None = typer.Option(
-        None, "--checkpoint", help="TSN checkpoint (default: the shipped checkpoints/tsn_lite0.pt)."
-    ),
+    checkpoint: Path | None = checkpoint_option(),
     bar: bool = typer.Option(True, "--progress/--no-progress", help="Progress bars on stderr."),
     executor: str = executor_option("the rotation sweeps' angles and the dataset's trees"),
     workers: int = workers_option(),
