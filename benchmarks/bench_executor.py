@@ -34,7 +34,7 @@ import platform
 import sys
 import tempfile
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -242,6 +242,20 @@ def part_kill_external(cfg_kw: dict, tmp: Path, address: str, raylet_pid: int) -
     return {**r, "alive_before": alive, "per_node": dict(ex.nodes), "events": events}
 
 
+def _table(title: str, header: str, lines: Iterable[str]) -> None:
+    """A section of the report: its title, then a markdown table (``header`` with its
+    rule line) of ``lines``."""
+    print(f"\n## {title}\n")
+    print(header)
+    for line in lines:
+        print(line)
+
+
+def _same(digest: str, ref: str | None, same: str, different: str) -> str:
+    """How ``digest`` compares with the reference run's (nothing when there is none)."""
+    return "" if ref is None else (same if digest == ref else different)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--parts", default="overhead,dataset,scaling,kill")
@@ -265,51 +279,49 @@ def main() -> None:
         tmp = Path(d)
         ref = None
         if "overhead" in parts:
-            print(f"\n## Per-piece overhead ({args.pieces} empty pieces, workers warm)\n")
-            print(
+            _table(
+                f"Per-piece overhead ({args.pieces} empty pieces, workers warm)",
                 "| executor | start (s) | first run of 8 pieces (s) | next run of 8 (s) "
-                "| ms per further piece |\n|---|---:|---:|---:|---:|"
-            )
-            for r in part_overhead(args.pieces):
-                print(
+                "| ms per further piece |\n|---|---:|---:|---:|---:|",
+                (
                     f"| {r['executor']} | {r['start_s']:.1f} | {r['first_s']:.2f} | "
-                    f"{r['run8_s']:.2f} | "
-                    f"{r['ms_per_piece']:.2f} |"
-                )
-        if "dataset" in parts:
-            print(f"\n## Dataset build, {n_trees} trees x 4 views at {args.size} px\n")
-            print(
-                "| executor | start (s) | build (s) | trees/s | time per tree vs local pool "
-                "| same bytes as in-process |\n|---|---:|---:|---:|---:|---|"
+                    f"{r['run8_s']:.2f} | {r['ms_per_piece']:.2f} |"
+                    for r in part_overhead(args.pieces)
+                ),
             )
+        if "dataset" in parts:
             rows = part_dataset(cfg_kw, tmp)
-            ref = rows[0]["digest"]
-            pool = rows[1]["trees_per_s"]
-            for r in rows:
-                print(
+            ref, pool = rows[0]["digest"], rows[1]["trees_per_s"]
+            _table(
+                f"Dataset build, {n_trees} trees x 4 views at {args.size} px",
+                "| executor | start (s) | build (s) | trees/s | time per tree vs local pool "
+                "| same bytes as in-process |\n|---|---:|---:|---:|---:|---|",
+                (
                     f"| {r['executor']} | {r['start_s']:.1f} | {r['seconds']:.1f} | "
                     f"{r['trees_per_s']:.2f} | {pool / r['trees_per_s']:.2f} | "
                     f"{'yes' if r['digest'] == ref else 'NO'} ({r['digest']}) |"
-                )
-        if "scaling" in parts:
-            print(f"\n## Two-node scaling (Ray test cluster, 1 CPU per node), {n_trees} trees\n")
-            print(
-                "| nodes | start (s) | build (s) | trees/s | speed-up | trees per node "
-                "| digest |\n|---|---:|---:|---:|---:|---|---|"
+                    for r in rows
+                ),
             )
+        if "scaling" in parts:
             rows = part_scaling(cfg_kw, tmp)
             base = rows[0]["trees_per_s"]
-            for r in rows:
-                same = "" if ref is None else (" same" if r["digest"] == ref else " DIFFERENT")
-                print(
+            _table(
+                f"Two-node scaling (Ray test cluster, 1 CPU per node), {n_trees} trees",
+                "| nodes | start (s) | build (s) | trees/s | speed-up | trees per node "
+                "| digest |\n|---|---:|---:|---:|---:|---|---|",
+                (
                     f"| {r['nodes']} | {r['start_s']:.1f} | {r['seconds']:.1f} | "
                     f"{r['trees_per_s']:.2f} | {r['trees_per_s'] / base:.2f} | "
-                    f"{' + '.join(map(str, r['per_node']))} | {r['digest']}{same} |"
-                )
+                    f"{' + '.join(map(str, r['per_node']))} | {r['digest']}"
+                    f"{_same(r['digest'], ref, ' same', ' DIFFERENT')} |"
+                    for r in rows
+                ),
+            )
         if "kill" in parts:
             print(f"\n## Node killed mid-run, {n_trees} trees\n")
             r = part_kill(cfg_kw, tmp)
-            same = "" if ref is None else (", same bytes" if r["digest"] == ref else ", DIFFERENT")
+            same = _same(r["digest"], ref, ", same bytes", ", DIFFERENT")
             print(
                 f"{'; '.join(r['events']) or 'the second node was never killed'}; "
                 f"{r['trees']} trees built, {r['failed']} failed, in {r['seconds']:.1f} s; "

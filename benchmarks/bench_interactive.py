@@ -25,13 +25,10 @@ import json
 import os
 import platform
 import random
-import socket
 import statistics
 import sys
 import tempfile
-import threading
 import time
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -40,29 +37,11 @@ sys.path.insert(0, str(ROOT))
 
 import httpx  # noqa: E402
 
+from tests.service_helpers import serve  # noqa: E402  (the tests' server in a thread)
 from treesketch.service import ServiceConfig, create_app  # noqa: E402
 from treesketch.trees import VIEW_FACES  # noqa: E402
 from weberpenn import species  # noqa: E402
 from weberpenn.controls import CONTROLS  # noqa: E402
-
-
-@contextmanager
-def serve(app: Any):
-    import uvicorn
-
-    sock = socket.socket()
-    sock.bind(("127.0.0.1", 0))
-    server = uvicorn.Server(uvicorn.Config(app, log_level="warning", lifespan="on"))
-    thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, daemon=True)
-    thread.start()
-    while not server.started:
-        time.sleep(0.05)
-    try:
-        yield f"http://127.0.0.1:{sock.getsockname()[1]}"
-    finally:
-        server.should_exit = True
-        thread.join(30)
-        sock.close()
 
 
 def wait_ready(client: httpx.Client) -> None:

@@ -1,5 +1,7 @@
 """The reference for ``bench_distance.py``: the shape distance as it was before issue 12's
-recalibration (``refine/shape.py`` at d857490), kept verbatim so both are measured in one run.
+recalibration (``refine/shape.py`` at d857490), kept so both are measured in one run.  Its
+fill and pyramid are the current module's (``filled_shape``, ``ink_pyramid``: unchanged
+since); what differs is here: a blurred fill compared by soft IoU and a plain chamfer.
 
 A sketch distance that does not care about drawing style: compare the tree's *shape*.
 
@@ -32,11 +34,10 @@ import numpy as np
 from scipy import ndimage
 
 from refine.prepare import prepare_sketch
+from refine.shape import OUTLINE_WEIGHT, filled_shape, ink_pyramid, pyramid_distance
 
 __all__ = ["OUTLINE_WEIGHT", "ShapeTarget", "shape_distance"]
 
-OUTLINE_WEIGHT = 4.0  # one side-fraction of mean outline offset weighs as 4 IoU units
-CLOSE_RADIUS = 1 / 14  # of the side: gaps up to twice this close before the fill
 _DARK = 0.5
 
 
@@ -50,15 +51,8 @@ class _ShapeLevel:
 
 def _level(ink: np.ndarray) -> _ShapeLevel:
     side = ink.shape[0]
-    r = max(1, int(round(side * CLOSE_RADIUS)))
-    pad = r + 1  # near the border the fat brush must not touch the edge
-    # closing with a disk of radius r, by distance transforms (linear time at any r)
-    fat = ndimage.distance_transform_edt(~np.pad(ink, pad)) <= r
-    filled = ndimage.distance_transform_edt(ndimage.binary_fill_holes(fat)) > r
-    filled = filled[pad:-pad, pad:-pad]
-    filled |= ink
+    filled, outline = filled_shape(ink)
     soft = ndimage.gaussian_filter(filled.astype(np.float32), sigma=max(0.5, side / 96))
-    outline = filled & ~ndimage.binary_erosion(filled, border_value=0)
     n = int(outline.sum())
     dist = (
         ndimage.distance_transform_edt(~outline).astype(np.float32)
@@ -78,15 +72,7 @@ class ShapeTarget:
     @classmethod
     def from_image(cls, img: Any, size: int = 128, scales: int = 3) -> ShapeTarget:
         f = prepare_sketch(img, size)
-        ink = f < _DARK
-        levels = []
-        for _ in range(scales):
-            levels.append(_level(ink))
-            s = ink.shape[0] // 2
-            if s < 16:
-                break
-            ink = ink[: 2 * s, : 2 * s].reshape(s, 2, s, 2).any(axis=(1, 3))
-        return cls(f, tuple(levels))
+        return cls(f, tuple(_level(x) for x in ink_pyramid(f < _DARK, scales)))
 
     @property
     def size(self) -> int:
@@ -98,10 +84,6 @@ class ShapeTarget:
 
 def _level_distance(a: _ShapeLevel, b: _ShapeLevel) -> float:
     side = a.soft.shape[0]
-    if a.n == 0 and b.n == 0:
-        return 0.0
-    if a.n == 0 or b.n == 0:
-        return 1.0 + OUTLINE_WEIGHT
     inter = float(np.minimum(a.soft, b.soft).sum())
     union = float(np.maximum(a.soft, b.soft).sum())
     iou = inter / union if union > 0 else 1.0
@@ -110,10 +92,7 @@ def _level_distance(a: _ShapeLevel, b: _ShapeLevel) -> float:
 
 
 def target_shape_distance(a: ShapeTarget, b: ShapeTarget) -> float:
-    if a.image.shape != b.image.shape:
-        raise ValueError(f"sketch sizes differ: {a.image.shape} vs {b.image.shape}")
-    terms = [_level_distance(x, y) for x, y in zip(a.levels, b.levels, strict=False)]
-    return float(np.mean(terms))
+    return pyramid_distance(a, b, _level_distance)
 
 
 def shape_distance(a: Any, b: Any, size: int = 128, scales: int = 3) -> float:

@@ -34,6 +34,7 @@ __all__ = ["NONTREE_KINDS", "SIZE", "TREE_SPECIES", "nontree_doodle", "tree_dood
 SIZE = 256
 
 Strokes = list[Stroke]
+Drawer = Callable[[np.random.Generator], Strokes]  # one kind of doodle, seeded
 
 
 # --------------------------------------------------------------------- shape helpers
@@ -381,26 +382,31 @@ def _envelope(rng: np.random.Generator) -> Strokes:
     return s
 
 
-_NONTREES: dict[str, Callable[[np.random.Generator], Strokes]] = {
-    "house": _house,
-    "car": _car,
-    "face": _face,
-    "cat": _cat,
-    "fish": _fish,
-    "bird": _bird,
-    "cup": _cup,
-    "word": _word,
-    "sun": _sun,
-    "flower": _flower,
-    "bicycle": _bicycle,
-    "chair": _chair,
-    "star": _star,
-    "heart": _heart,
-    "boat": _boat,
-    "person": _person,
-    "umbrella": _umbrella,
-    "envelope": _envelope,
-}
+def _by_name(*drawers: Drawer) -> dict[str, Drawer]:
+    """Drawers by what they draw: their name without the leading underscore."""
+    return {f.__name__.removeprefix("_"): f for f in drawers}
+
+
+_NONTREES = _by_name(
+    _house,
+    _car,
+    _face,
+    _cat,
+    _fish,
+    _bird,
+    _cup,
+    _word,
+    _sun,
+    _flower,
+    _bicycle,
+    _chair,
+    _star,
+    _heart,
+    _boat,
+    _person,
+    _umbrella,
+    _envelope,
+)
 
 #: What :func:`nontree_doodle` draws.  ``flower`` and ``umbrella`` (a stem under a head) are
 #: the hardest to tell from a tree.
@@ -462,6 +468,15 @@ def _inner_branches(
     return s
 
 
+def _crown_inside(
+    rng: np.random.Generator, branches: float, h: float, cy: float, rx: float, ry: float
+) -> Strokes:
+    """What is drawn inside a round crown (centre ``cy``, radii ``rx``, ``ry``) over a
+    trunk ``h`` tall: branches with probability ``branches``, then the extras."""
+    s = _inner_branches(rng, -h, rx, ry) if _chance(rng, branches) else []
+    return s + _crown_extras(rng, cy, rx, ry)
+
+
 def _crown_extras(rng: np.random.Generator, cy: float, rx: float, ry: float) -> Strokes:
     """What people add inside a round crown: a scribbled fill, or a few apples."""
     if _chance(rng, 0.2):  # scribbled in, back and forth
@@ -486,9 +501,7 @@ def _maple(rng: np.random.Generator) -> Strokes:
     s = _trunk(rng, h, _u(rng, 5, 9))
     bumps = int(rng.choice([0, 0, 8, 10, 12]))
     s.append(_outline(rng, _crown_loop(rng, 0, cy, rx, ry, bumps)))
-    if _chance(rng, 0.5):
-        s += _inner_branches(rng, -h, rx, ry)
-    return s + _crown_extras(rng, cy, rx, ry)
+    return s + _crown_inside(rng, 0.5, h, cy, rx, ry)
 
 
 def _oak(rng: np.random.Generator) -> Strokes:
@@ -507,9 +520,7 @@ def _oak(rng: np.random.Generator) -> Strokes:
         s.append(np.stack([xs, ys], 1))
     else:
         s.append(_outline(rng, _crown_loop(rng, 0, cy, rx, ry, int(rng.integers(6, 11)))))
-    if _chance(rng, 0.6):
-        s += _inner_branches(rng, -h, rx, ry)
-    return s + _crown_extras(rng, cy, rx, ry)
+    return s + _crown_inside(rng, 0.6, h, cy, rx, ry)
 
 
 def _cherry(rng: np.random.Generator) -> Strokes:
@@ -759,19 +770,9 @@ def _bonsai(rng: np.random.Generator) -> Strokes:
     return s
 
 
-_TREES: dict[str, Callable[[np.random.Generator], Strokes]] = {
-    "maple": _maple,
-    "pine": _pine,
-    "bonsai": _bonsai,
-    "palm": _palm,
-    "cherry": _cherry,
-    "fir": _fir,
-    "willow": _willow,
-    "oak": _oak,
-    "birch": _birch,
-    "poplar": _poplar,
-    "winter": _winter,
-}
+_TREES = _by_name(
+    _maple, _pine, _bonsai, _palm, _cherry, _fir, _willow, _oak, _birch, _poplar, _winter
+)
 
 #: The species :func:`tree_doodle` draws: the project's eleven (``weberpenn.species.SPECIES``).
 TREE_SPECIES: tuple[str, ...] = tuple(_TREES)

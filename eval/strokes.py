@@ -17,14 +17,19 @@ __all__ = ["Stroke", "arc", "branches", "bumpy", "curve", "jag", "line", "wobble
 Stroke = np.ndarray  # (n, 2) page pixels, x right, y down
 
 
-def wobble(pts: Stroke, rng: np.random.Generator, amp: float = 2.0, step: float = 6.0) -> Stroke:
-    """The stroke resampled every ``step`` px with a smooth sideways wobble of ``amp`` px."""
+def _resample(pts: Stroke, step: float) -> Stroke:
+    """The stroke's points every ``step`` px along it (at least its two ends)."""
     pts = np.asarray(pts, dtype=float)
     seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
     s = np.concatenate([[0.0], np.cumsum(seg)])
-    n = max(2, int(s[-1] / step) + 1)
-    t = np.linspace(0.0, s[-1], n)
-    out = np.stack([np.interp(t, s, pts[:, 0]), np.interp(t, s, pts[:, 1])], axis=1)
+    t = np.linspace(0.0, s[-1], max(2, int(s[-1] / step) + 1))
+    return np.stack([np.interp(t, s, pts[:, 0]), np.interp(t, s, pts[:, 1])], axis=1)
+
+
+def wobble(pts: Stroke, rng: np.random.Generator, amp: float = 2.0, step: float = 6.0) -> Stroke:
+    """The stroke resampled every ``step`` px with a smooth sideways wobble of ``amp`` px."""
+    out = _resample(pts, step)
+    n = len(out)
     k = np.ones(5) / 5
     noise = np.stack(
         [np.convolve(rng.normal(0, amp, n + 4), k, mode="valid") for _ in range(2)], axis=1
@@ -57,12 +62,7 @@ def bumpy(
 def jag(pts: Stroke, rng: np.random.Generator, amp: float = 2.0, step: float = 8.0) -> Stroke:
     """The stroke resampled every ``step`` px with independent ``amp`` px jumps at each
     point: the jaggy, shaky line of a mouse (no smoothing, unlike :func:`wobble`)."""
-    pts = np.asarray(pts, dtype=float)
-    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
-    s = np.concatenate([[0.0], np.cumsum(seg)])
-    n = max(2, int(s[-1] / step) + 1)
-    t = np.linspace(0.0, s[-1], n)
-    out = np.stack([np.interp(t, s, pts[:, 0]), np.interp(t, s, pts[:, 1])], axis=1)
+    out = _resample(pts, step)
     return out + rng.normal(0.0, amp, out.shape)
 
 

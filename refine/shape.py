@@ -46,6 +46,7 @@ prepares the input once and each candidate once).
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, Protocol
@@ -62,7 +63,10 @@ __all__ = [
     "OUTLINE_WEIGHT",
     "ShapeTarget",
     "embedding_distance",
+    "filled_shape",
+    "ink_pyramid",
     "line_distance",
+    "pyramid_distance",
     "shape_distance",
 ]
 
@@ -138,7 +142,9 @@ def _frame_by_height(ink: np.ndarray) -> np.ndarray:
     return ndimage.map_coordinates(ink.astype(np.float32), grid, order=1, cval=0.0) > 0.25
 
 
-def _level(ink: np.ndarray) -> _ShapeLevel:
+def filled_shape(ink: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``ink`` (bool) closed over gaps up to ``2 * CLOSE_RADIUS`` of the side and its
+    holes filled: (the filled silhouette, its outline pixels)."""
     side = ink.shape[0]
     r = max(1, int(round(side * CLOSE_RADIUS)))
     pad = r + 1  # near the border the fat brush must not touch the edge
@@ -146,7 +152,24 @@ def _level(ink: np.ndarray) -> _ShapeLevel:
     fat = ndimage.distance_transform_edt(~np.pad(ink, pad)) <= r
     filled = ndimage.distance_transform_edt(ndimage.binary_fill_holes(fat)) > r
     filled = filled[pad:-pad, pad:-pad] | ink
-    outline = filled & ~ndimage.binary_erosion(filled, border_value=0)
+    return filled, filled & ~ndimage.binary_erosion(filled, border_value=0)
+
+
+def ink_pyramid(ink: np.ndarray, scales: int) -> list[np.ndarray]:
+    """``ink`` and up to ``scales - 1`` halvings of it by 2x2 "any ink" pooling (coarser
+    levels close larger gaps), stopping before a level under 16 pixels."""
+    levels = []
+    for _ in range(scales):
+        levels.append(ink)
+        s = ink.shape[0] // 2
+        if s < 16:
+            break
+        ink = ink[: 2 * s, : 2 * s].reshape(s, 2, s, 2).any(axis=(1, 3))
+    return levels
+
+
+def _level(ink: np.ndarray) -> _ShapeLevel:
+    filled, outline = filled_shape(ink)
     n = int(outline.sum())
     if n == 0:
         return _ShapeLevel(np.zeros(ink.shape, np.float32), outline, 0)
@@ -176,15 +199,7 @@ class ShapeTarget:
         ink = fine.reshape(size, 2, size, 2).any(axis=(1, 3))
         if ink.any():
             ink = _frame_by_height(_drop_dust(ink))
-        top = ink
-        levels = []
-        for _ in range(scales):
-            levels.append(_level(ink))
-            s = ink.shape[0] // 2
-            if s < 16:
-                break
-            ink = ink[: 2 * s, : 2 * s].reshape(s, 2, s, 2).any(axis=(1, 3))
-        out = cls(f, top, tuple(levels))
+        out = cls(f, ink, tuple(_level(x) for x in ink_pyramid(ink, scales)))
         if embedder is not None:  # the network reads its own work size, whatever ours is
             seen = out if size == embedder.size else cls.from_image(img, embedder.size, scales)
             out = dataclasses.replace(out, embedding=np.asarray(embedder.embed(seen), np.float32))
@@ -222,12 +237,21 @@ class ShapeTarget:
         return target_shape_distance(self, other)
 
 
+def pyramid_distance(a: Any, b: Any, level_distance: Callable[[Any, Any], float]) -> float:
+    """The mean over two prepared sketches' pyramid levels (``a.levels``, items with ``n``
+    outline pixels) of ``level_distance``, which sees levels that both have an outline: a
+    level blank in both scores 0, one blank in one only ``1 + OUTLINE_WEIGHT``."""
+    if a.image.shape != b.image.shape:
+        raise ValueError(f"sketch sizes differ: {a.image.shape} vs {b.image.shape}")
+    terms = [
+        level_distance(x, y) if x.n and y.n else (0.0 if x.n == y.n else 1.0 + OUTLINE_WEIGHT)
+        for x, y in zip(a.levels, b.levels, strict=False)
+    ]
+    return float(np.mean(terms))
+
+
 def _level_distance(a: _ShapeLevel, b: _ShapeLevel) -> float:
     side = a.sdf.shape[0]
-    if a.n == 0 and b.n == 0:
-        return 0.0
-    if a.n == 0 or b.n == 0:
-        return 1.0 + OUTLINE_WEIGHT
     # a's outline seen from b (outside b > 0) and b's from a, with a's sign: an outline
     # drawn t pixels around the other gives t everywhere
     v = np.concatenate([b.sdf[a.outline], -a.sdf[b.outline]])
@@ -242,12 +266,9 @@ def _level_distance(a: _ShapeLevel, b: _ShapeLevel) -> float:
 
 
 def target_shape_distance(a: ShapeTarget, b: ShapeTarget) -> float:
-    if a.image.shape != b.image.shape:
-        raise ValueError(f"sketch sizes differ: {a.image.shape} vs {b.image.shape}")
     if (a.embedding is None) != (b.embedding is None):
         raise ValueError("one sketch has a learned embedding and the other has none")
-    terms = [_level_distance(x, y) for x, y in zip(a.levels, b.levels, strict=False)]
-    d = float(np.mean(terms))
+    d = pyramid_distance(a, b, _level_distance)
     if a.embedding is not None and b.embedding is not None:
         d += EMBED_WEIGHT * embedding_distance(a.embedding, b.embedding)
     return d

@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from .camera import Camera, Framing, check_size
-from .silhouette import Coverage, downsample, mesh_arrays
+from .camera import Camera, Framing
+from .silhouette import CoverageScene, mesh_arrays
 
 __all__ = ["RasterScene", "hit_mask"]
 
@@ -176,7 +176,7 @@ def _convex_runs(
     return row[keep], c0[keep].astype(np.int64), c1[keep].astype(np.int64)
 
 
-class RasterScene:
+class RasterScene(CoverageScene):
     """A tree's branch and leaf triangles, drawn by :func:`hit_mask` (no mitsuba); the
     branch tubes by their triangles facing the camera.
 
@@ -196,30 +196,10 @@ class RasterScene:
     def is_empty(self) -> bool:
         return all(p is None for p in self._parts)
 
-    def coverage(
-        self,
-        yaw: float = 0.0,
-        size: int = 256,
-        supersample: int = 2,
-        pitch: float = 0.0,
-        keep_hr: bool = False,
-        leaf_supersample: int | None = None,
-    ) -> Coverage:
-        """As :meth:`render.silhouette.TreeScene.coverage`, from :func:`hit_mask`."""
-        cam = Camera(self.framing, float(yaw), float(pitch))
-        size = check_size(size)
-        ss = int(supersample)
-        ss_leaf = ss if leaf_supersample is None else int(leaf_supersample)
-        if ss < 1 or ss_leaf < 1:
-            raise ValueError(f"supersample must be >= 1, got {supersample!r}, {leaf_supersample!r}")
-        hits = []
+    def _hit(self, part: int, cam: Camera, size: int, k: int) -> np.ndarray:
+        n = size * k
+        arrays = self._parts[part]
+        if arrays is None:
+            return np.zeros((n, n), bool)
         # tubes: their front half covers them; leaves are seen from both sides
-        for part, k, front in zip(self._parts, (ss, ss_leaf), (True, False), strict=True):
-            n = size * k
-            if part is None:
-                hits.append(np.zeros((n, n), bool))
-            else:
-                hits.append(hit_mask(*part, cam, n, front_only=front))
-        cov_b = downsample(hits[0].astype(np.float32), ss)
-        cov_l = downsample(hits[1].astype(np.float32), ss_leaf)
-        return Coverage(cov_b, cov_l, hits[0] if keep_hr else None)
+        return hit_mask(*arrays, cam, n, front_only=part == 0)

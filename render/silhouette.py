@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from .backend import LLVM_VARIANT, Backend, init_mitsuba
-from .camera import Camera, Framing
+from .camera import Camera, Framing, check_size
 
 log = logging.getLogger(__name__)
 
@@ -92,7 +92,42 @@ class Coverage:
         return 1.0 - self.branches, 1.0 - self.leaves
 
 
-class TreeScene:
+class CoverageScene:
+    """A tree's scene that draws silhouettes: ``framing`` and :meth:`coverage`, from how
+    the scene hits one of its parts (``_hit``)."""
+
+    framing: Framing
+
+    def _hit(self, part: int, cam: Camera, size: int, k: int) -> np.ndarray:
+        """``(size * k, size * k)`` bool: where rays, ``k x k`` per pixel, hit part 0
+        (the branches) or 1 (the leaves)."""
+        raise NotImplementedError
+
+    def coverage(
+        self,
+        yaw: float = 0.0,
+        size: int = 256,
+        supersample: int = 2,
+        pitch: float = 0.0,
+        keep_hr: bool = False,
+        leaf_supersample: int | None = None,
+    ) -> Coverage:
+        """Per-pixel coverage of branches (``supersample``^2 rays per pixel) and leaves
+        (``leaf_supersample``^2, default the same); ``keep_hr`` keeps the branch hit mask
+        at the supersampled resolution (for sub-pixel thinning)."""
+        cam = Camera(self.framing, float(yaw), float(pitch))
+        size = check_size(size)
+        ss = int(supersample)
+        ss_leaf = ss if leaf_supersample is None else int(leaf_supersample)
+        if ss < 1 or ss_leaf < 1:
+            raise ValueError(f"supersample must be >= 1, got {supersample!r}, {leaf_supersample!r}")
+        hits = [self._hit(0, cam, size, ss), self._hit(1, cam, size, ss_leaf)]
+        cov_b = downsample(hits[0].astype(np.float32), ss)
+        cov_l = downsample(hits[1].astype(np.float32), ss_leaf)
+        return Coverage(cov_b, cov_l, hits[0] if keep_hr else None)
+
+
+class TreeScene(CoverageScene):
     """A tree's mitsuba scenes, built once; render any yaw/pitch/size afterwards."""
 
     def __init__(
@@ -117,36 +152,15 @@ class TreeScene:
         return self._branches is None and self._leaves is None
 
     # ------------------------------------------------------------------ silhouettes
-    def coverage(
-        self,
-        yaw: float = 0.0,
-        size: int = 256,
-        supersample: int = 2,
-        pitch: float = 0.0,
-        keep_hr: bool = False,
-        leaf_supersample: int | None = None,
-    ) -> Coverage:
-        """Per-pixel coverage of branches (``supersample``^2 rays per pixel) and leaves
-        (``leaf_supersample``^2, default the same); ``keep_hr`` keeps the branch hit mask
-        at the supersampled resolution (for sub-pixel thinning)."""
-        cam = Camera(self.framing, float(yaw), float(pitch))
-        ss = int(supersample)
-        ss_leaf = ss if leaf_supersample is None else int(leaf_supersample)
-        size = int(size)
-        hits = []
-        for scene, k in ((self._branches, ss), (self._leaves, ss_leaf)):
-            n = size * k
-            if scene is None:
-                cam.rays(size, k)  # validates the arguments
-                hits.append(np.zeros((n, n), dtype=bool))
-            elif self.backend.variant == LLVM_VARIANT:
-                origins, direction = cam.rays(size, k)
-                hits.append(self._ray_test(scene, origins, direction, n))
-            else:
-                hits.append(self._render_scalar(scene, cam, n))
-        cov_b = downsample(hits[0].astype(np.float32), ss)
-        cov_l = downsample(hits[1].astype(np.float32), ss_leaf)
-        return Coverage(cov_b, cov_l, hits[0] if keep_hr else None)
+    def _hit(self, part: int, cam: Camera, size: int, k: int) -> np.ndarray:
+        scene = (self._branches, self._leaves)[part]
+        n = size * k
+        if scene is None:
+            return np.zeros((n, n), dtype=bool)
+        if self.backend.variant == LLVM_VARIANT:
+            origins, direction = cam.rays(size, k)
+            return self._ray_test(scene, origins, direction, n)
+        return self._render_scalar(scene, cam, n)
 
     def _ray_test(self, scene: Any, origins: np.ndarray, direction: np.ndarray, n: int) -> Any:
         mi = self._mi

@@ -133,6 +133,23 @@ def _dist_to(mask: np.ndarray) -> np.ndarray:
     return ndimage.distance_transform_edt(~mask).astype(np.float32)
 
 
+def _along_lines(lines: np.ndarray, width: np.ndarray | float) -> np.ndarray:
+    """Ink of strokes ``width`` px wide along the pixels of ``lines`` (a one-pixel mask)."""
+    return _stroke(_dist_to(lines), width)
+
+
+def _components(mask: np.ndarray, eight: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Labels of a mask's connected parts (``eight``: diagonal neighbours connect) and
+    each part's size in pixels (part ``i`` is label ``i + 1``)."""
+    lab, k = ndimage.label(mask, structure=np.ones((3, 3)) if eight else None)
+    return lab, ndimage.sum_labels(mask, lab, index=np.arange(1, k + 1))
+
+
+def _keep(lab: np.ndarray, sel: np.ndarray) -> np.ndarray:
+    """The pixels of the parts ``sel`` picks (a boolean per part of :func:`_components`)."""
+    return np.isin(lab, np.flatnonzero(sel) + 1)
+
+
 def _opening(mask: np.ndarray, radius: float) -> np.ndarray:
     """The parts of ``mask`` at least ``2 * radius`` px wide (opening by a disc)."""
     if radius <= 0 or not mask.any():
@@ -171,6 +188,29 @@ def _finish(ink: np.ndarray, size: int, paper: np.ndarray | float = 1.0) -> np.n
     return np.round(np.clip(_area_resize(img, size), 0.0, 1.0) * 255.0).astype(np.uint8)
 
 
+def _contours(mask: np.ndarray) -> list[np.ndarray]:
+    """A mask's closed outlines, each ``(k, 2)`` row/column points (padded so that parts
+    touching the border close too)."""
+    from skimage import measure
+
+    return [c - 1.0 for c in measure.find_contours(np.pad(mask, 1).astype(np.float32), 0.5)]
+
+
+def _arc_length(c: np.ndarray) -> np.ndarray:
+    """The length along a contour at each of its points (0 at the first)."""
+    return np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(c, axis=0).T))])
+
+
+def _along(c: np.ndarray, arc: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """The points of contour ``c`` at lengths ``at`` along it (``arc``: its arc length)."""
+    return np.stack([np.interp(at, arc, c[:, 0]), np.interp(at, arc, c[:, 1])], axis=1)
+
+
+def _pixels(pts: np.ndarray, n: int) -> np.ndarray:
+    """Row/column points as whole pixel indices on an ``n``-pixel page."""
+    return np.clip(np.round(pts).astype(int), 0, n - 1)
+
+
 @dataclass(frozen=True)
 class _Geometry:
     """What the styles draw from: masks and distance fields at work size."""
@@ -190,11 +230,9 @@ class _Geometry:
         blur = ndimage.gaussian_filter(self.leaves.astype(np.float32), sigma_px * self.s)
         m = blur >= level
         m = ndimage.binary_fill_holes(m)
-        lab, k = ndimage.label(m)
-        if k > 1:  # specks far from the crown are not drawn
-            areas = ndimage.sum_labels(m, lab, index=np.arange(1, k + 1))
-            keep = np.flatnonzero(areas >= 0.02 * areas.max()) + 1
-            m = np.isin(lab, keep)
+        lab, areas = _components(m)
+        if len(areas) > 1:  # specks far from the crown are not drawn
+            m = _keep(lab, areas >= 0.02 * areas.max())
         return m
 
     def main_branches(self, min_width_px: float) -> np.ndarray:
@@ -203,11 +241,9 @@ class _Geometry:
         wide = self.skeleton & (self.radius * 2.0 >= min_width_px * self.s)
         if not wide.any():
             return wide
-        lab, k = ndimage.label(wide, structure=np.ones((3, 3)))
-        if k > 1:
-            sizes = ndimage.sum_labels(wide, lab, index=np.arange(1, k + 1))
-            keep = np.flatnonzero(sizes >= max(4.0 * self.s, 0.05 * sizes.max())) + 1
-            wide = np.isin(lab, keep)
+        lab, sizes = _components(wide, eight=True)
+        if len(sizes) > 1:
+            wide = _keep(lab, sizes >= max(4.0 * self.s, 0.05 * sizes.max()))
         return wide
 
 
@@ -236,8 +272,58 @@ def _skeleton_strokes(
         sel = skel & (w >= lo * g.s) & (w < hi * g.s)
         if sel.any():
             width = float(np.median(w[sel]))
-            ink = np.maximum(ink, _stroke(_dist_to(sel), width))
+            ink = np.maximum(ink, _along_lines(sel, width))
     return ink
+
+
+@dataclass
+class _Drawing:
+    """One drawing in progress: what it is drawn from, the hand's line width (drawn
+    first from ``rng``, so every style's later choices keep their place in the stream)
+    and the ink so far."""
+
+    g: _Geometry
+    rng: np.random.Generator
+    lw: float
+    ink: np.ndarray
+
+    @classmethod
+    def start(
+        cls, sil: Silhouettes, rng: np.random.Generator, line_px: tuple[float, float]
+    ) -> _Drawing:
+        g = _geometry(sil)
+        return cls(g, rng, rng.uniform(*line_px) * g.s, np.zeros((g.n, g.n), np.float32))
+
+    def crown(self, sigma_px: tuple[float, float], level: float = 0.12) -> np.ndarray:
+        """The foliage region, blurred by a width drawn from ``sigma_px``."""
+        return self.g.crown(self.rng.uniform(*sigma_px), level)
+
+    def add(self, layer: np.ndarray | float) -> None:
+        self.ink = np.maximum(self.ink, layer)
+
+    def done(self, size: int, wobble_px: tuple[float, float], sigma_px: float) -> np.ndarray:
+        """The hand's wobble (a drawn amount, features of ``sigma_px``), then the paper."""
+        s = self.g.s
+        return _finish(
+            _warp(self.ink, self.rng, self.rng.uniform(*wobble_px) * s, sigma_px * s), size
+        )
+
+
+def _wave(
+    rng: np.random.Generator, n: int, sigma: float, amp_px: tuple[float, float], s: float
+) -> np.ndarray:
+    """A smooth offset field (features of ``sigma`` px, size drawn from ``amp_px``): added
+    to a distance field, it makes a drawn outline wavy."""
+    return _noise(rng, n, sigma) * rng.uniform(*amp_px) * s
+
+
+def _thick_lines(mask: np.ndarray, radius: float, lw: float) -> tuple[np.ndarray, np.ndarray]:
+    """The parts of ``mask`` at least ``2 * radius`` wide drawn as two lines (their edges),
+    and the pixels next to them, where single strokes of the thinner parts stop."""
+    thick = _opening(mask, radius)
+    if not thick.any():
+        return np.zeros(mask.shape, np.float32), np.zeros(mask.shape, bool)
+    return _stroke(_sdf(thick), lw), ndimage.binary_dilation(thick, iterations=2)
 
 
 # --------------------------------------------------------------------------- the styles
@@ -264,18 +350,15 @@ def pen(
     wobble_px: tuple[float, float] = (0.5, 1.5),
 ) -> np.ndarray:
     """Clean pen: wavy closed crown contour, trunk and main branches as strokes."""
-    g = _geometry(sil)
-    s = g.s
-    lw = rng.uniform(*line_px) * s
-    ink = np.zeros((g.n, g.n), np.float32)
-    crown = g.crown(rng.uniform(*crown_sigma_px))
+    d = _Drawing.start(sil, rng, line_px)
+    n, s = d.g.n, d.g.s
+    crown = d.crown(crown_sigma_px)
     if crown.any():
-        wave = _noise(rng, g.n, rng.uniform(*wave_sigma_px) * s) * rng.uniform(*wave_px) * s
-        width = lw * (1.0 + 0.25 * _noise(rng, g.n, 12 * s))
-        ink = np.maximum(ink, _stroke(_sdf(crown) + wave, width))
-    ink = np.maximum(ink, _branch_lines(g, rng, lw, twig_px, two_line_trunk))
-    ink = _warp(ink, rng, rng.uniform(*wobble_px) * s, 14 * s)
-    return _finish(ink, size)
+        wave = _wave(rng, n, rng.uniform(*wave_sigma_px) * s, wave_px, s)
+        width = d.lw * (1.0 + 0.25 * _noise(rng, n, 12 * s))
+        d.add(_stroke(_sdf(crown) + wave, width))
+    d.add(_branch_lines(d.g, rng, d.lw, twig_px, two_line_trunk))
+    return d.done(size, wobble_px, 14)
 
 
 def _branch_lines(
@@ -286,10 +369,8 @@ def _branch_lines(
     s = g.s
     main = g.main_branches(twig_px)
     if rng.random() < two_line_trunk:  # thick parts as two lines, thin ones as strokes
-        thick = _opening(g.branches, 2.5 * s)
-        ink = _stroke(_sdf(thick), lw)
-        main = main & ~ndimage.binary_dilation(thick, iterations=2)
-        return np.maximum(ink, _skeleton_strokes(g, main, (0.0, 2.0, 3.5), 1.0, lw / s))
+        ink, near = _thick_lines(g.branches, 2.5 * s, lw)
+        return np.maximum(ink, _skeleton_strokes(g, main & ~near, (0.0, 2.0, 3.5), 1.0, lw / s))
     return _skeleton_strokes(g, main, (0.0, 2.0, 3.5, 6.0, 10.0), 1.0, lw / s)
 
 
@@ -306,12 +387,9 @@ def bare(
     """A bare (winter) tree: no foliage at all, the trunk and the branches down to the
     twigs as pen strokes (the thick parts often as two lines), as people draw a tree's
     branching when they leave out its leaves."""
-    g = _geometry(sil)
-    s = g.s
-    lw = rng.uniform(*line_px) * s
-    ink = _branch_lines(g, rng, lw, rng.uniform(*twig_px), two_line_trunk)
-    ink = _warp(ink, rng, rng.uniform(*wobble_px) * s, 14 * s)
-    return _finish(ink, size)
+    d = _Drawing.start(sil, rng, line_px)
+    d.add(_branch_lines(d.g, rng, d.lw, rng.uniform(*twig_px), two_line_trunk))
+    return d.done(size, wobble_px, 14)
 
 
 def cloud(
@@ -326,44 +404,35 @@ def cloud(
     wobble_px: tuple[float, float] = (0.5, 1.2),
 ) -> np.ndarray:
     """Architect's cloud: scalloped crown outline, trunk as two lines."""
-    from skimage import measure
-
-    g = _geometry(sil)
-    s = g.s
-    lw = rng.uniform(*line_px) * s
-    ink = np.zeros((g.n, g.n), np.float32)
-    crown = g.crown(rng.uniform(*crown_sigma_px))
+    d = _Drawing.start(sil, rng, line_px)
+    g, s, lw = d.g, d.g.s, d.lw
+    crown = d.crown(crown_sigma_px)
     cloud_mask = crown
     if crown.any():
         r0 = rng.uniform(*scallop_px) * s
         radii = (0.75 * r0, r0, 1.3 * r0)
         centres = [np.zeros((g.n, g.n), bool) for _ in radii]
-        for c in measure.find_contours(np.pad(crown, 1).astype(np.float32), 0.5):
-            c = c - 1.0
-            seg = np.hypot(*np.diff(c, axis=0).T)
-            arc = np.concatenate([[0.0], np.cumsum(seg)])
+        for c in _contours(crown):
+            arc = _arc_length(c)
             if arc[-1] < 2 * r0:
                 continue
             step = r0 * rng.uniform(1.5, 1.8)
-            at = np.arange(rng.uniform(0, step), arc[-1], step)
-            pts = np.stack([np.interp(at, arc, c[:, 0]), np.interp(at, arc, c[:, 1])], axis=1)
-            pts = np.clip(np.round(pts).astype(int), 0, g.n - 1)
+            pts = _pixels(_along(c, arc, np.arange(rng.uniform(0, step), arc[-1], step)), g.n)
             which = rng.integers(0, len(radii), len(pts))
             for k in range(len(radii)):
                 sel = pts[which == k]
                 centres[k][sel[:, 0], sel[:, 1]] = True
         for k, r in enumerate(radii):  # discs on the outline: the union bulges in arcs
             cloud_mask = cloud_mask | (_dist_to(centres[k]) <= r)
-        ink = np.maximum(ink, _stroke(_sdf(cloud_mask), lw))
+        d.add(_stroke(_sdf(cloud_mask), lw))
     trunk = _opening(g.branches, 1.5 * s) & ~cloud_mask  # below the cloud: two lines
     if trunk.any():
         trunk_sdf = _sdf(trunk | (g.branches & ndimage.binary_dilation(cloud_mask, iterations=3)))
-        ink = np.maximum(ink, _stroke(trunk_sdf, lw) * ~ndimage.binary_erosion(cloud_mask))
+        d.add(_stroke(trunk_sdf, lw) * ~ndimage.binary_erosion(cloud_mask))
     if rng.random() < inner_branches:
         main = g.main_branches(2.0) & cloud_mask
-        ink = np.maximum(ink, _skeleton_strokes(g, main, (0.0, 3.0), 0.6, lw / s))
-    ink = _warp(ink, rng, rng.uniform(*wobble_px) * s, 16 * s)
-    return _finish(ink, size)
+        d.add(_skeleton_strokes(g, main, (0.0, 3.0), 0.6, lw / s))
+    return d.done(size, wobble_px, 16)
 
 
 def scribble(
@@ -380,11 +449,9 @@ def scribble(
     wobble_px: tuple[float, float] = (0.5, 1.5),
 ) -> np.ndarray:
     """Scribbled foliage: looping lines fill the crown; trunk and branches filled."""
-    g = _geometry(sil)
-    s = g.s
-    lw = rng.uniform(*line_px) * s
-    ink = np.zeros((g.n, g.n), np.float32)
-    crown = g.crown(rng.uniform(*crown_sigma_px))
+    d = _Drawing.start(sil, rng, line_px)
+    g, s, lw = d.g, d.g.s, d.lw
+    crown = d.crown(crown_sigma_px)
     if crown.any():
         edge = _sdf(crown) + _noise(rng, g.n, 6 * s) * 2.0 * s
         # level lines of a smooth random field look like a hand's loops
@@ -392,15 +459,13 @@ def scribble(
         gy, gx = np.gradient(field)
         dist = np.abs(field - np.round(field)) / np.maximum(np.hypot(gy, gx), 1e-3)
         holes = _noise(rng, g.n, 10 * s) < -(2.0 * rng.uniform(*coverage) - 1.0) * 1.5
-        fill = _stroke(dist, lw) * np.clip(edge, 0.0, 1.0) * ~holes
-        ink = np.maximum(ink, fill)
+        d.add(_stroke(dist, lw) * np.clip(edge, 0.0, 1.0) * ~holes)
         if rng.random() < outline:
-            ink = np.maximum(ink, _stroke(edge, lw))
+            d.add(_stroke(edge, lw))
     trunk = g.branches & (~crown | (g.radius * 2.0 >= 3.0 * s))
-    ink = np.maximum(ink, np.clip(g.branch_sdf + 0.5, 0.0, 1.0) * trunk)
-    ink = np.maximum(ink, _skeleton_strokes(g, g.main_branches(1.0) & ~crown, (0.0,), 1.0, lw / s))
-    ink = _warp(ink, rng, rng.uniform(*wobble_px) * s, 14 * s)
-    return _finish(ink, size)
+    d.add(np.clip(g.branch_sdf + 0.5, 0.0, 1.0) * trunk)
+    d.add(_skeleton_strokes(g, g.main_branches(1.0) & ~crown, (0.0,), 1.0, lw / s))
+    return d.done(size, wobble_px, 14)
 
 
 def pencil(
@@ -418,30 +483,23 @@ def pencil(
     wave_px: tuple[float, float] = (1.0, 2.5),
 ) -> np.ndarray:
     """Light pencil: thin, broken, sometimes doubled lines on grey or off-white paper."""
-    g = _geometry(sil)
-    s = g.s
-    n = g.n
-    lw = rng.uniform(*line_px) * s
-    crown = g.crown(rng.uniform(3.0, 6.0))
+    d = _Drawing.start(sil, rng, line_px)
+    g, s, n, lw = d.g, d.g.s, d.g.n, d.lw
+    crown = d.crown((3.0, 6.0))
     crown_sdf = _sdf(crown) if crown.any() else None
-    thick = _opening(g.branches, 2.0 * s)
-    thick_sdf = _sdf(thick) if thick.any() else None
-    main = g.main_branches(1.2) & ~ndimage.binary_dilation(thick, iterations=2)
-    ink = np.zeros((n, n), np.float32)
+    thick, near = _thick_lines(g.branches, 2.0 * s, lw)
+    limbs = _skeleton_strokes(g, g.main_branches(1.2) & ~near, (0.0, 2.5), 0.6, lw / s)
+    tree = np.maximum(thick, limbs)  # the same in every pass: only the hand moves
     passes = 2 if rng.random() < double else 1
     for _ in range(passes):  # a second pass a little off the first: a sketchy line
-        layer = np.zeros((n, n), np.float32)
+        layer = tree
         if crown_sdf is not None:
-            wave = _noise(rng, n, 8 * s) * rng.uniform(*wave_px) * s
-            layer = np.maximum(layer, _stroke(crown_sdf + wave, lw))
-        if thick_sdf is not None:
-            layer = np.maximum(layer, _stroke(thick_sdf, lw))
-        layer = np.maximum(layer, _skeleton_strokes(g, main, (0.0, 2.5), 0.6, lw / s))
+            layer = np.maximum(layer, _stroke(crown_sdf + _wave(rng, n, 8 * s, wave_px, s), lw))
         layer = _warp(layer, rng, rng.uniform(0.6, 1.5) * s, 12 * s)
         broken = _noise(rng, n, 3 * s) > ndtri(rng.uniform(*gaps))  # that fraction lifts
-        ink = np.maximum(ink, layer * broken * rng.uniform(0.7, 1.0))
+        d.add(layer * broken * rng.uniform(0.7, 1.0))
     pressure = np.clip(1.0 + 0.25 * _noise(rng, n, 20 * s), 0.5, 1.5)
-    ink = ink * pressure * rng.uniform(*darkness)
+    ink = d.ink * pressure * rng.uniform(*darkness)
     yy, xx = np.mgrid[0:n, 0:n].astype(np.float32) / n
     light = rng.uniform(*paper) + rng.uniform(*shading) * (
         rng.uniform(-1, 1) * (yy - 0.5) + rng.uniform(-1, 1) * (xx - 0.5)
@@ -462,18 +520,13 @@ def felt(
     wobble_px: tuple[float, float] = (0.8, 2.0),
 ) -> np.ndarray:
     """Felt tip: a thick smooth crown outline, the trunk and a few limbs as thick strokes."""
-    g = _geometry(sil)
-    s = g.s
-    lw = rng.uniform(*line_px) * s
-    ink = np.zeros((g.n, g.n), np.float32)
-    crown = g.crown(rng.uniform(*crown_sigma_px), level=0.2)
+    d = _Drawing.start(sil, rng, line_px)
+    g, s, lw = d.g, d.g.s, d.lw
+    crown = d.crown(crown_sigma_px, level=0.2)
     if crown.any():
-        wave = _noise(rng, g.n, 14 * s) * rng.uniform(0.5, 2.0) * s
-        ink = np.maximum(ink, _stroke(_sdf(crown) + wave, lw))
-    main = g.main_branches(branch_px)
-    ink = np.maximum(ink, _skeleton_strokes(g, main, (0.0, 8.0), 1.0, 0.8 * lw / s))
-    ink = _warp(ink, rng, rng.uniform(*wobble_px) * s, 18 * s)
-    return _finish(ink, size)
+        d.add(_stroke(_sdf(crown) + _wave(rng, g.n, 14 * s, (0.5, 2.0), s), lw))
+    d.add(_skeleton_strokes(g, g.main_branches(branch_px), (0.0, 8.0), 1.0, 0.8 * lw / s))
+    return d.done(size, wobble_px, 18)
 
 
 def _polylines(n: int, lines: list[np.ndarray]) -> np.ndarray:
@@ -482,7 +535,7 @@ def _polylines(n: int, lines: list[np.ndarray]) -> np.ndarray:
 
     mask = np.zeros((n, n), bool)
     for pts in lines:
-        p = np.clip(np.round(pts).astype(int), 0, n - 1)
+        p = _pixels(pts, n)
         for (r0, c0), (r1, c1) in zip(p[:-1], p[1:], strict=True):
             rr, cc = line(r0, c0, r1, c1)
             mask[rr, cc] = True
@@ -491,18 +544,13 @@ def _polylines(n: int, lines: list[np.ndarray]) -> np.ndarray:
 
 def _outline(mask: np.ndarray) -> np.ndarray:
     """The longest closed contour of a mask, ``(k, 2)``, as arc-length samples."""
-    from skimage import measure
-
-    contours = measure.find_contours(np.pad(mask, 1).astype(np.float32), 0.5)
-    return max(contours, key=len) - 1.0
+    return max(_contours(mask), key=len)
 
 
 def _resample(c: np.ndarray, k: int, start: float) -> np.ndarray:
     """``k`` points spaced evenly along a closed contour, from ``start`` (0..1) of its length."""
-    seg = np.hypot(*np.diff(c, axis=0).T)
-    arc = np.concatenate([[0.0], np.cumsum(seg)])
-    at = (start + np.arange(k) / k) % 1.0 * arc[-1]
-    return np.stack([np.interp(at, arc, c[:, 0]), np.interp(at, arc, c[:, 1])], axis=1)
+    arc = _arc_length(c)
+    return _along(c, arc, (start + np.arange(k) / k) % 1.0 * arc[-1])
 
 
 def _crown_lines(
@@ -567,12 +615,9 @@ def doodle(
 ) -> np.ndarray:
     """A quick doodle: polyline, lollipop, zigzag or looped crown, or thin foliage as
     single strokes; the trunk as two lines or one; one even line width."""
-    g = _geometry(sil)
-    s = g.s
-    lw = rng.uniform(*line_px) * s
-    n = g.n
-    ink = np.zeros((n, n), np.float32)
-    crown = g.crown(rng.uniform(3.0, 6.0))
+    d = _Drawing.start(sil, rng, line_px)
+    g, s, n, lw = d.g, d.g.s, d.g.n, d.lw
+    crown = d.crown((3.0, 6.0))
     leaf_px = float(g.leaves.sum())
     thin = sil.foliage_strokes
     if crown.any() and leaf_px > 0:
@@ -591,31 +636,26 @@ def doodle(
             from skimage.morphology import skeletonize
 
             strokes = skeletonize(g.leaves) & ~ndimage.binary_dilation(g.branches, iterations=1)
-            lab, k = ndimage.label(strokes, structure=np.ones((3, 3)))
-            if k:  # specks of a stroke are not drawn
-                sizes = ndimage.sum_labels(strokes, lab, index=np.arange(1, k + 1))
-                strokes = np.isin(lab, np.flatnonzero(sizes >= 6 * s) + 1)
-            ink = np.maximum(ink, _stroke(_dist_to(strokes), lw))
+            lab, sizes = _components(strokes, eight=True)
+            strokes = _keep(lab, sizes >= 6 * s)  # specks of a stroke are not drawn
+            d.add(_along_lines(strokes, lw))
         else:
-            lines = _crown_lines(crown, rng, s, mode, open_crown)
-            ink = np.maximum(ink, _stroke(_dist_to(_polylines(n, lines)), lw))
+            d.add(_along_lines(_polylines(n, _crown_lines(crown, rng, s, mode, open_crown)), lw))
     else:
         crown = np.zeros((n, n), bool)
     below = g.branches & ~crown
     if rng.random() < two_line_trunk:
         # the trunk as two lines (a bare tree: its thickest limbs only)
-        thick = _opening(below, (1.5 if leaf_px else 3.0) * s)
-        if thick.any():
-            ink = np.maximum(ink, _stroke(_sdf(thick), lw))
-            below = below & ~ndimage.binary_dilation(thick, iterations=2)
+        thick, near = _thick_lines(below, (1.5 if leaf_px else 3.0) * s, lw)
+        d.add(thick)
+        below = below & ~near
     if leaf_px == 0:  # a bare tree: thinner lines, the main limbs only
         lw = min(lw, rng.uniform(*bare_line_px) * s)
     main = g.main_branches(2.5 if leaf_px == 0 else 2.0)
     keep = main & ~crown if leaf_px and rng.random() >= inner_branches else main
     keep = keep & (below | crown | (leaf_px == 0))
-    ink = np.maximum(ink, _stroke(_dist_to(keep), lw) if keep.any() else 0.0)
-    ink = _warp(ink, rng, rng.uniform(*wobble_px) * s, 16 * s)
-    return _finish(ink, size)
+    d.add(_along_lines(keep, lw))
+    return d.done(size, wobble_px, 16)
 
 
 STYLES: dict[str, StyleFn] = {

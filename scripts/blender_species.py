@@ -15,25 +15,19 @@ labels the tiles.  Runs only inside Blender; not part of the test suite.
 
 import ast
 import json
+import os
 import sys
 
-import addon_utils  # type: ignore[import-not-found]
 import bpy  # type: ignore[import-not-found]
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # Blender adds no script folder
+from blender_scene import clear, enable_sapling  # noqa: E402
+
 with open(sys.argv[sys.argv.index("--") + 1], encoding="utf-8") as _fh:
     jobs = json.load(_fh)
-addon_utils.enable("add_curve_sapling", default_set=True)
+enable_sapling()
 GAP = 0.08  # of the widest tree's width, between two slots
-
-
-def clear() -> None:
-    for o in list(bpy.data.objects):
-        bpy.data.objects.remove(o)
-    for c in list(bpy.data.curves):
-        bpy.data.curves.remove(c)
-    for m in list(bpy.data.meshes):
-        bpy.data.meshes.remove(m)
 
 
 def linear(srgb: list) -> tuple:

@@ -15,24 +15,18 @@ the leaves.  Writes a JSON list to OUT.json.  Runs only inside Blender
 
 import ast
 import json
+import os
 import sys
 import time
 
-import addon_utils  # type: ignore[import-not-found]
 import bpy  # type: ignore[import-not-found]
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # Blender adds no script folder
+from blender_scene import clear, enable_sapling  # noqa: E402
 
 argv = sys.argv[sys.argv.index("--") + 1 :]
 out, repeats, presets = argv[0], int(argv[1]), argv[2:]
-addon_utils.enable("add_curve_sapling", default_set=True)
-
-
-def clear() -> None:
-    for o in list(bpy.data.objects):
-        bpy.data.objects.remove(o)
-    for c in list(bpy.data.curves):
-        bpy.data.curves.remove(c)
-    for m in list(bpy.data.meshes):
-        bpy.data.meshes.remove(m)
+enable_sapling()
 
 
 def box(points: list) -> list | None:

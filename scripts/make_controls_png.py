@@ -13,7 +13,6 @@ the middle where it has one), grown by ``grow_with_controls`` and rendered in co
 from __future__ import annotations
 
 import argparse
-import io
 import sys
 from pathlib import Path
 from typing import Any
@@ -26,6 +25,7 @@ sys.path.insert(0, str(ROOT))
 
 from render.camera import Framing  # noqa: E402
 from render.sketch import SketchRenderer  # noqa: E402
+from scripts.docs_png import write_palette_png  # noqa: E402
 from weberpenn import species  # noqa: E402
 from weberpenn.controls import CONTROLS, Control, current, grow_with_controls  # noqa: E402
 
@@ -114,15 +114,7 @@ def main() -> None:
     ap.add_argument("--out", default=str(ROOT / "docs" / "controls.png"))
     args = ap.parse_args()
     grid = make_grid(args.species, args.seed, args.tile, args.trunk_species)
-    buf = io.BytesIO()
-    grid.quantize(colors=128, method=Image.Quantize.MEDIANCUT).save(
-        buf, format="PNG", optimize=True
-    )
-    out = Path(args.out)
-    tmp = out.with_suffix(".png.tmp")
-    tmp.write_bytes(buf.getvalue())
-    tmp.replace(out)
-    print(f"wrote {out} ({out.stat().st_size // 1024} KB)")
+    write_palette_png(grid, args.out)
 
 
 if __name__ == "__main__":

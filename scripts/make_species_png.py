@@ -19,7 +19,6 @@ is refused as stale).
 from __future__ import annotations
 
 import argparse
-import io
 import json
 import subprocess
 import sys
@@ -34,6 +33,7 @@ sys.path.insert(0, str(ROOT))
 
 from benchmarks.compare_sapling import TOLERANCE, compare_species, dims  # noqa: E402
 from benchmarks.sapling_run import SaplingError, recorded, sizes, write_untouched  # noqa: E402
+from scripts.docs_png import write_palette_png  # noqa: E402
 from weberpenn import build_mesh, grow, species  # noqa: E402
 from weberpenn.export import save_sapling_preset  # noqa: E402
 from weberpenn.textures import colours  # noqa: E402
@@ -161,15 +161,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         tiles = render_tiles(args.blender, Path(tmp), args.tile, round(args.tile * 0.82))
         grid = make_grid(tiles, record, args.cols)
-    buf = io.BytesIO()
-    grid.quantize(colors=128, method=Image.Quantize.MEDIANCUT).save(
-        buf, format="PNG", optimize=True
-    )
-    out = Path(args.out)
-    tmp_out = out.with_suffix(".png.tmp")
-    tmp_out.write_bytes(buf.getvalue())
-    tmp_out.replace(out)
-    print(f"wrote {out} ({out.stat().st_size // 1024} KB)")
+    write_palette_png(grid, args.out)
     return 0
 
 

@@ -24,6 +24,7 @@ class PalmEstimator:
 
 
 palm_estimator = PalmEstimator()
+FINISHED = ("done", "failed", "cancelled", "expired")  # a job's end states
 
 
 class LeaningPalmEstimator:
@@ -88,8 +89,27 @@ def serve(app: Any, log_level: str = "warning") -> Iterator[str]:
         sock.close()
 
 
+@contextlib.contextmanager
+def http_service(config: Any) -> Iterator[Any]:
+    """A real server of ``config``'s app (see :func:`serve`) and an httpx client on it."""
+    import httpx
+
+    from treesketch.service import create_app
+
+    with serve(create_app(config)) as url, httpx.Client(base_url=url, timeout=30) as http:
+        yield http
+
+
+def submit(http: Any, sketch: bytes, **fields: str) -> str:
+    """``POST /jobs`` (an httpx client or a TestClient) with ``sketch`` and form ``fields``;
+    the new job's id."""
+    r = http.post("/jobs", files={"sketch": ("s.png", sketch, "image/png")}, data=fields)
+    assert r.status_code == 202, r.text
+    return r.json()["id"]
+
+
 def wait_for(http: Any, job_id: str, test: Callable[[dict], bool], timeout: float = 120.0) -> dict:
-    """Poll ``GET /jobs/{job_id}`` (an httpx client on a real server) until ``test`` holds."""
+    """Poll ``GET /jobs/{job_id}`` (an httpx client or a TestClient) until ``test`` holds."""
     deadline = time.monotonic() + timeout
     body: dict = {}
     while time.monotonic() < deadline:
@@ -105,4 +125,25 @@ def refining(body: dict) -> bool:
 
 
 def finished(body: dict) -> bool:
-    return body["state"] in ("done", "failed", "cancelled")
+    return body["state"] in FINISHED
+
+
+def check_broken_estimator_is_reported(app: Any, sketch: bytes) -> None:
+    """``app``'s estimator cannot load: /health turns to an error naming it once the pool
+    has tried ``LOAD_ATTEMPTS`` times, and a new job is refused (503)."""
+    from fastapi.testclient import TestClient
+
+    from treesketch.service.poolbase import LOAD_ATTEMPTS
+
+    pool = app.state.pool
+    pool.respawn_backoff = 0.1
+    with TestClient(app, base_url="http://127.0.0.1") as c:
+        deadline = time.monotonic() + 120
+        while c.get("/health").json()["status"] == "ok":
+            assert time.monotonic() < deadline, pool.status()
+            time.sleep(0.2)
+        h = c.get("/health").json()
+        assert h["status"] == "error" and pool.estimator in h["error"]
+        assert pool.replaced == LOAD_ATTEMPTS - 1
+        r = c.post("/jobs", files={"sketch": ("s.png", sketch, "image/png")})
+        assert r.status_code == 503 and "no worker can start" in r.json()["detail"]

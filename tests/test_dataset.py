@@ -3,15 +3,11 @@
 from __future__ import annotations
 
 import json
-import os
-import signal
-import subprocess
-import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
+from build_helpers import kill_and_resume_build
 from PIL import Image
 from typer.testing import CliRunner
 
@@ -212,44 +208,8 @@ def test_failing_tree_is_logged_and_the_run_goes_on(tmp_path, monkeypatch):
 @pytest.mark.slow
 def test_resumes_after_being_killed(tmp_path):
     out = tmp_path / "killed"
-    cmd = [
-        sys.executable,
-        "-m",
-        "treesketch.cli",
-        "dataset",
-        "build",
-        "--out",
-        str(out),
-        "--trees-per-species",
-        "2",
-        "--views",
-        "front,left",
-        "--size",
-        "48",
-        "--workers",
-        "2",
-        "--no-progress",
-    ]
-    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline:
-        if (out / "done").is_dir() and any((out / "done").glob("*.json")):
-            break
-        if proc.poll() is not None:
-            pytest.fail(f"builder ended before the kill: {proc.stdout.read().decode()}")
-        time.sleep(0.02)
-    else:
-        proc.kill()
-        pytest.fail("no tree finished within 120 s")
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.wait()
-    time.sleep(1.0)  # the orphaned workers notice and exit
-    n_done = len(list((out / "done").glob("*.json")))
-    assert 1 <= n_done < 10
-    assert not (out / "DONE").exists()
-    res = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=300)
-    assert res.returncode == 0, res.stdout + res.stderr
-    assert f"{n_done} already done" in res.stdout
+    # (the orphaned local workers notice and exit)
+    kill_and_resume_build(out, ["--workers", "2"], timeout=120, settle=1.0)
     _check_dataset(out, DatasetConfig(out=str(out), **SMALL))
 
 

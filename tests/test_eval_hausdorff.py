@@ -188,34 +188,19 @@ def test_paper_wording_reported_beside_the_symmetric_max():
 
 def test_agrees_with_meshlab_metro_on_a_near_pair():
     """The exact AABB distances against MeshLab's Metro filter sampling every vertex."""
-    import pymeshlab
-
+    from eval.metro import metro
     from weberpenn import build_mesh, grow, species
 
     p = species.sample("maple", 3)
     a = build_mesh(grow(p, seed=0)).branches
     b = build_mesh(grow(p, seed=1)).branches
-    ms = pymeshlab.MeshSet()
-    for m in (a, b):
-        ms.add_mesh(pymeshlab.Mesh(vertex_matrix=m.vertices, face_matrix=m.faces))
-    reach = pymeshlab.PureValue(float(bbox_diagonal(np.vstack([a.vertices, b.vertices]))))
-    metro = [
-        ms.get_hausdorff_distance(
-            sampledmesh=i,
-            targetmesh=1 - i,
-            samplevert=True,
-            sampleedge=False,
-            sampleface=False,
-            samplenum=len(a.vertices) + len(b.vertices),
-            maxdist=reach,
-        )
-        for i in (0, 1)
-    ]
+    reach = float(bbox_diagonal(np.vstack([a.vertices, b.vertices])))
+    res = metro(a, b, len(a.vertices) + len(b.vertices), faces=False, reach=reach)
     d = hausdorff(a, b, samples=1)  # the vertices decide: both measure every one of them
-    assert d.max == pytest.approx(max(m["max"] for m in metro), rel=1e-5)
+    assert d.max == pytest.approx(max(m["max"] for m in res), rel=1e-5)
     diag = d.diagonal
-    assert d.pred_to_gt_vertex * diag == pytest.approx(metro[0]["max"], rel=1e-5)
-    assert d.gt_to_pred_vertex * diag == pytest.approx(metro[1]["max"], rel=1e-5)
+    assert d.pred_to_gt_vertex * diag == pytest.approx(res[0]["max"], rel=1e-5)
+    assert d.gt_to_pred_vertex * diag == pytest.approx(res[1]["max"], rel=1e-5)
 
 
 @pytest.mark.slow

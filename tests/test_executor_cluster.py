@@ -74,32 +74,11 @@ def test_killed_ray_build_resumes_without_duplicates(tmp_path):
     finished trees and the manifest has every sketch once (workers never write: the
     killed driver leaves nothing half-written behind)."""
     import json
-    import signal
-    import subprocess
+
+    from build_helpers import kill_and_resume_build
 
     out = tmp_path / "killed"
-    root = Path(__file__).resolve().parents[1]
-    cmd = [sys.executable, "-m", "treesketch.cli", "dataset", "build", "--out", str(out)]
-    cmd += ["--trees-per-species", "2", "--views", "front,left", "--size", "48"]
-    cmd += ["--executor", "ray", "--workers", "2", "--no-progress"]
-    proc = subprocess.Popen(cmd, cwd=root, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
-    deadline = time.monotonic() + 180
-    while time.monotonic() < deadline:
-        if any((out / "done").glob("*.json")):
-            break
-        if proc.poll() is not None:
-            pytest.fail(f"builder ended before the kill: {proc.stdout.read().decode()}")
-        time.sleep(0.05)
-    else:
-        proc.kill()
-        pytest.fail("no tree finished within 180 s")
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.wait()
-    n_done = len(list((out / "done").glob("*.json")))
-    assert 1 <= n_done < 10 and not (out / "DONE").exists()
-    res = subprocess.run(cmd, cwd=root, capture_output=True, text=True, timeout=400)
-    assert res.returncode == 0, res.stdout + res.stderr
-    assert f"{n_done} already done" in res.stdout
+    kill_and_resume_build(out, ["--executor", "ray", "--workers", "2"], timeout=180)
     rows = [json.loads(x) for x in (out / "manifest.jsonl").read_text().splitlines()]
     keys = [(r["tree_id"], r["view"]) for r in rows]
     assert len(keys) == len(set(keys)) == 20

@@ -156,30 +156,24 @@ def test_json_round_trip(tmp_path):
     assert json.loads(path.read_text())["leafShape"] == "rect"
 
 
-def test_load_errors(tmp_path):
-    with pytest.raises(ParamError, match="no such"):
-        load_params(tmp_path / "missing.json")
-    bad = tmp_path / "bad.json"
-    bad.write_text("{not json")
-    with pytest.raises(ParamError, match="JSON"):
-        load_params(bad)
-    bad.write_text("[1, 2]")
-    with pytest.raises(ParamError, match="object"):
-        load_params(bad)
-    d = _d(ratio=-3.0)
-    bad.write_text(json.dumps(d))
-    with pytest.raises(ParamError, match=r"bad\.json.*ratio"):
-        load_params(bad)
-    py = tmp_path / "bad.py"
-    py.write_text("import os; os.system('echo hacked')\n")
-    with pytest.raises(ParamError):
-        load_params(py)
-    py.write_text("# only a comment\n\n")
-    with pytest.raises(ParamError, match="no dictionary"):
-        load_params(py)
-    py.write_text("[1, 2, 3]\n")
-    with pytest.raises(ParamError, match="dict"):
-        load_params(py)
+@pytest.mark.parametrize(
+    ("name", "text", "match"),
+    [
+        ("missing.json", None, "no such"),
+        ("bad.json", "{not json", "JSON"),
+        ("bad.json", "[1, 2]", "object"),
+        ("bad.json", json.dumps(_d(ratio=-3.0)), r"bad\.json.*ratio"),
+        ("bad.py", "import os; os.system('echo hacked')\n", None),  # never run
+        ("bad.py", "# only a comment\n\n", "no dictionary"),
+        ("bad.py", "[1, 2, 3]\n", "dict"),
+    ],
+)
+def test_load_errors(tmp_path, name: str, text: str | None, match: str | None):
+    path = tmp_path / name
+    if text is not None:
+        path.write_text(text)
+    with pytest.raises(ParamError, match=match):
+        load_params(path)
 
 
 def test_load_one_line_sapling_preset(tmp_path):

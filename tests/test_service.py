@@ -6,7 +6,6 @@ from __future__ import annotations
 import io
 import json
 import struct
-import time
 import zlib
 from collections.abc import AsyncIterator, Iterator
 from pathlib import Path
@@ -14,27 +13,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
-from service_helpers import palm_sketch_png, png
+from service_helpers import check_broken_estimator_is_reported, finished, png, wait_for
 
 from treesketch.service import ARTEFACTS, JobStore, Limits, ServiceConfig, create_app
 from treesketch.service.limits import LimitError, read_form
 
 ESTIMATOR = "service_helpers:palm_estimator"
-
-
-def _wait(client: TestClient, job_id: str, timeout: float = 120.0) -> dict:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        body = client.get(f"/jobs/{job_id}").json()
-        if body["state"] in ("done", "failed", "cancelled", "expired"):
-            return body
-        time.sleep(0.2)
-    raise AssertionError(f"job {job_id} did not finish in {timeout} s")
-
-
-@pytest.fixture(scope="module")
-def sketch() -> bytes:
-    return palm_sketch_png()
 
 
 @pytest.fixture(scope="module")
@@ -51,7 +35,7 @@ def done_job(client: TestClient, sketch: bytes) -> dict:
     assert r.status_code == 202, r.text
     body = r.json()
     assert body["state"] in ("queued", "running") and r.headers["location"] == body["links"]["self"]
-    return _wait(client, body["id"])
+    return wait_for(client, body["id"], finished)
 
 
 def test_health_and_status(client: TestClient) -> None:
@@ -178,7 +162,7 @@ def test_artefact_names_and_states(client: TestClient, done_job: dict) -> None:
 def test_blank_page_fails_with_message(client: TestClient) -> None:
     blank = png(np.full((64, 64), 255, np.uint8))
     r = client.post("/jobs", files={"sketch": ("b.png", blank, "image/png")})
-    body = _wait(client, r.json()["id"])
+    body = wait_for(client, r.json()["id"], finished)
     assert body["state"] == "failed" and "blank" in body["error"]
     r = client.post("/predict", files={"sketch": ("b.png", blank, "image/png")})
     assert r.status_code == 422 and "blank" in r.json()["detail"]
@@ -201,7 +185,7 @@ def test_expired_job_is_410(client: TestClient, sketch: bytes) -> None:
     r = client.post(
         "/jobs", files={"sketch": ("s.png", sketch, "image/png")}, data={"refine": "false"}
     )
-    body = _wait(client, r.json()["id"])
+    body = wait_for(client, r.json()["id"], finished)
     assert body["state"] == "done"
     store: JobStore = client.app.state.store
     assert body["id"] in store.expire(max_age_s=0.0, max_bytes=None)
@@ -263,21 +247,8 @@ def test_read_form_stops_a_huge_upload_early() -> None:
 
 
 def test_estimator_that_cannot_load_is_reported(tmp_path: Path, sketch: bytes) -> None:
-    from treesketch.service.pool import LOAD_ATTEMPTS
-
     config = ServiceConfig(data=tmp_path, workers=1, estimator="service_helpers:missing")
-    app = create_app(config)
-    app.state.pool.respawn_backoff = 0.1
-    with TestClient(app, base_url="http://127.0.0.1") as c:
-        deadline = time.monotonic() + 120
-        while c.get("/health").json()["status"] == "ok":
-            assert time.monotonic() < deadline, "the broken estimator was never reported"
-            time.sleep(0.2)
-        h = c.get("/health").json()
-        assert h["status"] == "error" and "service_helpers:missing" in h["error"]
-        assert app.state.pool.replaced == LOAD_ATTEMPTS - 1
-        r = c.post("/jobs", files={"sketch": ("s.png", sketch, "image/png")})
-        assert r.status_code == 503 and "no worker can start" in r.json()["detail"]
+    check_broken_estimator_is_reported(create_app(config), sketch)
 
 
 def test_default_data_folder(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
@@ -338,7 +309,7 @@ def test_the_species_picker_list_and_a_job_for_the_species_meant(
         data={"budget": "3", "species": "Christmas tree"},
     )
     assert r.status_code == 202, r.text
-    job = _wait(client, r.json()["id"])
+    job = wait_for(client, r.json()["id"], finished)
     assert job["state"] == "done", job["error"]
     res = job["result"]
     assert res["species"] == "fir"

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import httpx
 import pytest
-from service_helpers import finished, palm_sketch_png, refining, serve, wait_for
+from service_helpers import finished, http_service, refining, serve, submit, wait_for
 
 from treesketch.service import ServiceConfig, create_app
 
@@ -24,11 +24,6 @@ pytestmark = pytest.mark.slow
 
 ESTIMATOR = "service_helpers:palm_estimator"
 LONG = {"budget": "1000", "time_limit": "600"}  # runs until cancelled
-
-
-@pytest.fixture(scope="module")
-def sketch() -> bytes:
-    return palm_sketch_png()
 
 
 @pytest.fixture(scope="module")
@@ -48,12 +43,6 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
 def http(server: str) -> Iterator[httpx.Client]:
     with httpx.Client(base_url=server, timeout=30) as c:
         yield c
-
-
-def submit(http: httpx.Client, sketch: bytes, **fields: str) -> str:
-    r = http.post("/jobs", files={"sketch": ("s.png", sketch, "image/png")}, data=fields)
-    assert r.status_code == 202, r.text
-    return r.json()["id"]
 
 
 def worker_idle(http: httpx.Client) -> bool:
@@ -215,7 +204,7 @@ def test_huge_upload_is_refused_early(server: str, http: httpx.Client) -> None:
 
 def test_restart_keeps_done_jobs_fails_running_runs_queued(tmp_path: Path, sketch: bytes) -> None:
     config = ServiceConfig(data=tmp_path, workers=1, estimator=ESTIMATOR, max_queue=8)
-    with serve(create_app(config)) as url, httpx.Client(base_url=url, timeout=30) as http:
+    with http_service(config) as http:
         done = submit(http, sketch, budget="2")
         wait_for(http, done, finished)
         running = submit(http, sketch, **LONG)
@@ -223,7 +212,7 @@ def test_restart_keeps_done_jobs_fails_running_runs_queued(tmp_path: Path, sketc
         wait_for(http, running, refining)
         glb = http.get(f"/jobs/{done}/tree.glb").content
     # the server is down; a new one on the same folder
-    with serve(create_app(config)) as url, httpx.Client(base_url=url, timeout=30) as http:
+    with http_service(config) as http:
         assert http.get(f"/jobs/{done}/tree.glb").content == glb
         body = http.get(f"/jobs/{running}").json()
         assert body["state"] == "failed" and "server stopped" in body["error"]

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import httpx
 import pytest
-from service_helpers import finished, palm_sketch_png, refining, serve, wait_for
+from service_helpers import finished, http_service, refining, serve, submit, wait_for
 
 from treesketch.service import JobStore, ServiceConfig, create_app
 from treesketch.service.limits import MAX_PARTS
@@ -32,19 +32,8 @@ BOUNDARY = "hostileboundary"
 CTYPE = f"multipart/form-data; boundary={BOUNDARY}"
 
 
-@pytest.fixture(scope="module")
-def sketch() -> bytes:
-    return palm_sketch_png()
-
-
 def config(data: Path, **kw: object) -> ServiceConfig:
     return ServiceConfig(data=data, workers=1, estimator=ESTIMATOR, **kw)  # type: ignore[arg-type]
-
-
-def submit(http: httpx.Client, sketch: bytes, **fields: str) -> str:
-    r = http.post("/jobs", files={"sketch": ("s.png", sketch, "image/png")}, data=fields)
-    assert r.status_code == 202, r.text
-    return r.json()["id"]
 
 
 def part(name: str, value: bytes, filename: str | None = None) -> bytes:
@@ -78,10 +67,7 @@ def raw_post(url: str, path: str, body: bytes, headers: str = "") -> tuple[int, 
 def test_second_server_on_the_same_data_is_refused_and_the_live_job_goes_on(
     tmp_path: Path, sketch: bytes
 ) -> None:
-    with (
-        serve(create_app(config(tmp_path))) as url,
-        httpx.Client(base_url=url, timeout=30) as http,
-    ):
+    with http_service(config(tmp_path)) as http:
         job = submit(http, sketch, **LONG)
         wait_for(http, job, refining)
         # a second `treesketch serve` on the same folder, another port
@@ -243,10 +229,7 @@ def test_the_page_keeps_the_token_out_of_every_url(tmp_path: Path) -> None:
 # -- 4. Host and Origin, with no token set (the default) ---------------------------------------
 def test_foreign_host_and_cross_site_posts_are_refused(tmp_path: Path, sketch: bytes) -> None:
     files = {"sketch": ("s.png", sketch, "image/png")}
-    with (
-        serve(create_app(config(tmp_path))) as url,
-        httpx.Client(base_url=url, timeout=30) as http,
-    ):
+    with serve(create_app(config(tmp_path))) as url, httpx.Client(base_url=url, timeout=30) as http:
         # DNS rebinding: a foreign name that resolves to 127.0.0.1
         for path in ("/status", "/jobs", "/"):
             r = http.get(path, headers={"Host": "attacker.example:8000"})
@@ -273,7 +256,7 @@ def test_foreign_host_and_cross_site_posts_are_refused(tmp_path: Path, sketch: b
 def test_allowed_names_and_cors_origins(tmp_path: Path, sketch: bytes) -> None:
     cfg = config(tmp_path, hosts=("trees.example.org",), cors=("https://app.example.org",))
     files = {"sketch": ("s.png", sketch, "image/png")}
-    with serve(create_app(cfg)) as url, httpx.Client(base_url=url, timeout=30) as http:
+    with http_service(cfg) as http:
         assert http.get("/health").status_code == 421  # 127.0.0.1 is not one of its names
         host = {"Host": "trees.example.org"}
         assert http.get("/status", headers=host).status_code == 200
@@ -295,10 +278,7 @@ def test_allowed_names_and_cors_origins(tmp_path: Path, sketch: bytes) -> None:
 # -- 10. a full disk ---------------------------------------------------------------------------
 def test_storage_full_is_507_and_reported_in_health(tmp_path: Path, sketch: bytes) -> None:
     # more free space asked for than any disk has: the server's own check, end to end
-    with (
-        serve(create_app(config(tmp_path, min_free_bytes=2**62))) as url,
-        httpx.Client(base_url=url, timeout=30) as http,
-    ):
+    with http_service(config(tmp_path, min_free_bytes=2**62)) as http:
         r = http.post("/jobs", files={"sketch": ("s.png", sketch, "image/png")})
         assert r.status_code == 507 and "storage full" in r.json()["detail"], r.text
         h = http.get("/health").json()
@@ -432,10 +412,7 @@ def test_retention_removes_empty_folders_and_counts_orphaned_results(tmp_path: P
 def test_database_deleted_while_running_is_detected_and_its_results_are_swept(
     tmp_path: Path, sketch: bytes
 ) -> None:
-    with (
-        serve(create_app(config(tmp_path))) as url,
-        httpx.Client(base_url=url, timeout=30) as http,
-    ):
+    with http_service(config(tmp_path)) as http:
         done = submit(http, sketch, refine="false")
         assert wait_for(http, done, finished)["state"] == "done"
         for name in ("jobs.sqlite", "jobs.sqlite-wal", "jobs.sqlite-shm"):
@@ -446,10 +423,7 @@ def test_database_deleted_while_running_is_detected_and_its_results_are_swept(
         assert r.status_code == 503 and "restart the server" in r.json()["detail"]
         assert http.get(f"/jobs/{done}").json()["state"] == "done"  # still readable
     # restarted: an empty database; the old job's files are orphans that retention removes
-    with (
-        serve(create_app(config(tmp_path))) as url,
-        httpx.Client(base_url=url, timeout=30) as http,
-    ):
+    with http_service(config(tmp_path)) as http:
         assert http.get("/health").json()["status"] == "ok"
         assert http.get(f"/jobs/{done}").status_code == 404
         # made 40 days ago, its record gone: the 30-day retention finds the files
@@ -495,10 +469,7 @@ def test_sketch_part_without_filename_is_accepted(tmp_path: Path, sketch: bytes)
 
 
 def test_body_cut_off_before_its_closing_boundary_is_refused(tmp_path: Path, sketch: bytes) -> None:
-    with (
-        serve(create_app(config(tmp_path))) as url,
-        httpx.Client(base_url=url, timeout=30) as http,
-    ):
+    with serve(create_app(config(tmp_path))) as url, httpx.Client(base_url=url, timeout=30) as http:
         # the closing boundary never came (a Content-Length that matches what was sent)
         cut = part("refine", b"false") + part("sketch", sketch, "s.png")
         for body in (cut, cut[: len(cut) // 2]):

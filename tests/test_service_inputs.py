@@ -9,17 +9,11 @@ from collections.abc import Iterator
 import pytest
 from fastapi.testclient import TestClient
 from PIL import Image
-from service_helpers import palm_sketch_png
 
 from treesketch.service import Limits, ServiceConfig, create_app
 from treesketch.service.limits import LimitError, check_image, parse_options
 
 EPS = b"%!PS-Adobe-3.0 EPSF-3.0\n%%BoundingBox: 0 0 64 64\nnewpath 0 0 moveto 64 64 lineto stroke\n"
-
-
-@pytest.fixture(scope="module")
-def sketch() -> bytes:
-    return palm_sketch_png()
 
 
 @pytest.fixture(scope="module")

@@ -10,7 +10,6 @@ from collections.abc import Iterator
 
 import pytest
 from fastapi.testclient import TestClient
-from service_helpers import palm_sketch_png
 
 from refine.search import DEFAULT_BUDGET
 from treesketch.service import ServiceConfig, create_app
@@ -116,13 +115,11 @@ def test_post_trees_refuses_non_json_and_huge_bodies(client: TestClient) -> None
     assert r.status_code == 413
 
 
-def test_a_running_job_shows_its_current_best_tree(client: TestClient) -> None:
+def test_a_running_job_shows_its_current_best_tree(client: TestClient, sketch: bytes) -> None:
     """The first estimate's tree is there while the refinement runs; the count never
     passes the budget; the best distance only falls."""
     r = client.post(
-        "/jobs",
-        files={"sketch": ("s.png", palm_sketch_png(), "image/png")},
-        data={"budget": "40"},
+        "/jobs", files={"sketch": ("s.png", sketch, "image/png")}, data={"budget": "40"}
     )
     job_id = r.json()["id"]
     assert r.json()["links"]["preview/tree.glb"] == f"/jobs/{job_id}/preview/tree.glb"

@@ -15,7 +15,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
-from service_helpers import palm_sketch_png, png
+from service_helpers import (
+    check_broken_estimator_is_reported,
+    finished,
+    palm_sketch_png,
+    png,
+    refining,
+    submit,
+    wait_for,
+)
 
 from treesketch.service import ServiceConfig, create_app
 
@@ -27,7 +35,6 @@ pytestmark = pytest.mark.slow
 
 ESTIMATOR = "service_helpers:palm_estimator"
 LONG = {"budget": "1000", "time_limit": "600"}  # runs until cancelled or killed
-FINISHED = ("done", "failed", "cancelled", "expired")
 
 
 @pytest.fixture(scope="module")
@@ -38,11 +45,6 @@ def ray_session() -> Iterator[None]:
     finally:
         ex.close()
     assert not ray.is_initialized()
-
-
-@pytest.fixture(scope="module")
-def sketch() -> bytes:
-    return palm_sketch_png()
 
 
 @pytest.fixture(scope="module")
@@ -60,30 +62,6 @@ def client(ray_session: None, tmp_path_factory: pytest.TempPathFactory) -> Itera
     with TestClient(create_app(config), base_url="http://127.0.0.1") as c:
         yield c
     assert ray.is_initialized()  # not the pool's Ray: left to its owner
-
-
-def submit(client: TestClient, sketch: bytes, **fields: str) -> str:
-    r = client.post("/jobs", files={"sketch": ("s.png", sketch, "image/png")}, data=fields)
-    assert r.status_code == 202, r.text
-    return r.json()["id"]
-
-
-def wait_for(client: TestClient, job_id: str, test, timeout: float = 120.0) -> dict:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        body = client.get(f"/jobs/{job_id}").json()
-        if test(body):
-            return body
-        time.sleep(0.05)
-    raise AssertionError(f"job {job_id}: condition not met in {timeout} s; last {body}")
-
-
-def finished(body: dict) -> bool:
-    return body["state"] in FINISHED
-
-
-def refining(body: dict) -> bool:
-    return body["state"] == "running" and (body["progress"] or {}).get("evaluations", 0) >= 1
 
 
 def comparable(summary: dict) -> dict:
@@ -235,21 +213,9 @@ def test_killed_actors(client: TestClient, sketch: bytes) -> None:
 def test_estimator_that_cannot_load_is_reported(
     ray_session: None, tmp_path: Path, sketch: bytes
 ) -> None:
-    from treesketch.service.pool import LOAD_ATTEMPTS
-
     config = ServiceConfig(
         data=tmp_path, workers=1, estimator="service_helpers:missing", executor="ray"
     )
     app = create_app(config)
-    app.state.pool.respawn_backoff = 0.1
     app.state.pool.cpus_per_worker = 0  # beside the module's pool, which holds both CPUs
-    with TestClient(app, base_url="http://127.0.0.1") as c:
-        deadline = time.monotonic() + 120
-        while c.get("/health").json()["status"] == "ok":
-            assert time.monotonic() < deadline, app.state.pool.status()
-            time.sleep(0.2)
-        h = c.get("/health").json()
-        assert h["status"] == "error" and "service_helpers:missing" in h["error"]
-        assert app.state.pool.replaced == LOAD_ATTEMPTS - 1
-        r = c.post("/jobs", files={"sketch": ("s.png", sketch, "image/png")})
-        assert r.status_code == 503 and "no worker can start" in r.json()["detail"]
+    check_broken_estimator_is_reported(app, sketch)

@@ -5,59 +5,14 @@ estimate, tiny budgets)."""
 from __future__ import annotations
 
 import io
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
-from web_helpers import chromium, draw_with_mouse, palm_service
+from web_helpers import INK, PHONE, draw_with_mouse, guarded_context, open_page, view_pixels
 
 pytestmark = pytest.mark.slow
-
-INK = """() => {
-  const c = document.getElementById('pad');
-  const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
-  let n = 0;
-  for (let i = 0; i < d.length; i += 4) if (d[i] < 128) n++;
-  return n;
-}"""
-
-
-@pytest.fixture(scope="module")
-def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
-    with palm_service(tmp_path_factory.mktemp("web")) as url:
-        yield url
-
-
-@pytest.fixture(scope="module")
-def browser() -> Iterator[Any]:
-    with chromium() as b:
-        yield b
-
-
-@pytest.fixture
-def page(browser: Any, server: str) -> Iterator[Any]:
-    """A page that may talk to the server only: anything else (a CDN) fails the test."""
-    context = browser.new_context(viewport={"width": 1200, "height": 900}, accept_downloads=True)
-    outside: list[str] = []
-
-    def guard(route: Any) -> None:
-        if route.request.url.startswith(server):
-            route.continue_()
-        else:
-            outside.append(route.request.url)
-            route.abort()
-
-    context.route("**/*", guard)
-    pg = context.new_page()
-    errors: list[str] = []
-    pg.on("pageerror", lambda e: errors.append(str(e)))
-    pg.goto(server + "/")
-    yield pg
-    context.close()
-    assert not outside, f"the page fetched from outside the server: {outside}"
-    assert not errors, errors
 
 
 def test_draw_submit_view_and_download(page: Any, tmp_path: Path) -> None:
@@ -74,15 +29,13 @@ def test_draw_submit_view_and_download(page: Any, tmp_path: Path) -> None:
     assert page.evaluate("document.getElementById('progress').value") == 1
 
     # the 3D view shows the tree: non-background pixels in its middle
-    from PIL import Image
-
-    shot = np.asarray(Image.open(io.BytesIO(page.locator("#view canvas").screenshot())))[..., :3]
+    shot = view_pixels(page)
     h, w = shot.shape[:2]
-    middle = shot[h // 4 : 3 * h // 4, w // 4 : 3 * w // 4].astype(int)
+    middle = shot[h // 4 : 3 * h // 4, w // 4 : 3 * w // 4]
     background = np.array([0xE8, 0xEE, 0xF0])
     tree = np.abs(middle - background).sum(axis=2) > 40
     assert tree.mean() > 0.02, f"only {tree.mean():.3%} of the view's middle shows the tree"
-    inner = shot[4:-4, 4:-4].astype(int)  # the element's screenshot has a white rim
+    inner = shot[4:-4, 4:-4]  # the element's screenshot has a white rim
     ys, xs = np.nonzero(np.abs(inner - background).sum(axis=2) > 40)
     assert np.ptp(ys) > np.ptp(xs), "the palm should stand (taller than wide), not lie"
 
@@ -135,13 +88,11 @@ def test_undo_clear_and_eraser(page: Any) -> None:
 
 
 def test_phone_sized_screen(browser: Any, server: str) -> None:
-    context = browser.new_context(viewport={"width": 390, "height": 844}, has_touch=True)
-    pg = context.new_page()
-    pg.goto(server + "/")
-    box = pg.locator("#pad").bounding_box()
-    assert 300 < box["width"] <= 390
-    assert pg.evaluate("document.scrollingElement.scrollWidth") <= 390  # no sideways scroll
-    # a touch draws too
-    pg.touchscreen.tap(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
-    assert pg.evaluate(INK) > 0
-    context.close()
+    with guarded_context(browser, server, **PHONE) as ctx:
+        pg = open_page(ctx, server)
+        box = pg.locator("#pad").bounding_box()
+        assert 300 < box["width"] <= 390
+        assert pg.evaluate("document.scrollingElement.scrollWidth") <= 390  # no sideways scroll
+        # a touch draws too
+        pg.touchscreen.tap(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+        assert pg.evaluate(INK) > 0

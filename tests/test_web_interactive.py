@@ -6,83 +6,23 @@ server with one worker (a fixed palm as the first estimate)."""
 
 from __future__ import annotations
 
-import io
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
-from web_helpers import chromium, draw_with_mouse, palm_service
+from web_helpers import (
+    INK,
+    JOB_TIMEOUT,
+    PHONE,
+    draw_with_mouse,
+    guarded_context,
+    make_tree,
+    open_page,
+    view_pixels,
+)
 
 pytestmark = pytest.mark.slow
-
-INK = """() => {
-  const c = document.getElementById('pad');
-  const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
-  let n = 0;
-  for (let i = 0; i < d.length; i += 4) if (d[i] < 128) n++;
-  return n;
-}"""
-JOB_TIMEOUT = 180_000  # ms
-
-
-@pytest.fixture(scope="module")
-def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
-    with palm_service(tmp_path_factory.mktemp("web-interactive")) as url:
-        yield url
-
-
-@pytest.fixture(scope="module")
-def browser() -> Iterator[Any]:
-    with chromium() as b:
-        yield b
-
-
-@pytest.fixture
-def context(browser: Any, server: str) -> Iterator[Any]:
-    """A browser context that may talk to the server only; page errors fail the test."""
-    ctx = browser.new_context(viewport={"width": 1200, "height": 900})
-    outside: list[str] = []
-
-    def guard(route: Any) -> None:
-        if route.request.url.startswith(server):
-            route.continue_()
-        else:
-            outside.append(route.request.url)
-            route.abort()
-
-    ctx.route("**/*", guard)
-    errors: list[str] = []
-    ctx.on("weberror", lambda e: errors.append(str(e.error)))
-    yield ctx
-    ctx.close()
-    assert not outside, f"the page fetched from outside the server: {outside}"
-    assert not errors, errors
-
-
-@pytest.fixture
-def page(context: Any, server: str) -> Any:
-    pg = context.new_page()
-    pg.goto(server + "/")
-    pg.wait_for_function("document.getElementById('budget').value !== ''")
-    return pg
-
-
-def _make_tree(page: Any, budget: int = 2) -> None:
-    draw_with_mouse(page)
-    page.fill("#budget", str(budget))
-    page.click("#submit")
-    page.wait_for_selector("body[data-state=done]", timeout=JOB_TIMEOUT)
-    page.wait_for_selector("body[data-edit=ready]", timeout=30_000)
-    page.wait_for_selector("body[data-model=loaded]", timeout=30_000)
-
-
-def _view_pixels(page: Any) -> np.ndarray:
-    from PIL import Image
-
-    shot = page.locator("#view canvas").screenshot()
-    return np.asarray(Image.open(io.BytesIO(shot)))[..., :3].astype(int)
 
 
 def _edits(page: Any) -> int:
@@ -111,8 +51,8 @@ def test_the_first_tree_is_shown_before_the_refinement_ends(page: Any) -> None:
 
 
 def test_sliders_variant_and_the_edited_download(page: Any) -> None:
-    _make_tree(page)
-    before = _view_pixels(page)
+    make_tree(page)
+    before = view_pixels(page)
     h0 = _height(page)
     assert page.get_attribute("body", "data-edits") is None
     # height, typed in as a person drags: the tree is regrown that tall
@@ -141,7 +81,7 @@ def test_sliders_variant_and_the_edited_download(page: Any) -> None:
     page.wait_for_function(f"Number(document.body.dataset.edits) > {n}", timeout=30_000)
     page.wait_for_selector("body[data-model=loaded]")
     assert page.input_value("#c-seed") != seed
-    after = _view_pixels(page)
+    after = view_pixels(page)
     assert np.abs(after - before).sum(axis=2).__gt__(40).mean() > 0.01, "the tree did not change"
     assert page.inner_text("#view-note") == "edited"
     # the download is the edited tree's
@@ -174,7 +114,7 @@ def test_gallery_loads_an_example(page: Any) -> None:
 
 
 def test_permalink_reload_and_recent_jobs(page: Any, server: str) -> None:
-    _make_tree(page)
+    make_tree(page)
     job = page.get_attribute("body", "data-job")
     assert f"job={job}" in page.url
     page.wait_for_selector(f"#recent a[href*='{job}']")
@@ -193,11 +133,11 @@ def test_permalink_reload_and_recent_jobs(page: Any, server: str) -> None:
 
 
 def test_view_tools(page: Any) -> None:
-    _make_tree(page)
+    make_tree(page)
     assert page.inner_text("#height-readout").endswith(" m") and _height(page) > 1
-    framed = _view_pixels(page)
+    framed = view_pixels(page)
     page.uncheck("#ground")
-    bare = _view_pixels(page)
+    bare = view_pixels(page)
     assert (np.abs(bare - framed).sum(axis=2) > 40).mean() > 0.005, "the ground did not go"
     page.check("#ground")
     box = page.locator("#view canvas").bounding_box()
@@ -205,10 +145,10 @@ def test_view_tools(page: Any) -> None:
     page.mouse.down()
     page.mouse.move(box["x"] + box["width"] * 0.9, box["y"] + box["height"] * 0.3, steps=10)
     page.mouse.up()
-    turned = _view_pixels(page)
+    turned = view_pixels(page)
     assert (np.abs(turned - framed).sum(axis=2) > 40).mean() > 0.01
     page.click("#reset-view")
-    back = _view_pixels(page)
+    back = view_pixels(page)
     assert (np.abs(back - framed).sum(axis=2) > 40).mean() < 0.002
 
 
@@ -257,16 +197,10 @@ def test_keyboard_undo_redo_brush_and_upload(page: Any) -> None:
 
 
 def test_a_phone_scrolls_to_the_result(browser: Any, server: str) -> None:
-    ctx = browser.new_context(viewport={"width": 390, "height": 844}, has_touch=True)
-    pg = ctx.new_page()
-    pg.goto(server + "/")
-    pg.wait_for_function("document.getElementById('budget').value !== ''")
-    draw_with_mouse(pg)
-    pg.fill("#budget", "2")
-    pg.click("#submit")
-    pg.wait_for_selector("body[data-state=done]", timeout=JOB_TIMEOUT)
-    pg.wait_for_function("window.scrollY > 300", timeout=10_000)
-    top = pg.evaluate("document.getElementById('result-panel').getBoundingClientRect().top")
-    assert -50 < top < 300
-    assert pg.evaluate("document.scrollingElement.scrollWidth") <= 390
-    ctx.close()
+    with guarded_context(browser, server, **PHONE) as ctx:
+        pg = open_page(ctx, server)
+        make_tree(pg)
+        pg.wait_for_function("window.scrollY > 300", timeout=10_000)
+        top = pg.evaluate("document.getElementById('result-panel').getBoundingClientRect().top")
+        assert -50 < top < 300
+        assert pg.evaluate("document.scrollingElement.scrollWidth") <= 390

@@ -15,57 +15,18 @@ from typing import Any
 
 import numpy as np
 import pytest
-from web_helpers import chromium, draw_with_mouse, palm_service
+from web_helpers import DESKTOP, PHONE, guarded_context, make_tree, open_page, view_pixels
 
 from weberpenn import species
 
 pytestmark = pytest.mark.slow
-
-JOB_TIMEOUT = 180_000  # ms
-
-
-@pytest.fixture(scope="module")
-def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
-    with palm_service(tmp_path_factory.mktemp("web-species")) as url:
-        yield url
-
-
-@pytest.fixture(scope="module")
-def browser() -> Iterator[Any]:
-    with chromium() as b:
-        yield b
-
-
-def _context(browser: Any, server: str, **options: Any) -> tuple[Any, list[str], list[str]]:
-    """A context that may talk to the server only; (context, outside URLs, errors)."""
-    ctx = browser.new_context(accept_downloads=True, **options)
-    outside: list[str] = []
-    errors: list[str] = []
-
-    def guard(route: Any) -> None:
-        if route.request.url.startswith(server):
-            route.continue_()
-        else:
-            outside.append(route.request.url)
-            route.abort()
-
-    ctx.route("**/*", guard)
-    ctx.on("weberror", lambda e: errors.append(str(e.error)))
-    ctx.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    return ctx, outside, errors
+READY = "body[data-species=ready]"
 
 
 @pytest.fixture
 def page(browser: Any, server: str) -> Iterator[Any]:
-    ctx, outside, errors = _context(browser, server, viewport={"width": 1200, "height": 900})
-    pg = ctx.new_page()
-    pg.goto(server + "/")
-    pg.wait_for_selector("body[data-species=ready]")
-    pg.wait_for_function("document.getElementById('budget').value !== ''")
-    yield pg
-    ctx.close()
-    assert not outside, f"the page fetched from outside the server: {outside}"
-    assert not errors, errors
+    with guarded_context(browser, server, console=True, **DESKTOP) as ctx:
+        yield open_page(ctx, server, READY)
 
 
 def _make_tree(page: Any, pick: str | None = None) -> dict:
@@ -73,12 +34,7 @@ def _make_tree(page: Any, pick: str | None = None) -> dict:
     show; returns the finished job as the API gives it."""
     if pick is not None:
         page.select_option("#species-pick", pick)
-    draw_with_mouse(page)
-    page.fill("#budget", "2")
-    page.click("#submit")
-    page.wait_for_selector("body[data-state=done]", timeout=JOB_TIMEOUT)
-    page.wait_for_selector("body[data-edit=ready]", timeout=30_000)
-    page.wait_for_selector("body[data-model=loaded]", timeout=30_000)
+    make_tree(page)
     return page.evaluate("async (id) => (await fetch(`/jobs/${id}`)).json()", _job(page))
 
 
@@ -88,13 +44,6 @@ def _job(page: Any) -> str:
 
 def _loads(page: Any) -> int:
     return int(page.get_attribute("body", "data-loads") or 0)
-
-
-def _view_pixels(page: Any) -> np.ndarray:
-    from PIL import Image
-
-    shot = page.locator("#view canvas").screenshot()
-    return np.asarray(Image.open(io.BytesIO(shot)))[..., :3].astype(int)
 
 
 def test_the_picker_lists_every_species_and_the_pick_reaches_the_job(page: Any) -> None:
@@ -138,7 +87,7 @@ def test_candidates_switch_the_tree_the_controls_and_the_downloads(
             "(i) => document.querySelectorAll('#candidates img')[i].naturalWidth > 0", arg=i
         )
         assert thumb.get_attribute("aria-pressed") == ("true" if i == 0 else "false")
-    before = _view_pixels(page)
+    before = view_pixels(page)
     h0 = page.inner_text("#height-readout")
 
     # the second candidate, from the keyboard: a new GLB, its species, its controls
@@ -152,7 +101,7 @@ def test_candidates_switch_the_tree_the_controls_and_the_downloads(
     assert page.text_content("#species") == species.display_name(other["species"])
     assert cands.nth(1).get_attribute("aria-pressed") == "true"
     assert cands.nth(0).get_attribute("aria-pressed") == "false"
-    after = _view_pixels(page)
+    after = view_pixels(page)
     assert (np.abs(after - before).sum(axis=2) > 40).mean() > 0.01, "the tree did not change"
     assert page.inner_text("#height-readout") != h0
     page.wait_for_selector("body[data-edit=ready]")
@@ -197,23 +146,16 @@ def test_candidates_switch_the_tree_the_controls_and_the_downloads(
 
 
 def test_a_phone_shows_and_switches_the_candidates(browser: Any, server: str) -> None:
-    ctx, outside, errors = _context(
-        browser, server, viewport={"width": 390, "height": 844}, has_touch=True
-    )
-    pg = ctx.new_page()
-    pg.goto(server + "/")
-    pg.wait_for_selector("body[data-species=ready]")
-    pg.wait_for_function("document.getElementById('budget').value !== ''")
-    job = _make_tree(pg)
-    cands = pg.locator("#candidates .candidate")
-    assert cands.count() == 3
-    boxes = [cands.nth(i).bounding_box() for i in range(3)]
-    assert all(b["width"] >= 80 and b["x"] + b["width"] <= 390 for b in boxes)
-    assert len({round(b["y"]) for b in boxes}) == 1  # one row
-    assert pg.evaluate("document.scrollingElement.scrollWidth") <= 390  # no sideways scroll
-    n = _loads(pg)
-    cands.nth(2).tap()
-    pg.wait_for_function(f"Number(document.body.dataset.loads) > {n}", timeout=30_000)
-    assert pg.get_attribute("body", "data-shown") == job["result"]["candidates"][2]["species"]
-    ctx.close()
-    assert not outside and not errors, (outside, errors)
+    with guarded_context(browser, server, console=True, **PHONE) as ctx:
+        pg = open_page(ctx, server, READY)
+        job = _make_tree(pg)
+        cands = pg.locator("#candidates .candidate")
+        assert cands.count() == 3
+        boxes = [cands.nth(i).bounding_box() for i in range(3)]
+        assert all(b["width"] >= 80 and b["x"] + b["width"] <= 390 for b in boxes)
+        assert len({round(b["y"]) for b in boxes}) == 1  # one row
+        assert pg.evaluate("document.scrollingElement.scrollWidth") <= 390  # no sideways scroll
+        n = _loads(pg)
+        cands.nth(2).tap()
+        pg.wait_for_function(f"Number(document.body.dataset.loads) > {n}", timeout=30_000)
+        assert pg.get_attribute("body", "data-shown") == job["result"]["candidates"][2]["species"]

@@ -1,9 +1,12 @@
 """Browser helpers for the page tests and docs/web.png: Debian's chromium through
-Playwright (no browser download), and a tree drawn with mouse strokes."""
+Playwright (no browser download), a context held to the server, and a tree drawn with
+mouse strokes and submitted.  The page tests' ``server`` and ``browser`` fixtures are in
+``conftest.py``."""
 
 from __future__ import annotations
 
 import contextlib
+import io
 import math
 from collections.abc import Iterator
 from pathlib import Path
@@ -12,6 +15,17 @@ from typing import Any
 CHROMIUM = "/usr/bin/chromium"
 # software WebGL (SwiftShader) so the 3D view renders on a machine without a GPU
 CHROMIUM_ARGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--no-sandbox"]
+JOB_TIMEOUT = 180_000  # ms a tiny-budget job may take on a busy machine
+DESKTOP = {"viewport": {"width": 1200, "height": 900}}
+PHONE = {"viewport": {"width": 390, "height": 844}, "has_touch": True}
+# the pad's dark pixels (a JavaScript function for page.evaluate)
+INK = """() => {
+  const c = document.getElementById('pad');
+  const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+  let n = 0;
+  for (let i = 0; i < d.length; i += 4) if (d[i] < 128) n++;
+  return n;
+}"""
 
 
 @contextlib.contextmanager
@@ -38,6 +52,67 @@ def chromium() -> Iterator[Any]:
             yield browser
         finally:
             browser.close()
+
+
+@contextlib.contextmanager
+def guarded_context(
+    browser: Any, server: str, console: bool = False, **options: Any
+) -> Iterator[Any]:
+    """A browser context (``options`` as for ``new_context``) that may talk to ``server``
+    only: on leaving, a request elsewhere (a CDN) or a page error fails the test, and with
+    ``console`` a console error too."""
+    ctx = browser.new_context(accept_downloads=True, **options)
+    outside: list[str] = []
+    errors: list[str] = []
+
+    def guard(route: Any) -> None:
+        if route.request.url.startswith(server):
+            route.continue_()
+        else:
+            outside.append(route.request.url)
+            route.abort()
+
+    ctx.route("**/*", guard)
+    ctx.on("weberror", lambda e: errors.append(str(e.error)))
+    if console:
+        ctx.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    try:
+        yield ctx
+    finally:
+        ctx.close()
+    assert not outside, f"the page fetched from outside the server: {outside}"
+    assert not errors, errors
+
+
+def open_page(ctx: Any, server: str, ready: str = "") -> Any:
+    """A new page of ``ctx`` on the drawing page, once its budget is filled in (and the
+    ``ready`` selector, e.g. ``body[data-species=ready]``, shows)."""
+    pg = ctx.new_page()
+    pg.goto(server + "/")
+    if ready:
+        pg.wait_for_selector(ready)
+    pg.wait_for_function("document.getElementById('budget').value !== ''")
+    return pg
+
+
+def make_tree(page: Any, budget: int = 2) -> None:
+    """Draw ``tree_strokes``, submit with ``budget`` and wait until the result is shown
+    and editable."""
+    draw_with_mouse(page)
+    page.fill("#budget", str(budget))
+    page.click("#submit")
+    page.wait_for_selector("body[data-state=done]", timeout=JOB_TIMEOUT)
+    page.wait_for_selector("body[data-edit=ready]", timeout=30_000)
+    page.wait_for_selector("body[data-model=loaded]", timeout=30_000)
+
+
+def view_pixels(page: Any) -> Any:
+    """The 3D view's canvas as an (h, w, 3) int array."""
+    import numpy as np
+    from PIL import Image
+
+    shot = page.locator("#view canvas").screenshot()
+    return np.asarray(Image.open(io.BytesIO(shot)))[..., :3].astype(int)
 
 
 def tree_strokes(size: int = 512) -> list[list[tuple[float, float]]]:

@@ -4,16 +4,21 @@ from __future__ import annotations
 
 import logging
 from pathlib import Path
+from typing import NoReturn
 
 import typer
 
-from .cli_common import address_option, executor_option, workers_option
+from .cli_common import address_option, executor_from, executor_option, workers_option
 
 dataset_app = typer.Typer(
     name="dataset",
     help="Synthetic sketch datasets (species x trees x views).",
     no_args_is_help=True,
 )
+
+
+def _bad_parameter(message: str) -> NoReturn:
+    raise typer.BadParameter(message)
 
 
 def _csv(text: str, what: str) -> tuple[str, ...]:
@@ -70,8 +75,6 @@ def build(
     manifest with a train/val/test split by tree.  Re-running resumes."""
     from render.dataset import DatasetConfig, DatasetError, build_dataset
 
-    from .executor import ExecutorError, from_options
-
     logging.basicConfig(
         level=logging.INFO if verbose else logging.WARNING,
         format="%(asctime)s %(levelname)s %(name)s: %(message)s",
@@ -91,18 +94,12 @@ def build(
         )
     except DatasetError as exc:
         raise typer.BadParameter(str(exc)) from None
-    try:
-        runner = from_options(executor, workers, address)
-    except ExecutorError as exc:
-        raise typer.BadParameter(str(exc)) from None
-    try:
-        summary = build_dataset(cfg, progress=progress, executor=runner, only_split=only_split)
-    except DatasetError as exc:
-        typer.echo(f"Error: {exc}", err=True)
-        raise typer.Exit(2) from None
-    finally:
-        if runner is not None:
-            runner.close()
+    with executor_from(executor, workers, address, bad=_bad_parameter) as runner:
+        try:
+            summary = build_dataset(cfg, progress=progress, executor=runner, only_split=only_split)
+        except DatasetError as exc:
+            typer.echo(f"Error: {exc}", err=True)
+            raise typer.Exit(2) from None
     typer.echo(summary.text())
 
 

@@ -11,7 +11,15 @@ from pathlib import Path
 import typer
 
 from . import cli_eval_paper, cli_eval_tsn
-from .cli_common import address_option, executor_option, fail, workers_option
+from .cli_common import (
+    address_option,
+    checkpoint_option,
+    dataset_option,
+    executor_from,
+    executor_option,
+    fail,
+    workers_option,
+)
 
 eval_app = typer.Typer(
     help="Evaluate: 1-RMSE tables, Hausdorff distance, rotation sweep, reports.",
@@ -32,9 +40,7 @@ def rotation(
     budget: int = typer.Option(
         20, "--budget", help="Refinement budget (tree evaluations) per angle."
     ),
-    checkpoint: Path | None = typer.Option(
-        None, "--checkpoint", help="TSN checkpoint (default: shipped)."
-    ),
+    checkpoint: Path | None = checkpoint_option(),
     size: int = typer.Option(256, "--size", help="Sketch size in pixels."),
     samples: int = typer.Option(10_000, "--samples", help="Hausdorff samples per direction."),
     seed: int = typer.Option(0, "--seed", help="Growth seed for both trees."),
@@ -54,8 +60,6 @@ def rotation(
     from eval.rotation import plot_cases, plot_sweep, rotation_sweep, write_csv, yaw_angles
     from weberpenn import ParamError, load_params
 
-    from .executor import ExecutorError, from_options
-
     try:
         gt = load_params(params)
         n = len(yaw_angles(step))
@@ -73,26 +77,21 @@ def rotation(
         pipeline = Pipeline(load_estimator("tsn", checkpoint=checkpoint), settings)
     except ValueError as e:
         fail(str(e))
-    try:
-        runner = from_options(executor, workers, address)
-    except ExecutorError as e:
-        fail(str(e))
-    try:
-        with tqdm(total=n, desc="rotation sweep", dynamic_ncols=True) as bar:
-            res = rotation_sweep(
-                gt,
-                pipeline,
-                step=step,
-                size=size,
-                samples=samples,
-                seed=seed,
-                progress=lambda i, total: bar.update(i - bar.n),
-                executor=runner,
-                turns=tuple(turn),
-            )
-    finally:
-        if runner is not None:
-            runner.close()
+    with (
+        executor_from(executor, workers, address) as runner,
+        tqdm(total=n, desc="rotation sweep", dynamic_ncols=True) as bar,
+    ):
+        res = rotation_sweep(
+            gt,
+            pipeline,
+            step=step,
+            size=size,
+            samples=samples,
+            seed=seed,
+            progress=lambda i, total: bar.update(i - bar.n),
+            executor=runner,
+            turns=tuple(turn),
+        )
     out.mkdir(parents=True, exist_ok=True)
     write_csv(res.rows, out / "rotation.csv")
     plot_sweep(res, out / "rotation.png")
@@ -107,11 +106,9 @@ def rotation(
 
 @eval_app.command("all")
 def all_(
-    data: Path = typer.Option(..., "--data", help="Dataset folder (treesketch dataset build)."),
+    data: Path = dataset_option(),
     out: Path = typer.Option(Path("reports"), "--out", help="Report folder."),
-    checkpoint: Path | None = typer.Option(
-        None, "--checkpoint", help="TSN checkpoint (default: shipped)."
-    ),
+    checkpoint: Path | None = checkpoint_option(),
     refine_budget: int = typer.Option(
         40, "--refine-budget", help="Refinement budget per tree (0: none)."
     ),
@@ -152,7 +149,6 @@ def all_(
     from eval.scoring import tsn_scorer
 
     from .estimators import NNSEstimator, TSNEstimator
-    from .executor import ExecutorError, from_options
     from .pipeline import Pipeline
 
     extras = []
@@ -187,32 +183,26 @@ def all_(
         rot = []
     else:
         rot = [s.strip() for s in rotation_species.split(",") if s.strip()]
-    try:
-        runner = from_options(executor, workers, address)
-    except ExecutorError as e:
-        fail(str(e))
-    try:
-        path = build_report(
-            data,
-            out,
-            pipeline,
-            main,
-            extras,
-            per_species=per_species,
-            refine_budget=refine_budget,
-            rotation_step=rotation_step,
-            rotation_refine_budget=rotation_budget,
-            rotation_species=rot,
-            samples=samples,
-            max_sketches=max_sketches,
-            command="treesketch " + " ".join(shlex.quote(a) for a in sys.argv[1:]),
-            executor=runner,
-        )
-    except ValueError as e:
-        fail(str(e))
-    finally:
-        if runner is not None:
-            runner.close()
+    with executor_from(executor, workers, address) as runner:
+        try:
+            path = build_report(
+                data,
+                out,
+                pipeline,
+                main,
+                extras,
+                per_species=per_species,
+                refine_budget=refine_budget,
+                rotation_step=rotation_step,
+                rotation_refine_budget=rotation_budget,
+                rotation_species=rot,
+                samples=samples,
+                max_sketches=max_sketches,
+                command="treesketch " + " ".join(shlex.quote(a) for a in sys.argv[1:]),
+                executor=runner,
+            )
+        except ValueError as e:
+            fail(str(e))
     typer.echo(f"wrote {path}")
 
 

@@ -12,7 +12,14 @@ from pathlib import Path
 
 import typer
 
-from .cli_common import address_option, executor_option, fail, workers_option
+from .cli_common import (
+    address_option,
+    checkpoint_option,
+    executor_from,
+    executor_option,
+    fail,
+    workers_option,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_CACHE = Path("out") / "paper_cache"
@@ -28,9 +35,7 @@ def eval_paper(
     cache: Path = typer.Option(
         DEFAULT_CACHE, "--cache", help="Where the generated test data is kept between runs."
     ),
-    checkpoint: Path | None = typer.Option(
-        None, "--checkpoint", help="TSN checkpoint (default: the shipped checkpoints/tsn_lite0.pt)."
-    ),
+    checkpoint: Path | None = checkpoint_option(),
     bar: bool = typer.Option(True, "--progress/--no-progress", help="Progress bars on stderr."),
     executor: str = executor_option("the rotation sweeps' angles and the dataset's trees"),
     workers: int = workers_option(),
@@ -42,7 +47,6 @@ def eval_paper(
     from render.dataset import DatasetConfig, DatasetError, build_dataset
 
     from .estimators import SeededEstimator, TSNEstimator
-    from .executor import ExecutorError, from_options
     from .pipeline import Pipeline
 
     sizes = (QUICK if quick else FULL).check()
@@ -65,29 +69,24 @@ def eval_paper(
         command += f" --checkpoint {portable_path(checkpoint, ROOT)}"
     if out != Path("reports"):
         command += f" --out {portable_path(out, ROOT)}"
-    try:
-        runner = from_options(executor, workers, address)
-    except ExecutorError as e:
-        fail(str(e))
     data = cache / f"sg_test_{sizes.trees_per_species}"
-    try:
-        cfg = DatasetConfig(out=str(data), trees_per_species=sizes.trees_per_species)
-        summary = build_dataset(cfg, progress=bar, executor=runner, only_split="test")
-        if summary.failed:
-            fail(f"{len(summary.failed)} test trees failed to build: {', '.join(summary.failed)}")
+    with executor_from(executor, workers, address) as runner:
+        try:
+            cfg = DatasetConfig(out=str(data), trees_per_species=sizes.trees_per_species)
+            summary = build_dataset(cfg, progress=bar, executor=runner, only_split="test")
+            if summary.failed:
+                failed = ", ".join(summary.failed)
+                fail(f"{len(summary.failed)} test trees failed to build: {failed}")
 
-        def pipeline_for(seed: int) -> Pipeline:
-            return Pipeline(SeededEstimator(estimator, seed))
+            def pipeline_for(seed: int) -> Pipeline:
+                return Pipeline(SeededEstimator(estimator, seed))
 
-        from eval.scoring import tsn_scorer
+            from eval.scoring import tsn_scorer
 
-        res = compute(data, tsn_scorer(estimator.model), pipeline_for, sizes, bar, runner)
-        path = write(out, res, sizes, stamp, command)
-    except (DatasetError, ValueError, OSError) as e:
-        fail(str(e))
-    finally:
-        if runner is not None:
-            runner.close()
+            res = compute(data, tsn_scorer(estimator.model), pipeline_for, sizes, bar, runner)
+            path = write(out, res, sizes, stamp, command)
+        except (DatasetError, ValueError, OSError) as e:
+            fail(str(e))
     typer.echo(f"wrote {path} ({res.seconds / 60:.1f} min; {stamp.short()})")
 
 

@@ -21,6 +21,8 @@ from typing import Any
 import numpy as np
 import typer
 
+from .cli_common import checkpoint_option, dataset_option, fail
+
 
 def evaluate(
     data: Path,
@@ -120,10 +122,8 @@ def format_result(res: dict[str, Any], split: str) -> str:
 
 
 def eval_tsn(
-    data: Path = typer.Option(..., "--data", help="Dataset folder (treesketch dataset build)."),
-    checkpoint: Path | None = typer.Option(
-        None, "--checkpoint", help="TSN checkpoint (default: the shipped one)."
-    ),
+    data: Path = dataset_option(),
+    checkpoint: Path | None = checkpoint_option(),
     split: str = typer.Option("test", "--split", help="train, val or test."),
     max_sketches: int | None = typer.Option(
         None, "--max-sketches", help="Score only the first N sketches."
@@ -146,8 +146,6 @@ def eval_tsn(
 ) -> None:
     """Paper-style table: 1-RMSE per head and overall, species-identification accuracy."""
     from weberpenn.fileio import atomic_write
-
-    from .cli_common import fail
 
     try:
         keep = None if styles is None else tuple(s.strip() for s in styles.split(",") if s.strip())

@@ -6,11 +6,11 @@ from pathlib import Path
 
 import typer
 
-from .cli_common import fail
+from .cli_common import dataset_option, fail
 
 
 def train_cmd(
-    data: Path = typer.Option(..., "--data", help="Dataset folder (treesketch dataset build)."),
+    data: Path = dataset_option(),
     out: Path = typer.Option(..., "--out", help="Checkpoint to write, e.g. checkpoints/NAME.pt."),
     backbone: str = typer.Option("lite0", "--backbone", help="lite0 (pretrained) or resnet_small."),
     size: int = typer.Option(128, "--size", help="Input size in pixels (multiple of 32)."),

@@ -82,37 +82,31 @@ def apply(frames: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.einsum("nij,nj->ni", frames, v)
 
 
-def mat_x(a: np.ndarray) -> np.ndarray:
-    """Batch of rotation matrices about X."""
+def _mat_about(a: np.ndarray, axis: int) -> np.ndarray:
+    """Batch of rotation matrices by angles ``a`` about coordinate ``axis`` (0, 1, 2)."""
     a = np.asarray(a, dtype=np.float64)
     c, s = np.cos(a), np.sin(a)
+    i, j = (axis + 1) % 3, (axis + 2) % 3  # the plane it turns, in right-handed order
     m = np.zeros(a.shape + (3, 3))
-    m[..., 0, 0] = 1.0
-    m[..., 1, 1], m[..., 1, 2] = c, -s
-    m[..., 2, 1], m[..., 2, 2] = s, c
+    m[..., axis, axis] = 1.0
+    m[..., i, i], m[..., i, j] = c, -s
+    m[..., j, i], m[..., j, j] = s, c
     return m
+
+
+def mat_x(a: np.ndarray) -> np.ndarray:
+    """Batch of rotation matrices about X."""
+    return _mat_about(a, 0)
 
 
 def mat_y(a: np.ndarray) -> np.ndarray:
     """Batch of rotation matrices about Y."""
-    a = np.asarray(a, dtype=np.float64)
-    c, s = np.cos(a), np.sin(a)
-    m = np.zeros(a.shape + (3, 3))
-    m[..., 1, 1] = 1.0
-    m[..., 0, 0], m[..., 0, 2] = c, s
-    m[..., 2, 0], m[..., 2, 2] = -s, c
-    return m
+    return _mat_about(a, 1)
 
 
 def mat_z(a: np.ndarray) -> np.ndarray:
     """Batch of rotation matrices about Z."""
-    a = np.asarray(a, dtype=np.float64)
-    c, s = np.cos(a), np.sin(a)
-    m = np.zeros(a.shape + (3, 3))
-    m[..., 2, 2] = 1.0
-    m[..., 0, 0], m[..., 0, 1] = c, -s
-    m[..., 1, 0], m[..., 1, 1] = s, c
-    return m
+    return _mat_about(a, 2)
 
 
 def quat_to_mat(w: np.ndarray, x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:

@@ -158,21 +158,19 @@ def _shift_level(key: str, level: int, lo: float, hi: float):
     return apply
 
 
-def _lean(v: Values, d: float) -> None:
-    if d == 0:
-        return
-    _shift_level("curve", 0, -360.0, 360.0)(v, d)
-    _trunk_segments(v, d)
+def _turn_trunk(back: bool):
+    """Lean the trunk by the value in degrees; ``back``: turn it back as much above its
+    middle (a dog-leg whose top stands upright again: a bend)."""
 
+    def apply(v: Values, d: float) -> None:
+        if d == 0:
+            return
+        _shift_level("curve", 0, -360.0, 360.0)(v, d)
+        if back:
+            _shift_level("curveBack", 0, -360.0, 360.0)(v, -d)
+        _trunk_segments(v, d)
 
-def _bend(v: Values, d: float) -> None:
-    # the trunk turns one way to its middle and back the other way above it: a dog-leg
-    # whose top stands upright again
-    if d == 0:
-        return
-    _shift_level("curve", 0, -360.0, 360.0)(v, d)
-    _shift_level("curveBack", 0, -360.0, 360.0)(v, -d)
-    _trunk_segments(v, d)
+    return apply
 
 
 def _trunk_segments(v: Values, d: float) -> None:
@@ -216,6 +214,28 @@ def _size_keys(v: Values, f: float) -> None:
     v["scaleV"] = float(v["scaleV"]) * f
 
 
+def _factor(
+    name: str, label: str, help: str, lo: float, hi: float, moves: str, apply_fn: Callable
+) -> Control:
+    """A relative control that multiplies (``x``): 1 leaves the tree as it is."""
+    return Control(
+        name, label, help, "number", lo, hi, 0.05, "x", (moves,), neutral=1.0, apply_fn=apply_fn
+    )
+
+
+def _degrees(
+    name: str, label: str, help: str, limit: float, moves: tuple[str, ...], apply_fn: Callable
+) -> Control:
+    """A relative control that adds degrees, up to ``limit`` either way: 0 leaves the
+    tree as it is."""
+    return Control(
+        name, label, help, "number", -limit, limit, 1.0, "°", moves, neutral=0.0, apply_fn=apply_fn
+    )
+
+
+# what a lean or a bend does to the trunk besides turning it (``_trunk_segments``)
+_TRUNK_MOVES = ("attractUp[0]: times 1 - |value| / 90", f"curveRes[0]: at least {TRUNK_CURVE_RES}")
+
 CONTROLS: tuple[Control, ...] = (
     Control(
         "height",
@@ -229,18 +249,14 @@ CONTROLS: tuple[Control, ...] = (
         ("scale, scaleV: both times (wanted height / grown height); every length follows",),
         read_fn=lambda p: tree_height(p),
     ),
-    Control(
+    _factor(
         "crown_width",
         "Crown width",
         "How far the main branches reach out: a narrow or a spreading crown.",
-        "number",
         0.4,
         2.0,
-        0.05,
-        "x",
-        ("length[1]: times the value (the main branches' length)",),
-        neutral=1.0,
-        apply_fn=_scale_level("length", 1, 0.0, 1.0),
+        "length[1]: times the value (the main branches' length)",
+        _scale_level("length", 1, 0.0, 1.0),
     ),
     Control(
         "crown_shape",
@@ -256,93 +272,57 @@ CONTROLS: tuple[Control, ...] = (
         apply_fn=_shape,
         read_fn=lambda p: str(p["shape"]),
     ),
-    Control(
+    _factor(
         "branch_count",
         "Branch count",
         "How many main branches grow from the trunk.",
-        "number",
         0.25,
         2.5,
-        0.05,
-        "x",
-        ("branches[1]: times the value, rounded, at least 1",),
-        neutral=1.0,
-        apply_fn=_scale_level("branches", 1, 1.0, float(SPECS["branches"].hi), integer=True),
+        "branches[1]: times the value, rounded, at least 1",
+        _scale_level("branches", 1, 1.0, float(SPECS["branches"].hi), integer=True),
     ),
-    Control(
+    _degrees(
         "branch_angle",
         "Branch angle",
         "Tilts the main branches away from the trunk (more: flatter) or up towards it.",
-        "number",
-        -45.0,
         45.0,
-        1.0,
-        "°",
         ("downAngle[1]: plus the value, kept in 0..180 degrees",),
-        neutral=0.0,
-        apply_fn=_shift_level("downAngle", 1, 0.0, 180.0),
+        _shift_level("downAngle", 1, 0.0, 180.0),
     ),
-    Control(
+    _degrees(
         "trunk_lean",
         "Trunk lean",
         "Bends the trunk to one side so the tree leans (strongest on a single trunk; a "
         "trunk that forks low leans little).",
-        "number",
-        -90.0,
         90.0,
-        1.0,
-        "°",
-        (
-            "curve[0]: plus the value",
-            "attractUp[0]: times 1 - |value| / 90",
-            f"curveRes[0]: at least {TRUNK_CURVE_RES}",
-        ),
-        neutral=0.0,
-        apply_fn=_lean,
+        ("curve[0]: plus the value", *_TRUNK_MOVES),
+        _turn_trunk(back=False),
     ),
-    Control(
+    _degrees(
         "trunk_bend",
         "Trunk bend",
         "An S-bend in the trunk: it turns one way, then back upright.",
-        "number",
-        -90.0,
         90.0,
-        1.0,
-        "°",
-        (
-            "curve[0]: plus the value",
-            "curveBack[0]: minus the value",
-            "attractUp[0]: times 1 - |value| / 90",
-            f"curveRes[0]: at least {TRUNK_CURVE_RES}",
-        ),
-        neutral=0.0,
-        apply_fn=_bend,
+        ("curve[0]: plus the value", "curveBack[0]: minus the value", *_TRUNK_MOVES),
+        _turn_trunk(back=True),
     ),
-    Control(
+    _factor(
         "leaf_size",
         "Leaf size",
         "How big each leaf is.",
-        "number",
         0.3,
         3.0,
-        0.05,
-        "x",
-        ("leafScale: times the value",),
-        neutral=1.0,
-        apply_fn=_leaf_size,
+        "leafScale: times the value",
+        _leaf_size,
     ),
-    Control(
+    _factor(
         "leaf_density",
         "Leaf density",
         "How many leaves each twig carries.",
-        "number",
         0.1,
         3.0,
-        0.05,
-        "x",
-        ("leaves: its size times the value, rounded, at least 1 (the sign kept)",),
-        neutral=1.0,
-        apply_fn=_leaf_density,
+        "leaves: its size times the value, rounded, at least 1 (the sign kept)",
+        _leaf_density,
     ),
     Control(
         "leafy",

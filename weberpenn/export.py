@@ -21,6 +21,7 @@ import os
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import trimesh
@@ -203,17 +204,24 @@ def obj_files(
     return files
 
 
+def _mesh_format(path: Path) -> str:
+    """``glb`` or ``obj``, by the path's suffix (``.gltf`` is written as ``.glb``)."""
+    suffix = path.suffix.lower()
+    if suffix in (".glb", ".gltf"):
+        return "glb"
+    if suffix == ".obj":
+        return "obj"
+    raise ValueError(f"{path}: unknown mesh format {suffix!r} (use .glb or .obj)")
+
+
 def mesh_paths(path: str | os.PathLike[str], *, textures: bool = True) -> list[Path]:
     """The files a mesh export to ``path`` writes (:func:`mesh_files`), known before the
     tree is grown: for checking outputs first (``weberpenn.fileio.check_targets``)."""
     path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix in (".glb", ".gltf"):
+    if _mesh_format(path) == "glb":
         return [path.with_suffix(".glb")]
-    if suffix == ".obj":
-        extra = [_texture_path(path, name) for name in ("bark", "leaf")] if textures else []
-        return [path, path.with_suffix(".mtl"), *extra]
-    raise ValueError(f"{path}: unknown mesh format {suffix!r} (use .glb or .obj)")
+    extra = [_texture_path(path, name) for name in ("bark", "leaf")] if textures else []
+    return [path, path.with_suffix(".mtl"), *extra]
 
 
 def _texture_path(obj: Path, name: str) -> Path:
@@ -221,36 +229,22 @@ def _texture_path(obj: Path, name: str) -> Path:
 
 
 def mesh_files(
-    tree_mesh: TreeMesh,
-    path: str | os.PathLike[str],
-    *,
-    yaw: float = 0.0,
-    max_faces: int | None = None,
-    textures: bool = True,
+    tree_mesh: TreeMesh, path: str | os.PathLike[str], **options: Any
 ) -> dict[Path, bytes | str]:
-    """``{path: content}`` of a mesh export by the path's suffix (``.glb``: one file;
-    ``.obj``: see :func:`obj_files`), for ``weberpenn.fileio.write_together`` beside other
+    """``{path: content}`` of a mesh export by the path's suffix (``.glb``: one file, see
+    :func:`glb_bytes`; ``.obj``: see :func:`obj_files`; ``options``: theirs, ``yaw``,
+    ``max_faces``, ``textures``), for ``weberpenn.fileio.write_together`` beside other
     outputs."""
     path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix in (".glb", ".gltf"):
-        data = glb_bytes(tree_mesh, yaw=yaw, max_faces=max_faces, textures=textures)
-        return {path.with_suffix(".glb"): data}
-    if suffix == ".obj":
-        return obj_files(tree_mesh, path, yaw=yaw, max_faces=max_faces, textures=textures)
-    raise ValueError(f"{path}: unknown mesh format {suffix!r} (use .glb or .obj)")
+    if _mesh_format(path) == "glb":
+        return {path.with_suffix(".glb"): glb_bytes(tree_mesh, **options)}
+    return obj_files(tree_mesh, path, **options)
 
 
-def export_mesh(
-    tree_mesh: TreeMesh,
-    path: str | os.PathLike[str],
-    *,
-    yaw: float = 0.0,
-    max_faces: int | None = None,
-    textures: bool = True,
-) -> Path:
+def export_mesh(tree_mesh: TreeMesh, path: str | os.PathLike[str], **options: Any) -> Path:
     """Write the tree as ``.glb`` (``.gltf`` is written as ``.glb``) or ``.obj`` (+ ``.mtl``
-    and textures), all files or none; returns the mesh file's path."""
-    files = mesh_files(tree_mesh, path, yaw=yaw, max_faces=max_faces, textures=textures)
+    and textures), all files or none (``options`` as for :func:`mesh_files`); returns the
+    mesh file's path."""
+    files = mesh_files(tree_mesh, path, **options)
     write_together(files)
     return next(iter(files))

@@ -26,30 +26,14 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from eval.hausdorff import bbox_diagonal, hausdorff, tree_hausdorff  # noqa: E402
+from eval.metro import metro  # noqa: E402
 from weberpenn import build_mesh, grow, species  # noqa: E402
 
 
-def metro(a, b, samples: int, diag: float) -> tuple[float, float]:
+def metro_norm(a, b, samples: int, diag: float) -> tuple[float, float]:
     """(max, mean) normalised, both directions, as MeshLab's Metro filter measures."""
-    import pymeshlab
-
-    ms = pymeshlab.MeshSet()
-    for m in (a, b):
-        ms.add_mesh(pymeshlab.Mesh(vertex_matrix=m.vertices, face_matrix=m.faces))
     reach = bbox_diagonal(np.vstack([a.vertices, b.vertices])) * 1.01 + 1e-9
-    r = [
-        ms.get_hausdorff_distance(
-            sampledmesh=i,
-            targetmesh=1 - i,
-            samplevert=True,
-            sampleedge=False,
-            samplefauxedge=False,
-            sampleface=True,
-            samplenum=samples,
-            maxdist=pymeshlab.PureValue(reach),
-        )
-        for i in (0, 1)
-    ]
+    r = metro(a, b, samples, faces=True, reach=reach)
     return max(x["max"] for x in r) / diag, 0.5 * (r[0]["mean"] + r[1]["mean"]) / diag
 
 
@@ -77,7 +61,7 @@ def main() -> None:
                 mx, mn, t_m = float("nan"), float("nan"), float("nan")
             else:
                 t1 = time.perf_counter()
-                mx, mn = metro(ma, mb, args.samples, diag)
+                mx, mn = metro_norm(ma, mb, args.samples, diag)
                 t_m = time.perf_counter() - t1
             nv = len(ma.vertices) + len(mb.vertices)
             print(

@@ -27,6 +27,7 @@ import time
 import traceback
 from typing import Any
 
+from .progress import ProgressRows
 from .worker import WORKER_NICE, progress_info
 
 __all__ = ["JobActor"]
@@ -46,8 +47,8 @@ class JobActor:
         except Exception as exc:  # noqa: BLE001 - told to the pool by ready()
             self.runner = None
             self.error = f"cannot load the estimator {spec!r}: {exc}"
-        self._lock = threading.Lock()
-        self._progress: dict[str, dict[str, Any]] = {}
+        self._progress = ProgressRows()
+        self._lock = threading.Lock()  # of _cancelled
         self._cancelled: set[str] = set()  # by job id: a cancel may overtake its run
 
     def ready(self) -> dict[str, Any]:
@@ -62,9 +63,7 @@ class JobActor:
         }
 
     def poll(self, job_id: str) -> dict[str, Any] | None:
-        with self._lock:
-            p = self._progress.get(job_id)
-            return None if p is None else dict(p)
+        return self._progress.get(job_id)
 
     def cancel(self, job_id: str) -> None:
         with self._lock:
@@ -80,9 +79,7 @@ class JobActor:
         t0 = time.perf_counter()
 
         def progress(p: Any) -> None:
-            info = progress_info(p, time.perf_counter() - t0)
-            with self._lock:
-                self._progress[job_id] = info
+            self._progress.put(job_id, progress_info(p, time.perf_counter() - t0))
 
         def cancelled() -> bool:
             with self._lock:
@@ -102,7 +99,7 @@ class JobActor:
             traceback.print_exc()
             return {"state": "failed", "message": f"{type(exc).__name__}: {exc}", "input": False}
         finally:
+            self._progress.end(job_id)
             with self._lock:
-                self._progress.pop(job_id, None)
                 self._cancelled.discard(job_id)
             gc.collect()

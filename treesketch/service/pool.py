@@ -5,7 +5,8 @@ oldest queued job for each idle worker, relays progress (kept in memory for the 
 stream and saved to the store at most once a second), records results, and watches the
 processes.  A worker that dies (kill -9, out of memory) fails its job with a message and
 is replaced; a worker that has not stopped ``cancel_grace`` seconds after a cancel is
-killed and replaced.  The HTTP front never waits on any of this.
+killed and replaced.  The HTTP front never waits on any of this.  The bookkeeping is
+``poolbase.BasePool``'s, shared with the Ray pool.
 """
 
 from __future__ import annotations
@@ -15,34 +16,26 @@ import multiprocessing as mp
 import os
 import sqlite3
 import sys
-import threading
 import time
 from collections import deque
 from dataclasses import dataclass
 from multiprocessing.connection import Connection, wait
 from typing import Any
 
-from .progress import LiveProgress
-from .store import JobStore, is_full
+from .poolbase import RESPAWN_BACKOFF, BasePool, Slot
+from .store import Job, JobStore, is_full
 
-__all__ = ["WorkerPool"]
-
-RESPAWN_BACKOFF = 5.0  # seconds before retrying a worker that could not load its model
-LOAD_ATTEMPTS = 3  # failed loads in a row after which the pool gives up (``broken``)
+__all__ = ["WorkerPool", "default_workers"]
 
 
-@dataclass
-class _Worker:
+@dataclass(kw_only=True)
+class _Worker(Slot):
     process: Any
     conn: Connection
     cancel: Any  # multiprocessing.Value('b')
-    ready: bool = False
-    job: str | None = None
-    job_started: float = 0.0
-    cancel_at: float | None = None
 
 
-class WorkerPool:
+class WorkerPool(BasePool):
     """``start()``, ``submit_wakeup()``, ``cancel(job_id)``, ``live(job_id)``, ``stop()``."""
 
     def __init__(
@@ -57,48 +50,27 @@ class WorkerPool:
     ) -> None:
         if workers < 1:
             raise ValueError(f"workers must be at least 1, got {workers}")
-        self.store = store
-        self.n = workers
-        self.estimator = estimator
-        self.cancel_grace = cancel_grace
-        self.retention = retention
-        self.sweep_every = sweep_every
+        super().__init__(
+            store, workers, estimator, cancel_grace, retention, sweep_every, respawn_backoff
+        )
         self._ctx = mp.get_context("spawn")
-        self._workers: list[_Worker] = []
-        self._lock = threading.Lock()
-        self._live = LiveProgress(store)
         self._inbox: deque[tuple[_Worker, tuple[str, Any, Any]]] = deque()
         self._wake_r, self._wake_w = self._ctx.Pipe(duplex=False)
-        self._stopping = threading.Event()
-        self._thread: threading.Thread | None = None
-        self.respawn_backoff = respawn_backoff
-        self.error: str | None = None  # the last worker start-up failure
-        self._load_failures = 0
-        self.replaced = 0  # workers replaced after dying
 
     # -- life --------------------------------------------------------------------------
-    def start(self) -> None:
-        self.store.recover()
-        self._workers = [self._spawn() for _ in range(self.n)]
-        self._thread = threading.Thread(target=self._loop, name="treesketch-pool", daemon=True)
-        self._thread.start()
-
     def stop(self, timeout: float = 5.0) -> None:
-        self._stopping.set()
-        self.wakeup()
-        if self._thread is not None:
-            self._thread.join(timeout)
-        for w in self._workers:
+        self._stop_thread(timeout)
+        for w in self._slots:
             w.cancel.value = 1  # a running job stops at its next evaluation
             with contextlib.suppress(OSError):
                 w.conn.send(None)
         deadline = time.monotonic() + timeout
-        for w in self._workers:
+        for w in self._slots:
             w.process.join(max(0.0, deadline - time.monotonic()))
             if w.process.is_alive():
                 w.process.kill()
                 w.process.join(1.0)
-        self._workers = []
+        self._slots = []
 
     def _spawn(self) -> _Worker:
         from .worker import worker_main
@@ -115,25 +87,17 @@ class WorkerPool:
         child.close()
         return _Worker(process=proc, conn=parent, cancel=flag)
 
+    def _retire(self, w: _Worker) -> None:
+        w.conn.close()
+
     # -- requests from the HTTP side (any thread) --------------------------------------
     def wakeup(self) -> None:
         """A job was queued: look now rather than at the next tick."""
         with contextlib.suppress(OSError):
             self._wake_w.send_bytes(b".")
 
-    def cancel(self, job_id: str) -> bool:
-        """Raise the cancel flag of the worker running ``job_id``; False if none runs it."""
-        with self._lock:
-            for w in self._workers:
-                if w.job == job_id:
-                    w.cancel.value = 1
-                    if w.cancel_at is None:
-                        w.cancel_at = time.monotonic()
-                    return True
-        return False
-
-    def live(self, job_id: str) -> dict[str, Any] | None:
-        return self._live.get(job_id)
+    def _signal_cancel(self, w: _Worker, job_id: str) -> None:
+        w.cancel.value = 1  # seen by the worker at its next evaluation
 
     def status(self) -> list[dict[str, Any]]:
         with self._lock:
@@ -144,17 +108,8 @@ class WorkerPool:
                     "ready": w.ready,
                     "job": w.job,
                 }
-                for w in self._workers
+                for w in self._slots
             ]
-
-    @property
-    def broken(self) -> bool:
-        """True when workers failed to load the estimator LOAD_ATTEMPTS times in a row."""
-        return self._load_failures >= LOAD_ATTEMPTS
-
-    def busy(self) -> int:
-        with self._lock:
-            return sum(w.job is not None for w in self._workers)
 
     # -- the dispatcher thread ---------------------------------------------------------
     def _loop(self) -> None:
@@ -177,37 +132,30 @@ class WorkerPool:
         self._assign()
         waitables: list[Any] = [self._wake_r]
         with self._lock:
-            for w in self._workers:
+            for w in self._slots:
                 if w.process.is_alive():  # a dead one's sentinel would never block
                     waitables += [w.conn, w.process.sentinel]
         ready = wait(waitables, timeout=0.2)
         if self._wake_r in ready:
             while self._wake_r.poll():
                 self._wake_r.recv_bytes()
-        for i in range(len(self._workers)):
-            self._drain(self._workers[i])
+        for i in range(len(self._slots)):
+            self._drain(self._slots[i])
             self._deliver()  # a worker's last answer before its death is seen
-            if not self._workers[i].process.is_alive() and not self.broken:
+            if not self._slots[i].process.is_alive() and not self.broken:
                 self._replace(i)
         self._enforce_cancels()
-        if time.monotonic() - last_sweep > self.sweep_every:
-            last_sweep = time.monotonic()
-            self.store.expire(*self.retention)
-        return last_sweep
+        return self._sweep(last_sweep)
 
-    def _assign(self) -> None:
-        for w in self._workers:
-            if w.ready and w.job is None and w.process.is_alive():
-                job = self.store.claim_next()
-                if job is None:
-                    return
-                self._live.begin(job.id, job.options)
-                with self._lock:
-                    w.cancel.value = 0
-                    w.job, w.job_started, w.cancel_at = job.id, time.monotonic(), None
-                # a dying process fails the send; _replace then fails the job
-                with contextlib.suppress(OSError):
-                    w.conn.send((job.id, job.options))
+    def _idle(self, w: _Worker) -> bool:
+        return super()._idle(w) and w.process.is_alive()
+
+    def _run(self, w: _Worker, job: Job) -> None:
+        w.cancel.value = 0  # (no cancel can name this job before _begin gives it to w)
+        self._begin(w, job)
+        # a dying process fails the send; _replace then fails the job
+        with contextlib.suppress(OSError):
+            w.conn.send((job.id, job.options))
 
     def _drain(self, w: _Worker) -> None:
         """Move what the worker sent into the inbox."""
@@ -228,54 +176,33 @@ class WorkerPool:
         if kind == "ready":
             w.ready = True
             self._load_failures = 0
-            return
-        if kind == "broken":
+        elif kind == "broken":
             self.error = str(payload)
-            return
-        if kind == "progress":
+        elif kind == "progress":
             self._live.update(job_id, payload)
-            return
-        if kind == "done":
-            self.store.finish(job_id, payload)
-        elif kind == "cancelled":
-            self.store.fail(job_id, "cancelled", state="cancelled")
-        elif kind == "failed":
-            self.store.fail(job_id, str(payload["message"]), input_error=bool(payload["input"]))
-        with self._lock:
-            w.job, w.cancel_at = None, None
-        self._live.end(job_id)
+        else:  # done, cancelled or failed
+            self._record(job_id, kind, payload)
+            self._release(w, job_id)
 
     def _replace(self, i: int) -> None:
-        w = self._workers[i]
+        w = self._slots[i]
         code = w.process.exitcode
         if w.job is not None:
-            if w.cancel_at is not None:
-                self.store.fail(w.job, "cancelled", state="cancelled")
-            else:
-                self.store.fail(
-                    w.job,
-                    f"the worker process died while running this job (exit code {code}); "
-                    "submit it again",
-                )
-            self._live.end(w.job)
+            self._fail_lost(
+                w,
+                w.job,
+                f"the worker process died while running this job (exit code {code}); "
+                "submit it again",
+            )
+            self._release(w, w.job)
         if not w.ready:  # died while loading: retry a few times, slowly, then give up
             self.error = self.error or f"a worker exited while loading (exit code {code})"
             self._load_failures += 1
-            if self.broken:
-                return
-            self._stopping.wait(self.respawn_backoff)
-        w.conn.close()
-        fresh = self._spawn()
-        with self._lock:
-            self._workers[i] = fresh
-            self.replaced += 1
+        self._renew(i, slow=not w.ready)
 
-    def _enforce_cancels(self) -> None:
-        now = time.monotonic()
-        for w in self._workers:
-            if w.cancel_at is not None and now - w.cancel_at > self.cancel_grace:
-                w.process.kill()  # _replace records the job as cancelled
-                w.process.join(1.0)
+    def _kill(self, w: _Worker) -> None:
+        w.process.kill()  # _replace records the job as cancelled
+        w.process.join(1.0)
 
 
 def default_workers() -> int:

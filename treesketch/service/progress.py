@@ -2,7 +2,8 @@
 
 Kept in memory for the events stream and ``/jobs/{id}`` (every update), saved to the job
 store at most once every :data:`SAVE_PROGRESS_EVERY` seconds per job (the store is a
-SQLite file: a write per evaluation would slow every reader).
+SQLite file: a write per evaluation would slow every reader).  :class:`ProgressRows`, the
+latest row per job in memory, also keeps a Ray actor's jobs for the pool's polls.
 """
 
 from __future__ import annotations
@@ -13,20 +14,41 @@ from typing import Any
 
 from .store import JobStore
 
-__all__ = ["SAVE_PROGRESS_EVERY", "LiveProgress"]
+__all__ = ["SAVE_PROGRESS_EVERY", "LiveProgress", "ProgressRows"]
 
 SAVE_PROGRESS_EVERY = 1.0
 
 
-class LiveProgress:
+class ProgressRows:
+    """The latest progress row of each running job: ``put(job, row)``, ``get(job)`` (a
+    copy, None when there is none), ``end(job)``; any thread."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._rows: dict[str, dict[str, Any]] = {}
+
+    def put(self, job_id: str, row: dict[str, Any]) -> None:
+        with self._lock:
+            self._rows[job_id] = row
+
+    def get(self, job_id: str) -> dict[str, Any] | None:
+        with self._lock:
+            row = self._rows.get(job_id)
+            return None if row is None else dict(row)
+
+    def end(self, job_id: str) -> None:
+        with self._lock:
+            self._rows.pop(job_id, None)
+
+
+class LiveProgress(ProgressRows):
     """``begin(job, options)``, ``update(job, info)``, ``get(job)``, ``end(job)``; any
     thread."""
 
     def __init__(self, store: JobStore, save_every: float = SAVE_PROGRESS_EVERY) -> None:
+        super().__init__()
         self.store = store
         self.save_every = float(save_every)
-        self._lock = threading.Lock()
-        self._rows: dict[str, dict[str, Any]] = {}
         self._saved: dict[str, float] = {}
 
     def begin(self, job_id: str, options: dict[str, Any]) -> None:
@@ -55,11 +77,6 @@ class LiveProgress:
             snapshot = dict(row)
         if due:
             self.store.set_progress(job_id, snapshot)
-
-    def get(self, job_id: str) -> dict[str, Any] | None:
-        with self._lock:
-            row = self._rows.get(job_id)
-            return None if row is None else dict(row)
 
     def end(self, job_id: str) -> None:
         with self._lock:

@@ -18,7 +18,8 @@ An actor lost mid-job (killed, out of memory, its node gone) costs one attempt: 
 goes back to the head of the queue and runs on another actor; lost a second time it is
 failed with a message.  A job that fails for its own reason (a blank page) is reported,
 never retried.  Lost actors are replaced; idle ones are probed every ``PROBE_EVERY``
-seconds (and at once after a loss) so that a job is not sent to a dead one.
+seconds (and at once after a loss) so that a job is not sent to a dead one.  The
+bookkeeping is ``poolbase.BasePool``'s, shared with the local pool.
 """
 
 from __future__ import annotations
@@ -31,10 +32,9 @@ import traceback
 from dataclasses import dataclass
 from typing import Any
 
-from .pool import LOAD_ATTEMPTS, RESPAWN_BACKOFF
-from .progress import LiveProgress
+from .poolbase import RESPAWN_BACKOFF, BasePool, Slot
 from .runner import JobOptions
-from .store import JobStore, is_full
+from .store import Job, JobStore, is_full
 
 __all__ = ["MAX_ATTEMPTS", "RayWorkerPool"]
 
@@ -44,30 +44,28 @@ TICK = 0.1  # longest wait of the dispatcher (a submitted job waits at most this
 MAX_ATTEMPTS = 2  # runs of one job on actors that were lost under it
 
 
-@dataclass
-class _Actor:
+@dataclass(kw_only=True)
+class _Actor(Slot):
     handle: Any
     ready_ref: Any  # the pending ready() probe, or None
     loaded: bool = False  # answered a probe once: a later lost probe is no load failure
-    ready: bool = False
     node: str = ""
     actor: str = ""
     pid: int = 0
     probed_at: float = 0.0
-    job: str | None = None
     attempt: int = 0
     run_ref: Any = None
     poll_ref: Any = None
     polled_at: float = 0.0
-    cancel_at: float | None = None
-    killed: bool = False
 
 
-class RayWorkerPool:
+class RayWorkerPool(BasePool):
     """``workers`` actors of ``cpus_per_worker`` CPUs (a job runs on one thread; 0: Ray
     reserves none; None workers: one per CPU of the cluster).  ``address``: an existing
     cluster; None uses the Ray this process already runs, or starts a local one with
     ``workers`` CPUs and stops it at :meth:`stop`."""
+
+    thread_name = "treesketch-ray-pool"
 
     def __init__(
         self,
@@ -85,25 +83,13 @@ class RayWorkerPool:
             raise ValueError(f"workers must be at least 1, got {workers}")
         if not 0 <= cpus_per_worker <= 1024:
             raise ValueError(f"cpus_per_worker must be in [0, 1024], got {cpus_per_worker}")
+        super().__init__(
+            store, workers or 0, estimator, cancel_grace, retention, sweep_every, respawn_backoff
+        )
         self.cpus_per_worker = cpus_per_worker
-        self.store = store
-        self.n = workers or 0
-        self.estimator = estimator
         self.address = address
-        self.cancel_grace = cancel_grace
-        self.retention = retention
-        self.sweep_every = sweep_every
-        self.respawn_backoff = respawn_backoff
-        self.error: str | None = None
-        self.replaced = 0
-        self._load_failures = 0
-        self._actors: list[_Actor] = []
-        self._lock = threading.Lock()
-        self._live = LiveProgress(store)
         self._attempts: dict[str, int] = {}  # job id -> runs lost with their actor
         self._wake = threading.Event()
-        self._stopping = threading.Event()
-        self._thread: threading.Thread | None = None
         self._owns_ray = False
         self._ray: Any = None
         self._cls: Any = None
@@ -130,20 +116,13 @@ class RayWorkerPool:
             max_concurrency=4,
             scheduling_strategy="SPREAD",
         )
-        self.store.recover()
-        self._actors = [self._spawn() for _ in range(self.n)]
-        self._thread = threading.Thread(target=self._loop, name="treesketch-ray-pool", daemon=True)
-        self._thread.start()
+        super().start()
 
     def stop(self, timeout: float = 5.0) -> None:
-        self._stopping.set()
-        self._wake.set()
-        if self._thread is not None:
-            self._thread.join(timeout)
-        for a in self._actors:
-            with contextlib.suppress(Exception):  # a dead actor or a Ray going away
-                self._ray.kill(a.handle, no_restart=True)
-        self._actors = []
+        self._stop_thread(timeout)
+        for a in self._slots:
+            self._retire(a)
+        self._slots = []
         if self._owns_ray and self._ray.is_initialized():
             self._ray.shutdown()
         self._owns_ray = False
@@ -152,29 +131,22 @@ class RayWorkerPool:
         handle = self._cls.remote(self.estimator)
         return _Actor(handle=handle, ready_ref=handle.ready.remote(), probed_at=time.monotonic())
 
+    def _retire(self, a: _Actor) -> None:
+        with contextlib.suppress(Exception):  # a dead actor or a Ray going away
+            self._ray.kill(a.handle, no_restart=True)
+
     # -- requests from the HTTP side (any thread) --------------------------------------
     def wakeup(self) -> None:
         self._wake.set()
 
-    def cancel(self, job_id: str) -> bool:
-        """Ask the actor running ``job_id`` to stop; False if none runs it."""
-        with self._lock:
-            for a in self._actors:
-                if a.job == job_id:
-                    if a.cancel_at is None:
-                        a.cancel_at = time.monotonic()
-                        a.handle.cancel.remote(job_id)
-                    return True
-        return False
+    def _signal_cancel(self, a: _Actor, job_id: str) -> None:
+        a.handle.cancel.remote(job_id)  # seen by the actor at its next evaluation
 
     def actor_of(self, job_id: str) -> Any | None:
         """The Ray actor handle running ``job_id`` (None if none runs it): for operators'
         tools and fault tests, e.g. ``ray.kill(pool.actor_of(job_id))``."""
         with self._lock:
-            return next((a.handle for a in self._actors if a.job == job_id), None)
-
-    def live(self, job_id: str) -> dict[str, Any] | None:
-        return self._live.get(job_id)
+            return next((a.handle for a in self._slots if a.job == job_id), None)
 
     def status(self) -> list[dict[str, Any]]:
         with self._lock:
@@ -188,17 +160,8 @@ class RayWorkerPool:
                     "job": a.job,
                     "attempt": a.attempt if a.job else None,  # 2: a lost actor's job again
                 }
-                for a in self._actors
+                for a in self._slots
             ]
-
-    @property
-    def broken(self) -> bool:
-        """True when actors failed to load the estimator LOAD_ATTEMPTS times in a row."""
-        return self._load_failures >= LOAD_ATTEMPTS
-
-    def busy(self) -> int:
-        with self._lock:
-            return sum(a.job is not None for a in self._actors)
 
     # -- the dispatcher thread ---------------------------------------------------------
     def _loop(self) -> None:
@@ -206,9 +169,7 @@ class RayWorkerPool:
         while not self._stopping.is_set():
             try:
                 self._step()
-                if time.monotonic() - last_sweep > self.sweep_every:
-                    last_sweep = time.monotonic()
-                    self.store.expire(*self.retention)
+                last_sweep = self._sweep(last_sweep)
             except Exception as exc:  # noqa: BLE001 - e.g. the cluster unreachable for a while
                 # the dispatcher must outlive it, or every running job would hang
                 traceback.print_exc()
@@ -218,14 +179,14 @@ class RayWorkerPool:
     def _step(self) -> None:
         self._assign()
         refs = [
-            r for a in self._actors for r in (a.ready_ref, a.run_ref, a.poll_ref) if r is not None
+            r for a in self._slots for r in (a.ready_ref, a.run_ref, a.poll_ref) if r is not None
         ]
         if refs:
             self._ray.wait(refs, num_returns=1, timeout=TICK)
         else:
             self._wake.wait(TICK)
         self._wake.clear()
-        for i in range(len(self._actors)):
+        for i in range(len(self._slots)):
             self._check(i)
         self._probe_and_poll()
         self._enforce_cancels()
@@ -233,28 +194,20 @@ class RayWorkerPool:
     def _done(self, ref: Any) -> bool:
         return ref is not None and bool(self._ray.wait([ref], timeout=0)[0])
 
-    def _assign(self) -> None:
-        for a in self._actors:
-            if not (a.ready and a.job is None):
-                continue
-            job = self.store.claim_next()
-            if job is None:
-                return
-            try:
-                views = JobOptions.from_dict(job.options).views
-                drawings = self.store.read_uploads(job.id, views)
-            except OSError as exc:
-                self.store.fail(job.id, f"the uploaded sketch is gone: {exc}")
-                continue
-            attempt = self._attempts.get(job.id, 0) + 1
-            self._live.begin(job.id, job.options)
-            with self._lock:
-                a.job, a.attempt, a.cancel_at = job.id, attempt, None
-                a.polled_at = time.monotonic()
-            a.run_ref = a.handle.run.remote(job.id, job.options, drawings)
+    def _run(self, a: _Actor, job: Job) -> None:
+        try:
+            views = JobOptions.from_dict(job.options).views
+            drawings = self.store.read_uploads(job.id, views)
+        except OSError as exc:
+            self.store.fail(job.id, f"the uploaded sketch is gone: {exc}")
+            return
+        # (read with the job only: status shows an attempt once _begin gives the job)
+        a.attempt, a.polled_at = self._attempts.get(job.id, 0) + 1, time.monotonic()
+        self._begin(a, job)
+        a.run_ref = a.handle.run.remote(job.id, job.options, drawings)
 
     def _check(self, i: int) -> None:
-        a = self._actors[i]
+        a = self._slots[i]
         if self._done(a.ready_ref):
             self._on_ready(i)
             return
@@ -268,7 +221,7 @@ class RayWorkerPool:
             self._on_result(i)
 
     def _on_ready(self, i: int) -> None:
-        a = self._actors[i]
+        a = self._slots[i]
         ref, a.ready_ref = a.ready_ref, None
         try:
             info = self._ray.get(ref)
@@ -276,12 +229,12 @@ class RayWorkerPool:
             if not a.loaded:
                 self.error = self.error or f"a worker actor died while loading: {_first(exc)}"
                 self._load_failures += 1
-            self._replace(i, slow=not a.loaded)
+            self._renew(i, slow=not a.loaded)
             return
         if info["error"]:
             self.error = str(info["error"])
             self._load_failures += 1
-            self._replace(i, slow=True)
+            self._renew(i, slow=True)
             return
         with self._lock:
             a.ready, a.loaded, a.node, a.pid = True, True, info["node"], int(info["pid"])
@@ -292,7 +245,7 @@ class RayWorkerPool:
         from weberpenn.fileio import write_together
 
         ray = self._ray
-        a = self._actors[i]
+        a = self._slots[i]
         job_id, ref = a.job, a.run_ref
         assert job_id is not None
         a.run_ref = a.poll_ref = None
@@ -315,58 +268,36 @@ class RayWorkerPool:
                     what = "storage full: " if is_full(exc) else ""
                     self.store.fail(job_id, f"{what}the results could not be saved: {exc}")
                 else:
-                    self.store.finish(job_id, summary)
-            elif out["state"] == "cancelled":
-                self.store.fail(job_id, "cancelled", state="cancelled")
+                    self._record(job_id, "done", summary)
             else:
-                self.store.fail(job_id, str(out["message"]), input_error=bool(out["input"]))
+                self._record(job_id, out["state"], out)
         self._release(a, job_id)
 
     def _lost(self, i: int, job_id: str, why: str) -> None:
         """The actor running ``job_id`` died: retry the job once elsewhere, replace it."""
-        a = self._actors[i]
+        a = self._slots[i]
         lost = self._attempts.get(job_id, 0) + 1
-        retried = False
-        if a.cancel_at is not None:
-            self.store.fail(job_id, "cancelled", state="cancelled")
-        elif lost < MAX_ATTEMPTS and self.store.requeue(job_id):
-            self._attempts[job_id], retried = lost, True
+        retried = a.cancel_at is None and lost < MAX_ATTEMPTS and self.store.requeue(job_id)
+        if retried:
+            self._attempts[job_id] = lost
         else:
-            self.store.fail(
+            self._fail_lost(
+                a,
                 job_id,
                 f"the worker running this job was lost {lost} times (last: {why}); submit it again",
             )
         self._release(a, job_id, keep_attempts=retried)
         # its node may have taken others with it: check the idle ones before sending work
-        for other in self._actors:
+        for other in self._slots:
             if other is not a and other.ready and other.job is None:
                 self._probe(other)
-        self._replace(i)
+        self._renew(i)
         self._wake.set()
 
     def _release(self, a: _Actor, job_id: str, keep_attempts: bool = False) -> None:
-        with self._lock:
-            a.job, a.cancel_at = None, None
-        self._live.end(job_id)
+        super()._release(a, job_id)
         if not keep_attempts:
             self._attempts.pop(job_id, None)
-
-    def _replace(self, i: int, slow: bool = False) -> None:
-        """A new actor for slot ``i``; ``slow``: after a failed load, wait first, and give
-        up once the pool is broken."""
-        a = self._actors[i]
-        with contextlib.suppress(Exception):
-            self._ray.kill(a.handle, no_restart=True)
-        if slow:
-            if self.broken:
-                with self._lock:
-                    a.killed, a.ready = True, False
-                return
-            self._stopping.wait(self.respawn_backoff)
-        fresh = self._spawn()
-        with self._lock:
-            self._actors[i] = fresh
-            self.replaced += 1
 
     def _probe(self, a: _Actor) -> None:
         with self._lock:
@@ -375,20 +306,15 @@ class RayWorkerPool:
 
     def _probe_and_poll(self) -> None:
         now = time.monotonic()
-        for a in self._actors:
+        for a in self._slots:
             if a.ready and a.job is None and now - a.probed_at > PROBE_EVERY:
                 self._probe(a)
             elif a.job is not None and a.poll_ref is None and now - a.polled_at > POLL_EVERY:
                 a.polled_at = now
                 a.poll_ref = a.handle.poll.remote(a.job)
 
-    def _enforce_cancels(self) -> None:
-        now = time.monotonic()
-        for a in self._actors:
-            if a.cancel_at is not None and not a.killed and now - a.cancel_at > self.cancel_grace:
-                a.killed = True  # _on_result sees the actor lost and records the cancel
-                with contextlib.suppress(Exception):
-                    self._ray.kill(a.handle, no_restart=True)
+    def _kill(self, a: _Actor) -> None:
+        self._retire(a)  # _on_result sees the actor lost and records the cancel
 
 
 def _first(exc: BaseException) -> str:

@@ -1,0 +1,46 @@
+"""Fixtures shared by test modules: the service tests' drawing (``sketch``), and the page
+tests' (``tests/test_web*.py``) server, browser and page, whose helpers are in
+``web_helpers.py``.  A module may define its own fixture of the same name."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+
+
+@pytest.fixture(scope="session")
+def sketch() -> bytes:
+    """A palm drawn by the renderer, as PNG bytes: what the service tests submit."""
+    from service_helpers import palm_sketch_png
+
+    return palm_sketch_png()
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    """A real server with one worker and the palm test estimator, one per test module (so
+    a module's jobs are its own); its base URL.  A module may define its own."""
+    from web_helpers import palm_service
+
+    with palm_service(tmp_path_factory.mktemp("web")) as url:
+        yield url
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Any]:
+    """Debian's chromium through Playwright."""
+    from web_helpers import chromium
+
+    with chromium() as b:
+        yield b
+
+
+@pytest.fixture
+def page(browser: Any, server: str) -> Iterator[Any]:
+    """The drawing page on a desktop screen, held to the server (see ``guarded_context``)."""
+    from web_helpers import DESKTOP, guarded_context, open_page
+
+    with guarded_context(browser, server, **DESKTOP) as ctx:
+        yield open_page(ctx, server)
