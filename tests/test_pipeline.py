@@ -6,6 +6,7 @@ import time
 
 import numpy as np
 import pytest
+from pipeline_helpers import Fixed, gt_sketch
 
 from treesketch import (
     Cancelled,
@@ -24,30 +25,7 @@ from treesketch.pipeline import (
     rescale_height,
     tree_height,
 )
-from weberpenn import build_mesh, grow, species
-
-
-def _gt_sketch(name: str = "palm", seed: int = 3, yaw: float = 0.0) -> np.ndarray:
-    from render.sketch import SketchRenderer
-
-    return SketchRenderer(build_mesh(grow(species.sample(name, seed)), species=name)).sketch(
-        yaw, 256
-    )
-
-
-class Fixed:
-    """A stand-in estimator: always the same sampled tree."""
-
-    def __init__(self, name: str, seed: int) -> None:
-        self.name = "fixed"
-        self.tree = species.sample(name, seed)
-        self.species = name
-        self.calls = 0
-
-    def estimate(self, sketch: np.ndarray) -> Estimate:
-        self.calls += 1
-        assert sketch.dtype == np.uint8 and sketch.shape == (256, 256)
-        return Estimate(self.tree, self.species, {self.species: 1.0})
+from weberpenn import species
 
 
 def test_fixed_is_an_estimator() -> None:
@@ -56,7 +34,7 @@ def test_fixed_is_an_estimator() -> None:
 
 
 def test_refine_improves_and_fields() -> None:
-    img = _gt_sketch()
+    img = gt_sketch()
     seen = []
     r = Pipeline(Fixed("palm", 9), RefineSettings(budget=25)).run(img, progress=seen.append)
     assert r.species == "palm" and r.estimator == "fixed"
@@ -79,14 +57,14 @@ def test_refine_improves_and_fields() -> None:
 
 
 def test_predict_then_refine_is_the_pipeline() -> None:
-    img = _gt_sketch()
+    img = gt_sketch()
     a = predict_then_refine(img, estimator=Fixed("palm", 9), budget=6)
     b = Pipeline(Fixed("palm", 9), RefineSettings(budget=6)).run(img)
     assert a.params == b.params and a.losses == b.losses and a.yaw == b.yaw
 
 
 def test_no_refine_and_height() -> None:
-    img = _gt_sketch()
+    img = gt_sketch()
     r = Pipeline(Fixed("palm", 9), RefineSettings(refine=False)).run(img, height=7.5)
     assert r.refinement is None
     assert r.losses["after"] == r.losses["before"]
@@ -102,7 +80,7 @@ def test_the_refined_tree_keeps_the_searchs_own_size() -> None:
     # bend, which a sketch framed to its tree cannot tell from the tree's size (the
     # hand-made distance alone: with the embedding's term these 25 evaluations find no
     # better point, and the rule under test needs a search that moves)
-    img = _gt_sketch("bonsai", 3)
+    img = gt_sketch("bonsai", 3)
     start = tree_height(Fixed("bonsai", 9).tree)
     free = Pipeline(Fixed("bonsai", 9), RefineSettings(budget=25, embedding="none")).run(img)
     assert abs(tree_height(free.params) - start) > 0.01 * start
@@ -115,7 +93,7 @@ def test_the_refined_tree_keeps_the_searchs_own_size() -> None:
 @pytest.mark.parametrize("height", [float("inf"), 1e308, float("nan"), 0.0, -1.0])
 def test_bad_height_is_refused_before_any_work(height: float) -> None:
     est = Fixed("palm", 9)
-    img = _gt_sketch()
+    img = gt_sketch()
     t0 = time.perf_counter()
     with pytest.raises(ValueError, match="height"):
         Pipeline(est, RefineSettings(budget=50)).run(img, height=height)
@@ -143,7 +121,7 @@ def test_settings_are_validated(change: dict, match: str) -> None:
 
 
 def test_tiny_time_limit_still_evaluates_the_first_estimate() -> None:
-    r = Pipeline(Fixed("palm", 9), RefineSettings(time_limit=1e-6)).run(_gt_sketch())
+    r = Pipeline(Fixed("palm", 9), RefineSettings(time_limit=1e-6)).run(gt_sketch())
     assert r.refinement is not None and r.refinement.evaluations >= 1
     assert np.isfinite(r.losses["before"]) and np.isfinite(r.losses["after"])
     assert r.losses["after"] <= r.losses["before"]
@@ -157,13 +135,13 @@ def test_cancel_stops_within_one_evaluation() -> None:
 
     with pytest.raises(Cancelled):
         Pipeline(Fixed("palm", 9), RefineSettings(budget=40)).run(
-            _gt_sketch(), progress=seen.append, cancel=cancel
+            gt_sketch(), progress=seen.append, cancel=cancel
         )
     assert max(p.evaluations for p in seen) <= 3
 
 
 def test_template_estimator() -> None:
-    r = Pipeline("template", RefineSettings(budget=8)).run(_gt_sketch("pine", 2))
+    r = Pipeline("template", RefineSettings(budget=8)).run(gt_sketch("pine", 2))
     assert r.estimator == "template" and r.species in species.SPECIES
     assert r.losses["after"] <= r.losses["before"]
     assert set(r.species_scores) == set(species.SPECIES)
@@ -205,7 +183,7 @@ def test_non_trees_are_flagged(kind: str, embedding: str) -> None:
 def test_load_sketch_inputs(tmp_path) -> None:
     from PIL import Image
 
-    img = _gt_sketch()
+    img = gt_sketch()
     p = tmp_path / "s.png"
     Image.fromarray(img).convert("RGBA").save(p)
     assert np.array_equal(load_sketch(p), img)
@@ -236,7 +214,7 @@ class Unsure:
 def test_species_by_synthesis_keeps_the_better_match() -> None:
     seen = []
     r = Pipeline(Unsure(), RefineSettings(budget=12)).run(
-        _gt_sketch("palm", 3), progress=seen.append
+        gt_sketch("palm", 3), progress=seen.append
     )
     assert set(r.extras["tried"]) == {"maple", "palm"}  # pine scores too low to try
     assert r.species == "palm" == min(r.extras["tried"], key=r.extras["tried"].get)
@@ -244,12 +222,12 @@ def test_species_by_synthesis_keeps_the_better_match() -> None:
     assert r.summary()["tried"] == r.extras["tried"]
     evals = [p.evaluations for p in seen]
     assert evals == sorted(evals)  # progress never runs backwards across candidates
-    one = Pipeline(Unsure(), RefineSettings(budget=12, species_tries=1)).run(_gt_sketch("palm", 3))
+    one = Pipeline(Unsure(), RefineSettings(budget=12, species_tries=1)).run(gt_sketch("palm", 3))
     assert one.species == "maple" and set(one.extras["tried"]) == {"maple"}
 
 
 def test_candidates_list_three_species_with_trees_distances_and_probabilities() -> None:
-    r = Pipeline(Unsure(), RefineSettings(budget=12)).run(_gt_sketch("palm", 3))
+    r = Pipeline(Unsure(), RefineSettings(budget=12)).run(gt_sketch("palm", 3))
     names = [c.species for c in r.candidates]
     assert len(names) >= 3 and names[0] == r.species and len(set(names)) == len(names)
     assert abs(sum(c.probability for c in r.candidates) - 1.0) < 0.05
@@ -271,18 +249,18 @@ def test_candidates_list_three_species_with_trees_distances_and_probabilities() 
 
 def test_the_species_the_user_means_is_the_one_refined() -> None:
     est = Unsure()  # it would say maple or palm; the user says pine
-    r = Pipeline(est, RefineSettings(budget=10)).run(_gt_sketch("palm", 3), species="Pine")
+    r = Pipeline(est, RefineSettings(budget=10)).run(gt_sketch("palm", 3), species="Pine")
     assert r.species == "pine" and set(r.extras["tried"]) == {"pine"}
     assert r.params["levels"] == species.base("pine")["levels"]
     assert r.candidates[0].species == "pine" and r.candidates[0].probability == 1.0
     christmas = Pipeline(est, RefineSettings(refine=False)).run(
-        _gt_sketch("palm", 3), species="christmas tree"
+        gt_sketch("palm", 3), species="christmas tree"
     )
     assert (
         christmas.species == "fir" and christmas.params["leaves"] == species.base("fir")["leaves"]
     )
     with pytest.raises(ValueError, match="unknown species 'baobab'"):
-        Pipeline(est, RefineSettings(budget=10)).run(_gt_sketch("palm", 3), species="baobab")
+        Pipeline(est, RefineSettings(budget=10)).run(gt_sketch("palm", 3), species="baobab")
 
 
 def test_posterior_lets_a_confident_network_stand_against_a_small_distance_gap() -> None:
@@ -327,7 +305,7 @@ def test_the_drawing_is_framed_and_prepared_once_per_run(monkeypatch) -> None:
 
     monkeypatch.setattr(objective.PreparedDrawing, "create", classmethod(counting_create))
     monkeypatch.setattr(shape.ShapeTarget, "from_image", counting_from_image)
-    r = Pipeline(Unsure(), RefineSettings(budget=12, embedding="none")).run(_gt_sketch("palm", 3))
+    r = Pipeline(Unsure(), RefineSettings(budget=12, embedding="none")).run(gt_sketch("palm", 3))
     assert set(r.extras["tried"]) == {"maple", "palm"}
     assert len(made) == 1 and np.array_equal(made[0], r.input_sketch)
     framed_input = objective.framed(r.input_sketch, 128)
@@ -338,7 +316,7 @@ def test_a_drawing_prepared_for_other_settings_is_refused() -> None:
     from refine.objective import PreparedDrawing
     from refine.search import refine
 
-    img = _gt_sketch("palm", 3)
+    img = gt_sketch("palm", 3)
     drawing = PreparedDrawing.create(img, 64, "ink")
     with pytest.raises(ValueError, match="prepared for size 64"):
         refine(drawing, species.sample("palm", 9), RefineSettings(budget=2), species="palm")
@@ -351,7 +329,7 @@ def test_progress_shows_the_current_best_tree_within_the_budget() -> None:
     the count never passes the plan (both species' budgets) and the distance only falls."""
     seen = []
     r = Pipeline(Unsure(), RefineSettings(budget=12)).run(
-        _gt_sketch("palm", 3), progress=seen.append
+        gt_sketch("palm", 3), progress=seen.append
     )
     assert set(r.extras["tried"]) == {"maple", "palm"}
     # the plan is known once the candidates are: palm gets max(8, 12 // 2)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from pipeline_helpers import Fixed, gt_sketch
 
 from treesketch import Estimate, Pipeline, RefineSettings, SketchError
 from treesketch.views import (
@@ -14,28 +15,7 @@ from treesketch.views import (
     parse_view,
     parse_yaw,
 )
-from weberpenn import build_mesh, grow, species
-
-
-def _sketch(name: str, seed: int, yaw: float) -> np.ndarray:
-    from render.sketch import SketchRenderer
-
-    mesh = build_mesh(grow(species.sample(name, seed)), species=name)
-    return SketchRenderer(mesh).sketch(yaw, 256)
-
-
-class Fixed:
-    """A stand-in estimator: always the same sampled tree; counts the views it reads."""
-
-    def __init__(self, name: str, seed: int) -> None:
-        self.name = "fixed"
-        self.tree = species.sample(name, seed)
-        self.species = name
-        self.calls = 0
-
-    def estimate(self, sketch: np.ndarray) -> Estimate:
-        self.calls += 1
-        return Estimate(self.tree, self.species, {self.species: 1.0})
+from weberpenn import species
 
 
 @pytest.mark.parametrize(
@@ -97,7 +77,7 @@ def test_fuse_averages_scores_and_continuous_values() -> None:
 
 
 def test_two_views_are_read_refined_and_kept() -> None:
-    front, side = _sketch("palm", 3, 0.0), _sketch("palm", 3, 90.0)
+    front, side = gt_sketch("palm", 3, 0.0), gt_sketch("palm", 3, 90.0)
     est = Fixed("palm", 9)
     seen = []
     r = Pipeline(est, RefineSettings(budget=10, embedding="none")).run(
@@ -119,7 +99,7 @@ def test_two_views_are_read_refined_and_kept() -> None:
 
 
 def test_one_view_is_the_list_of_one() -> None:
-    front = _sketch("palm", 3, 0.0)
+    front = gt_sketch("palm", 3, 0.0)
     cfg = RefineSettings(budget=6, embedding="none")
     a = Pipeline(Fixed("palm", 9), cfg).run(front)
     b = Pipeline(Fixed("palm", 9), cfg).run([front])
@@ -131,7 +111,7 @@ def test_an_unknown_side_is_found() -> None:
     # the truth's own tree drawn from 90 degrees: the start tree is the truth, so the
     # search of the second view's angle must land on 90 (or an equally good mirror)
     tree = species.sample("maple", 4)
-    front, side = _sketch("maple", 4, 0.0), _sketch("maple", 4, 90.0)
+    front, side = gt_sketch("maple", 4, 0.0), gt_sketch("maple", 4, 90.0)
 
     class Truth(Fixed):
         def estimate(self, sketch: np.ndarray) -> Estimate:
@@ -148,5 +128,5 @@ def test_a_blank_second_view_is_refused_before_any_work() -> None:
     est = Fixed("palm", 9)
     blank = np.full((256, 256), 255, np.uint8)
     with pytest.raises(SketchError, match="view 2 of 2"):
-        Pipeline(est, RefineSettings(budget=4)).run([_sketch("palm", 3, 0.0), (blank, 90)])
+        Pipeline(est, RefineSettings(budget=4)).run([gt_sketch("palm", 3, 0.0), (blank, 90)])
     assert est.calls == 0

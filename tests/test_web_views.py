@@ -15,17 +15,10 @@ from typing import Any
 
 import numpy as np
 import pytest
-from web_helpers import chromium, draw_with_mouse, palm_service
+from web_helpers import DESKTOP, INK, draw_with_mouse, guarded_context, open_page, palm_service
 
 pytestmark = pytest.mark.slow
 
-INK = """() => {
-  const c = document.getElementById('pad');
-  const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
-  let n = 0;
-  for (let i = 0; i < d.length; i += 4) if (d[i] < 128) n++;
-  return n;
-}"""
 JOB_TIMEOUT = 180_000  # ms
 BACKGROUND = np.array([0xE8, 0xEE, 0xF0])  # the 3D view's
 
@@ -37,36 +30,11 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
         yield url
 
 
-@pytest.fixture(scope="module")
-def browser() -> Iterator[Any]:
-    with chromium() as b:
-        yield b
-
-
 @pytest.fixture
 def page(browser: Any, server: str) -> Iterator[Any]:
-    """A page that may talk to the server only; page errors and console errors fail."""
-    context = browser.new_context(viewport={"width": 1200, "height": 900})
-    outside: list[str] = []
-
-    def guard(route: Any) -> None:
-        if route.request.url.startswith(server):
-            route.continue_()
-        else:
-            outside.append(route.request.url)
-            route.abort()
-
-    context.route("**/*", guard)
-    errors: list[str] = []
-    pg = context.new_page()
-    pg.on("pageerror", lambda e: errors.append(str(e)))
-    pg.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    pg.goto(server + "/")
-    pg.wait_for_function("document.getElementById('budget').value !== ''")
-    yield pg
-    context.close()
-    assert not outside, f"the page fetched from outside the server: {outside}"
-    assert not errors, errors
+    """The drawing page (conftest's), held to the server, console errors failing too."""
+    with guarded_context(browser, server, console=True, **DESKTOP) as ctx:
+        yield open_page(ctx, server)
 
 
 def lean(mask: np.ndarray) -> float:
