@@ -271,7 +271,7 @@ def _plot_published(results: Sequence[PublishedResult], budget: int, stamp: Stam
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(7.2, 3.0))
+    fig, ax = plt.subplots(figsize=(9.0, 3.2))
     x = np.arange(len(results))
     w = 0.21
     bars = [
@@ -287,7 +287,7 @@ def _plot_published(results: Sequence[PublishedResult], budget: int, stamp: Stam
     ax.set_xticks(x, [r.file.removesuffix(".json") for r in results], rotation=60, fontsize=6)
     ax.set_ylabel("max Hausdorff / GT diagonal")
     ax.set_title("the 15 published trees (front sketch; front + side)", fontsize=10)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # off the bars
     ax.grid(alpha=0.3, axis="y")
     fig.tight_layout(rect=(0, 0.04, 1, 1))
     _footer(fig, stamp)
