@@ -95,6 +95,8 @@ def test_sliders_variant_and_the_edited_download(page: Any) -> None:
     n = _edits(page)
     page.click("#reset-controls")
     page.wait_for_function(f"Number(document.body.dataset.edits) > {n}", timeout=30_000)
+    # the edit counts as soon as its tree arrives; the height is read once it is loaded
+    page.wait_for_selector("body[data-model=loaded]")
     assert page.inner_text("#view-note") == ""
     assert _height(page) == pytest.approx(h0, rel=0.01)
 
