@@ -348,13 +348,13 @@ def _reliability_png(rows: list, e: float, n: int, path: Path) -> None:
             label="mean confidence -> accuracy")  # fmt: skip
     ax.set_xlim(0, 1)
     ax.set_ylim(0, 1.08)
-    ax.set_xlabel("confidence (the species' probability; capped when the warning fires)")
+    ax.set_xlabel("confidence of the result")
     ax.set_ylabel("share of drawings whose species is right")
     ax.set_title(f"Reliability on {n} held-out drawings, ECE {e:.3f}", fontsize=9)
     ax.legend(fontsize=7, loc="lower right")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
+    fig.savefig(path, bbox_inches="tight")
 
 
 def main() -> None:

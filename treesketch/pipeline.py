@@ -367,11 +367,11 @@ def _view_turns(
     from render.sketch import SketchRenderer
 
     out = []
+    r = SketchRenderer(mesh)  # the scene built once for every view and turn
     for v, d in zip(views[1:], drawings[1:], strict=True):
         if v.yaw is not None:
             out.append(float(v.yaw))
             continue
-        r = SketchRenderer(mesh)
         dist = [d.distance(r.sketch((yaw + t) % 360.0, d.size)) for t in START_YAWS]
         out.append(START_YAWS[int(np.argmin(dist))])
     return out
@@ -531,21 +531,19 @@ class Pipeline:
 
         start = est.params if chosen is None else est.params_for(chosen)
         mesh0 = build_mesh(grow(start), species=est.species if chosen is None else chosen)
-        before = SketchRenderer(mesh0).sketch(yaw0, SKETCH_SIZE)
+        draw0 = SketchRenderer(mesh0)  # each tree's scene built once for all its views
+        before = draw0.sketch(yaw0, SKETCH_SIZE)
         if params1 is start:
-            mesh1, after = mesh0, before
+            mesh1, after, draw1 = mesh0, before, draw0
         else:
             mesh1 = build_mesh(grow(params1), species=name)
-            after = SketchRenderer(mesh1).sketch(yaw1, SKETCH_SIZE)
+            draw1 = SketchRenderer(mesh1)
+            after = draw1.sketch(yaw1, SKETCH_SIZE)
         turns = _view_turns(views, result_refine, drawings, mesh0, yaw0)
         view_results = [ViewResult(0.0, img, before, after, math.nan, math.nan)]
         for i, turn in enumerate(turns, start=1):
-            b = SketchRenderer(mesh0).sketch((yaw0 + turn) % 360.0, SKETCH_SIZE)
-            a = (
-                b
-                if mesh1 is mesh0
-                else SketchRenderer(mesh1).sketch((yaw1 + turn) % 360.0, SKETCH_SIZE)
-            )
+            b = draw0.sketch((yaw0 + turn) % 360.0, SKETCH_SIZE)
+            a = b if mesh1 is mesh0 else draw1.sketch((yaw1 + turn) % 360.0, SKETCH_SIZE)
             view_results.append(
                 ViewResult(turn, imgs[i], b, a, math.nan, math.nan, views[i].yaw is None)
             )
