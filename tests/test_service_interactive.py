@@ -96,6 +96,8 @@ def test_post_trees_answers_a_light_glb(client: TestClient) -> None:
         ({"params": "P", "seed": -1}, 422, "seed"),
         ({"params": "P", "max_faces": 3}, 422, "max_faces"),
         ({"params": "P", "species": "oak-ish"}, 422, "species"),
+        ({"params": "P", "yaw": "north"}, 422, "yaw"),
+        ({"params": "P", "yaw": True}, 422, "yaw"),
     ],
 )
 def test_post_trees_refuses_bad_requests(
@@ -113,6 +115,12 @@ def test_post_trees_refuses_non_json_and_huge_bodies(client: TestClient) -> None
     assert r.status_code == 422 and "not JSON" in r.json()["detail"]
     r = client.post("/trees", content=b"x" * (300 * 1024))
     assert r.status_code == 413
+    # Python's JSON reader takes the non-standard Infinity and NaN: still no yaw
+    params = json.dumps(species.sample("palm", 0).to_dict())
+    for bad in ("Infinity", "NaN"):
+        body = f'{{"params": {params}, "yaw": {bad}}}'.encode()
+        r = client.post("/trees", content=body, headers={"Content-Type": "application/json"})
+        assert r.status_code == 422 and "yaw" in r.json()["detail"], r.text
 
 
 def test_a_running_job_shows_its_current_best_tree(client: TestClient, sketch: bytes) -> None:
@@ -145,6 +153,18 @@ def test_a_running_job_shows_its_current_best_tree(client: TestClient, sketch: b
     assert view.status_code == 200 and _faces(view.content) <= VIEW_FACES
     assert client.get(f"/jobs/{job_id}/preview/other.bin").status_code == 404
     assert client.get("/jobs/nope/preview/tree.glb").status_code == 404
+    # editing the job's tree starts from the very tree on show: grown again at the result's
+    # yaw it is the job's own viewer file, byte for byte (the 3D view does not jump)
+    result = bodies[-1]["result"]
+    again = client.post(
+        "/trees",
+        json={"params": result["params"], "species": result["species"], "yaw": result["yaw"]},
+        headers=GLB,
+    )
+    assert again.status_code == 200, again.text
+    assert again.content == view.content
+    turned = {"params": result["params"], "species": result["species"], "yaw": result["yaw"] + 90}
+    assert client.post("/trees", json=turned, headers=GLB).content != view.content
 
 
 def test_a_preview_is_written_at_most_every_two_seconds(tmp_path) -> None:

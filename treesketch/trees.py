@@ -8,6 +8,7 @@ controls applied, the tree grown) and :func:`light_glb` (the viewer's GLB, at mo
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -29,13 +30,16 @@ class TreeRequest:
     """A tree to grow: ``params`` (a Sapling dictionary), ``controls`` (name: value, see
     ``weberpenn.controls``), ``seed`` (the variant; same as ``controls["seed"]``),
     ``species`` (its textures and leaf shape; None: the nearest species to ``params``),
-    ``max_faces`` (None: full detail)."""
+    ``max_faces`` (None: full detail), ``yaw`` (degrees: the GLB is turned to face the
+    camera that sees the tree from there, as a job's files face their drawing, so an edit
+    of a job's tree keeps the side it was drawn from)."""
 
     params: TreeParams
     controls: Mapping[str, Any] = field(default_factory=dict)
     seed: int | None = None
     species: str | None = None
     max_faces: int | None = VIEW_FACES
+    yaw: float = 0.0
 
     @classmethod
     def from_json(cls, body: Any) -> TreeRequest:
@@ -45,11 +49,11 @@ class TreeRequest:
 
         if not isinstance(body, Mapping):
             raise ValueError("the body must be a JSON object with 'params'")
-        unknown = sorted(set(body) - {"params", "controls", "seed", "species", "max_faces"})
+        unknown = sorted(set(body) - {"params", "controls", "seed", "species", "max_faces", "yaw"})
         if unknown:
             raise ValueError(
                 f"unknown field(s) {', '.join(unknown)}; "
-                "send params, controls, seed, species, max_faces"
+                "send params, controls, seed, species, max_faces, yaw"
             )
         if "params" not in body or not isinstance(body["params"], Mapping):
             raise ValueError("'params' must be a parameter dictionary (a JSON object)")
@@ -64,7 +68,10 @@ class TreeRequest:
         max_faces = body.get("max_faces", VIEW_FACES)
         if max_faces is not None:
             check_budget(max_faces)
-        return cls(params, controls, controls.get("seed"), name, max_faces)
+        yaw = body.get("yaw", 0.0)
+        if isinstance(yaw, bool) or not isinstance(yaw, int | float) or not math.isfinite(yaw):
+            raise ValueError(f"'yaw' must be a finite number of degrees, got {yaw!r:.40}")
+        return cls(params, controls, controls.get("seed"), name, max_faces, float(yaw) % 360.0)
 
 
 @dataclass(frozen=True)

@@ -4,8 +4,8 @@ job's current best tree.
 - ``GET /controls``: the controls table (``weberpenn.controls``), every species' defaults
   (the species list is ``weberpenn.species.SPECIES``), the default budget and the
   viewer's triangle budget.
-- ``POST /trees`` (JSON: ``params``, ``controls``, ``seed``, ``species``, ``max_faces``):
-  the tree grown; ``Accept: model/gltf-binary`` answers its GLB (the tree's height,
+- ``POST /trees`` (JSON: ``params``, ``controls``, ``seed``, ``species``, ``max_faces``,
+  ``yaw``): the tree grown (its GLB turned to face the view from ``yaw``); ``Accept: model/gltf-binary`` answers its GLB (the tree's height,
   species and control values in ``X-Tree-*`` headers), otherwise JSON with its
   parameters, species, height and control values.
 - ``GET /jobs/{id}/preview/tree.glb`` and ``.../sketch.png``: the job's current best tree
@@ -89,7 +89,7 @@ def grow_request(body: Any, want_glb: bool) -> tuple[bytes | dict[str, Any], dic
         "X-Tree-Controls": json.dumps(tree.controls, separators=(",", ":")),
     }
     if want_glb:
-        return light_glb(tree.mesh, max_faces=request.max_faces), facts
+        return light_glb(tree.mesh, yaw=request.yaw, max_faces=request.max_faces), facts
     return {
         "params": tree.params.to_dict(),
         "species": tree.species,

@@ -390,7 +390,7 @@ async function switchTo(i) {
   setPreset(false);
   updateSideButton();
   $("edit-status").textContent = `Growing the ${c.name}...`;
-  await startEdit({ params: c.params, species: c.species }, true);
+  await startEdit({ params: c.params, species: c.species, yaw: job.result.yaw }, true);
   if (mine !== switchCount || !edit) return;
   const r = await treeRequest({}, "model/gltf-binary", table ? table.view_faces : null);
   if (mine !== switchCount) return;
@@ -473,7 +473,7 @@ async function restoreFromUrl() {
 
 // ---- shaping the tree: the controls (GET /controls, POST /trees) ---------------------
 let table = null; // GET /controls
-let edit = null; // {params, species, initial: {name: value}, busy, again, edited, switched}
+let edit = null; // {params, species, yaw, initial: {name: value}, busy, again, edited, switched}
 let editTimer = null;
 
 async function loadControls() {
@@ -547,7 +547,8 @@ function showValue(c, input, out) {
 }
 
 async function treeRequest(controls, accept, maxFaces) {
-  const body = { params: edit.params, species: edit.species, controls, max_faces: maxFaces };
+  // turned like the job's files, so an edit keeps the side the tree was drawn from
+  const body = { params: edit.params, species: edit.species, controls, max_faces: maxFaces, yaw: edit.yaw };
   return api("/trees", {
     method: "POST",
     body: JSON.stringify(body),
@@ -559,7 +560,7 @@ async function treeRequest(controls, accept, maxFaces) {
 async function startEdit(result, switched = false) {
   if (!table) return;
   const count = edit ? edit.count : 0;
-  const mine = { params: result.params, species: result.species, initial: null, busy: false, again: false, edited: false, switched, count };
+  const mine = { params: result.params, species: result.species, yaw: result.yaw || 0, initial: null, busy: false, again: false, edited: false, switched, count };
   edit = mine;
   const r = await treeRequest({}, "application/json", table.view_faces);
   if (!r.ok || edit !== mine) return;
@@ -666,7 +667,6 @@ $("dl-json").addEventListener("click", (ev) => downloadEdited(ev, "application/j
 // ---- the 3D view ---------------------------------------------------------------------
 const view = $("view");
 let renderer = null, scene = null, camera = null, controls = null, model = null, ground = null;
-let modelFacesDrawing = true; // the model on show is a job's file, turned to face its drawing
 let framedJob = null; // the job whose tree the camera was framed on
 
 function render() { if (renderer) renderer.render(scene, camera); }
@@ -731,7 +731,6 @@ function loadModel(source, frame = true) {
   const onLoad = (gltf) => {
     if (model) scene.remove(model);
     model = gltf.scene;
-    modelFacesDrawing = typeof source === "string";
     scene.add(model);
     let meshes = 0;
     model.traverse((o) => {
@@ -777,12 +776,11 @@ let side = null; // drawing from another side: {job, turn, views, strokes, undon
 // the camera went round to its right.  A job's GLBs are turned to face the first drawing
 // (ExportOptions.face_view: the default front view shows the tree as drawn), and a camera
 // gone round by +t sees what SketchRenderer draws at the result's yaw + t: the drawing's
-// "yaw".  A tree grown by POST /trees (an edit) is not turned: its front is yaw 0.
+// "yaw".  A tree grown by POST /trees (an edit, a candidate) is turned the same way.
 function currentTurn() {
   const dx = camera.position.x - controls.target.x;
   const dz = camera.position.z - controls.target.z;
-  const facing = modelFacesDrawing || !shownJob ? 0 : shownJob.result.yaw;
-  let t = (Math.atan2(dx, dz) * 180) / Math.PI - facing;
+  let t = (Math.atan2(dx, dz) * 180) / Math.PI;
   t = ((t % 360) + 540) % 360 - 180; // -180 <= t < 180
   t = Math.round(t * 10) / 10;
   return t === 0 ? 0 : t; // never -0
