@@ -66,10 +66,10 @@ def evaluate(
         imgs = [dataset_sketch(data / r["sketch"]) for r in chunk]
         if normalise:
             imgs = [prepare_input(i) for i in imgs]
-        alone, mirror = model.raw_views(imgs)
+        (alone, mirror), features = model.views_and_features(imgs)
         out = 0.5 * (alone + mirror)  # what predict uses (flip=True)
-        for r, a, o in zip(chunk, alone, out, strict=True):
-            pred = model.from_raw(o)
+        for r, a, o, f in zip(chunk, alone, out, features, strict=True):
+            pred = model.from_raw(o, f)
             if r["params"] not in params:
                 text = (data / r["params"]).read_text(encoding="utf-8")
                 params[r["params"]] = TreeParams(json.loads(text))

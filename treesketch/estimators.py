@@ -64,8 +64,8 @@ class TSNEstimator:
     def estimate(self, sketch: np.ndarray) -> Estimate:
         with _one_torch_thread():
             raw, features = self.model.raw_and_features([sketch])
-        pred = self.model.from_raw(raw[0])
-        scores = self.model.species_id.scores(pred.matrix)
+        pred = self.model.from_raw(raw[0], features[0])
+        scores = self.model.species_id.scores(pred.matrix, features[0])
         tree = self.model.tree_probabilities(features)
         return Estimate(
             pred.params,

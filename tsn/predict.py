@@ -101,18 +101,24 @@ class TSNModel:
     def raw_views(self, images: Any, mirrored: bool = True) -> tuple[np.ndarray, ...]:
         """Normalised network outputs ``(N, 4, 62)`` for the images as given and, with
         ``mirrored``, for their left-right mirrors (one batch of 2N)."""
-        mats, _ = self._forward(images, mirrored)
-        n = len(mats) // 2 if mirrored else len(mats)
-        return (mats[:n], mats[n:]) if mirrored else (mats,)
+        return self.views_and_features(images, mirrored)[0]
+
+    def views_and_features(
+        self, images: Any, mirrored: bool = True
+    ) -> tuple[tuple[np.ndarray, ...], np.ndarray]:
+        """:meth:`raw_views` and the pooled features the heads read, ``(N, m)`` (with
+        ``mirrored``, each the mean over the image and its mirror)."""
+        mats, pooled = self._forward(images, mirrored)
+        if not mirrored:
+            return (mats,), pooled
+        n = len(mats) // 2
+        return (mats[:n], mats[n:]), 0.5 * (pooled[:n] + pooled[n:])
 
     def raw_and_features(self, images: Any) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`raw_batch` and the pooled features the heads read, ``(N, m)`` (with
         ``self.flip``, each the mean over the image and its mirror)."""
-        mats, pooled = self._forward(images, self.flip)
-        if not self.flip:
-            return mats, pooled
-        n = len(mats) // 2
-        return 0.5 * (mats[:n] + mats[n:]), 0.5 * (pooled[:n] + pooled[n:])
+        views, pooled = self.views_and_features(images, self.flip)
+        return (0.5 * (views[0] + views[1]) if self.flip else views[0]), pooled
 
     def tree_probabilities(self, features: np.ndarray) -> np.ndarray | None:
         """P(each drawing is a tree) from :meth:`raw_and_features`' features, or None when
@@ -126,19 +132,21 @@ class TSNModel:
         views = self.raw_views(images, mirrored=self.flip)
         return 0.5 * (views[0] + views[1]) if self.flip else views[0]
 
-    def from_raw(self, raw: np.ndarray) -> Prediction:
-        """Decode one normalised ``(4, 62)`` network output."""
+    def from_raw(self, raw: np.ndarray, features: np.ndarray | None = None) -> Prediction:
+        """Decode one normalised ``(4, 62)`` network output (its species from the pooled
+        ``(m,)`` features too, when the checkpoint's species classifier reads them)."""
         mat = self.normaliser.denormalise(raw)
-        name = self.species_id.identify(mat)
+        name = self.species_id.identify(mat, features)
         decoded = encoding.decode(mat, self.normaliser)
         projected = wp_species.project(name, decoded)
         return Prediction(projected, name, encoding.split_heads(raw), decoded, mat)
 
     def predict(self, image: Any) -> Prediction:
-        return self.from_raw(self.raw_batch([image])[0])
+        return self.predict_batch([image])[0]
 
     def predict_batch(self, images: Any) -> list[Prediction]:
-        return [self.from_raw(r) for r in self.raw_batch(list(images))]
+        raw, features = self.raw_and_features(list(images))
+        return [self.from_raw(r, f) for r, f in zip(raw, features, strict=True)]
 
     def __call__(self, image: Any) -> Prediction:
         return self.predict(image)

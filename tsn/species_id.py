@@ -14,14 +14,18 @@ over the species' cps).  Everything is plain data (``to_dict``/``from_dict``) so
 inside the checkpoint.
 
 A checkpoint may also carry a :class:`SpeciesClassifier`: a multinomial logistic
-regression over the same output cells, fitted on the network's own outputs for its
-training drawings and temperature-scaled on held-out ones, so its probabilities mean what
-they say.  When present it decides the species and gives the scores (Algorithm 1's shares
-are counts, not probabilities, and over eleven species they tie often).
+regression, temperature-scaled on held-out drawings so its probabilities mean what they
+say.  It reads either the same output cells (``reads="outputs"``: fitted on the network's
+own outputs for its training drawings) or the pooled features the network's heads read
+(``reads="features"``: a richer description of the drawing, which tells a lollipop doodle
+from a birch's slender crown where the 62 predicted values cannot).  When present it
+decides the species and gives the scores (Algorithm 1's shares are counts, not
+probabilities, and over eleven species they tie often).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -42,13 +46,17 @@ _CELLS = np.array(
 )
 
 
+READS = ("outputs", "features")
+
+
 class SpeciesIdError(ValueError):
     """A species identifier that cannot be built or read."""
 
 
 @dataclass(frozen=True)
 class SpeciesClassifier:
-    """Calibrated species probabilities from an un-normalised ``(4, 62)`` output."""
+    """Calibrated species probabilities from what it ``reads``: un-normalised ``(N, 4, 62)``
+    network outputs, or ``(N, m)`` pooled network features."""
 
     species: tuple[str, ...]
     mean: np.ndarray  # (m,) of the standardised features
@@ -57,6 +65,7 @@ class SpeciesClassifier:
     bias: np.ndarray  # (k,)
     temperature: float
     scale: np.ndarray  # (62,) normaliser divisors
+    reads: str = "outputs"
 
     @staticmethod
     def features(mats: np.ndarray, scale: np.ndarray) -> np.ndarray:
@@ -64,22 +73,36 @@ class SpeciesClassifier:
         a = np.asarray(mats, dtype=np.float64).reshape(-1, 4, len(PREDICTED_KEYS))
         return a[:, _CELLS[:, 0], _CELLS[:, 1]] / np.asarray(scale, np.float64)[_CELLS[:, 1]]
 
+    @staticmethod
+    def design(inputs: np.ndarray, scale: np.ndarray, reads: str) -> np.ndarray:
+        """``(N, m)`` regression inputs of what a classifier ``reads``."""
+        if reads == "outputs":
+            return SpeciesClassifier.features(inputs, scale)
+        if reads == "features":
+            x = np.asarray(inputs, dtype=np.float64)
+            if x.ndim != 2:
+                raise SpeciesIdError(f"expected (N, m) pooled features, got shape {x.shape}")
+            return x
+        raise SpeciesIdError(f"a species classifier reads one of {READS}, not {reads!r}")
+
     @classmethod
     def fit(
         cls,
-        mats: np.ndarray,
+        inputs: np.ndarray,
         labels: Sequence[str],
         scale: np.ndarray,
         held_out: tuple[np.ndarray, Sequence[str]] | None = None,
         l2: float = 1e-3,
+        reads: str = "outputs",
     ) -> SpeciesClassifier:
-        """Fit on ``(N, 4, 62)`` outputs and their species; the temperature on
-        ``held_out`` (outputs, species) when given (else 1)."""
+        """Fit on what it ``reads`` (``(N, 4, 62)`` outputs or ``(N, m)`` pooled
+        features) and their species; the temperature on ``held_out`` (the same kind of
+        input, species) when given (else 1)."""
         import torch
         from scipy.optimize import minimize_scalar
 
         names = tuple(sorted(set(labels), key=list(labels).index))
-        x = cls.features(mats, scale)
+        x = cls.design(inputs, scale, reads)
         mean, std = x.mean(axis=0), np.maximum(x.std(axis=0), 1e-6)
         y = np.array([names.index(s) for s in labels])
         xt = torch.from_numpy((x - mean) / std)
@@ -97,7 +120,7 @@ class SpeciesClassifier:
         opt.step(closure)
         out = cls(
             names, mean, std, w.detach().numpy(), b.detach().numpy(), 1.0,
-            np.asarray(scale, np.float64),
+            np.asarray(scale, np.float64), reads,
         )  # fmt: skip
         if held_out is not None and len(held_out[1]):
             logits = out.logits(held_out[0])
@@ -111,23 +134,37 @@ class SpeciesClassifier:
                 return float(-logp[np.arange(len(yh)), yh].mean())
 
             t = minimize_scalar(nll, bounds=(0.05, 20.0), method="bounded").x
-            out = cls(names, mean, std, out.weight, out.bias, float(t), out.scale)
+            out = dataclasses.replace(out, temperature=float(t))
         return out
 
-    def logits(self, mats: np.ndarray) -> np.ndarray:
-        x = (self.features(mats, self.scale) - self.mean) / self.std
+    def logits(self, inputs: np.ndarray) -> np.ndarray:
+        x = (self.design(inputs, self.scale, self.reads) - self.mean) / self.std
         return x @ self.weight.T + self.bias
 
-    def probabilities_many(self, mats: np.ndarray) -> np.ndarray:
-        """``(N, k)`` calibrated probabilities, columns in ``species`` order."""
-        z = self.logits(mats) / self.temperature
+    def probabilities_many(self, inputs: np.ndarray) -> np.ndarray:
+        """``(N, k)`` calibrated probabilities, columns in ``species`` order, of
+        ``(N, ...)`` inputs of the kind it ``reads``."""
+        z = self.logits(inputs) / self.temperature
         z = z - z.max(axis=1, keepdims=True)
         e = np.exp(z)
         return e / e.sum(axis=1, keepdims=True)
 
-    def probabilities(self, mat: np.ndarray) -> dict[str, float]:
-        p = self.probabilities_many(np.asarray(mat)[None])[0]
+    def probabilities(self, one: np.ndarray) -> dict[str, float]:
+        """Of one input of the kind it ``reads``: a ``(4, 62)`` output or ``(m,)``
+        features."""
+        p = self.probabilities_many(np.asarray(one)[None])[0]
         return {s: float(v) for s, v in zip(self.species, p, strict=True)}
+
+    def of(self, mat: np.ndarray, features: np.ndarray | None) -> dict[str, float]:
+        """Probabilities of one drawing from its un-normalised ``(4, 62)`` output and its
+        ``(m,)`` pooled features (None: not at hand, for a classifier that reads outputs)."""
+        if self.reads == "outputs":
+            return self.probabilities(mat)
+        if features is None:
+            raise SpeciesIdError(
+                "this species classifier reads the network's pooled features; none were given"
+            )
+        return self.probabilities(features)
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -138,10 +175,14 @@ class SpeciesClassifier:
             "bias": self.bias.tolist(),
             "temperature": float(self.temperature),
             "scale": self.scale.tolist(),
+            "reads": self.reads,
         }
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> SpeciesClassifier:
+        reads = str(d.get("reads", "outputs"))  # checkpoints before "reads" read outputs
+        if reads not in READS:
+            raise SpeciesIdError(f"a species classifier reads one of {READS}, not {reads!r}")
         return cls(
             tuple(d["species"]),
             np.asarray(d["mean"], np.float64),
@@ -150,6 +191,7 @@ class SpeciesClassifier:
             np.asarray(d["bias"], np.float64),
             float(d["temperature"]),
             np.asarray(d["scale"], np.float64),
+            reads,
         )
 
 
@@ -200,15 +242,26 @@ class SpeciesIdentifier:
             out[s] = float((np.abs(x - self.value[s]) <= self.eps[s]).mean())
         return out
 
-    def identify(self, params_or_matrix: Mapping[str, Any] | np.ndarray) -> str:
-        """The species of a dictionary or of an un-normalised ``(4, 62)`` matrix."""
+    def _classifies(self, features: np.ndarray | None) -> bool:
+        """Whether the classifier decides: there is one and it has what it reads (a
+        dictionary has no network features: Algorithm 1 reads it)."""
+        c = self.classifier
+        return c is not None and (c.reads == "outputs" or features is not None)
+
+    def identify(
+        self,
+        params_or_matrix: Mapping[str, Any] | np.ndarray,
+        features: np.ndarray | None = None,
+    ) -> str:
+        """The species of a dictionary or of an un-normalised ``(4, 62)`` matrix (and the
+        drawing's ``(m,)`` pooled features, for a classifier that reads them)."""
         m = (
             encoding.encode(params_or_matrix)
             if isinstance(params_or_matrix, Mapping)
             else np.asarray(params_or_matrix, dtype=np.float64)
         )
-        if self.classifier is not None:
-            p = self.classifier.probabilities(m)
+        if self.classifier is not None and self._classifies(features):
+            p = self.classifier.of(m, features)
             return max(p, key=lambda s: p[s])
         sh = self.shares(m)
 
@@ -221,11 +274,12 @@ class SpeciesIdentifier:
     def identify_many(self, mats: Sequence[np.ndarray] | np.ndarray) -> list[str]:
         return [self.identify(np.asarray(m)) for m in mats]
 
-    def scores(self, mat: np.ndarray) -> dict[str, float]:
-        """Species scores of an un-normalised ``(4, 62)`` output: the classifier's
-        calibrated probabilities when there is one, else Algorithm 1's shares."""
-        if self.classifier is not None:
-            return self.classifier.probabilities(mat)
+    def scores(self, mat: np.ndarray, features: np.ndarray | None = None) -> dict[str, float]:
+        """Species scores of an un-normalised ``(4, 62)`` output (and the drawing's pooled
+        features): the classifier's calibrated probabilities when there is one, else
+        Algorithm 1's shares."""
+        if self.classifier is not None and self._classifies(features):
+            return self.classifier.of(mat, features)
         return self.shares(mat)
 
     def with_classifier(self, classifier: SpeciesClassifier) -> SpeciesIdentifier:
