@@ -39,6 +39,7 @@ import httpx  # noqa: E402
 
 from tests.service_helpers import serve  # noqa: E402  (the tests' server in a thread)
 from treesketch.service import ServiceConfig, create_app  # noqa: E402
+from treesketch.service.store import FINISHED  # noqa: E402
 from treesketch.trees import VIEW_FACES  # noqa: E402
 from weberpenn import species  # noqa: E402
 from weberpenn.controls import CONTROLS  # noqa: E402
@@ -127,7 +128,7 @@ def first_tree(client: httpx.Client, drawings: list[Path]) -> list[dict[str, Any
                 g = client.get(f"/jobs/{job}/preview/tree.glb")
                 if g.status_code == 200:
                     first = time.perf_counter() - t0
-            if body["state"] in ("done", "failed", "cancelled"):
+            if body["state"] in FINISHED:
                 break
             time.sleep(0.02)
         total = time.perf_counter() - t0

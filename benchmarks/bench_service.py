@@ -29,7 +29,7 @@ import httpx
 import psutil
 
 # benchmarks/ is on the path when this runs as a script
-from serve_process import ServeProcess
+from serve_process import FINISHED, ServeProcess
 
 ROOT = Path(__file__).resolve().parents[1]
 SKETCH = ROOT / "examples" / "sketch_maple.png"
@@ -90,7 +90,7 @@ def run_jobs(
                     active.append(job)
                 while True:
                     state = http.get(f"/jobs/{job}").json()["state"]
-                    if state in ("done", "failed", "cancelled"):
+                    if state in FINISHED:
                         break
                     time.sleep(0.5)
                 with lock:

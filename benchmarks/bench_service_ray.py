@@ -35,7 +35,7 @@ from typing import Any
 import httpx
 
 # benchmarks/ is on the path when this runs as a script
-from serve_process import ServeProcess
+from serve_process import FINISHED, ServeProcess
 
 ROOT = Path(__file__).resolve().parents[1]
 SKETCH = ROOT / "examples" / "hand" / "palm.png"
@@ -59,7 +59,7 @@ class Server(ServeProcess):
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             body = self.http.get(f"/jobs/{job_id}").json()
-            if body["state"] in ("done", "failed", "cancelled"):
+            if body["state"] in FINISHED:
                 return body
             time.sleep(0.02)
         raise RuntimeError(f"job {job_id} did not finish in {timeout} s")

@@ -11,6 +11,10 @@ from pathlib import Path
 
 import httpx
 
+from treesketch.service.store import FINISHED  # a job's end states, for the benchmarks' waits
+
+__all__ = ["FINISHED", "ServeProcess", "free_port"]
+
 
 def free_port() -> int:
     with socket.socket() as s:

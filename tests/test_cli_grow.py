@@ -92,6 +92,21 @@ def test_grow_light_turned_lods_and_bad_lods(tmp_path):
     assert res.exit_code == 2 and "--lods" in res.output
 
 
+@pytest.mark.parametrize("option", ["--max-faces", "--lods"])
+def test_grow_checks_every_triangle_budget_before_growing(tmp_path, monkeypatch, option):
+    import weberpenn
+
+    def no_growing(*args, **kwargs):
+        raise AssertionError("the tree was grown before the budget was checked")
+
+    monkeypatch.setattr(weberpenn, "build_mesh", no_growing)
+    out = tmp_path / "t.glb"
+    res = runner.invoke(app, ["grow", "--species", "palm", "--out", str(out), option, "50"])
+    assert res.exit_code == 2, res.output
+    assert option in res.output and "out of range" in res.output
+    assert not out.exists()
+
+
 def test_grow_with_controls(tmp_path):
     pj = tmp_path / "tree.json"
     save_params(species.sample("maple", 2), pj)

@@ -8,7 +8,14 @@ from typing import NoReturn
 
 import typer
 
-from .cli_common import address_option, executor_from, executor_option, workers_option
+from .cli_common import (
+    address_option,
+    comma_list,
+    executor_from,
+    executor_option,
+    fail,
+    workers_option,
+)
 
 dataset_app = typer.Typer(
     name="dataset",
@@ -19,13 +26,6 @@ dataset_app = typer.Typer(
 
 def _bad_parameter(message: str) -> NoReturn:
     raise typer.BadParameter(message)
-
-
-def _csv(text: str, what: str) -> tuple[str, ...]:
-    items = tuple(x.strip().lower() for x in text.split(",") if x.strip())
-    if not items:
-        raise typer.BadParameter(f"give at least one {what} (comma-separated)")
-    return items
 
 
 @dataset_app.command("build")
@@ -83,13 +83,13 @@ def build(
         cfg = DatasetConfig(
             out=str(out),
             trees_per_species=trees_per_species,
-            species=_csv(species, "species"),
-            views=_csv(views, "view"),
+            species=comma_list(species, "species"),
+            views=comma_list(views, "view"),
             size=size,
             seed=seed,
             val_fraction=val_fraction,
             test_fraction=test_fraction,
-            styles=_csv(styles, "style"),
+            styles=comma_list(styles, "style"),
             styles_per_view=styles_per_view,
         )
     except DatasetError as exc:
@@ -98,8 +98,7 @@ def build(
         try:
             summary = build_dataset(cfg, progress=progress, executor=runner, only_split=only_split)
         except DatasetError as exc:
-            typer.echo(f"Error: {exc}", err=True)
-            raise typer.Exit(2) from None
+            fail(str(exc))
     typer.echo(summary.text())
 
 

@@ -14,6 +14,7 @@ from . import cli_eval_paper, cli_eval_tsn
 from .cli_common import (
     address_option,
     checkpoint_option,
+    comma_list,
     dataset_option,
     executor_from,
     executor_option,
@@ -157,6 +158,12 @@ def all_(
     spread = executor.strip().lower() != "local" or workers != 1 or address is not None
     if spread and model != "tsn":
         fail("--executor/--workers/--address spread the sweeps of --model tsn only")
+    if rotation_species == "all":
+        rot = None
+    elif rotation_species == "none":
+        rot = []
+    else:
+        rot = list(comma_list(rotation_species, "species"))
     try:
         for spec in backbone:  # checked before anything is loaded
             name, sep, path = spec.partition("=")
@@ -177,12 +184,6 @@ def all_(
         pipeline = Pipeline(estimator)
     except (RuntimeError, ValueError, OSError) as e:  # DatasetError is a ValueError
         fail(str(e))
-    if rotation_species == "all":
-        rot = None
-    elif rotation_species == "none":
-        rot = []
-    else:
-        rot = [s.strip() for s in rotation_species.split(",") if s.strip()]
     with executor_from(executor, workers, address) as runner:
         try:
             path = build_report(

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import typer
 
-from .cli_common import checkpoint_option, dataset_option, fail
+from .cli_common import checkpoint_option, dataset_option, fail, styles_kept, styles_option
 
 
 def evaluate(
@@ -129,12 +129,7 @@ def eval_tsn(
         None, "--max-sketches", help="Score only the first N sketches."
     ),
     json_out: Path | None = typer.Option(None, "--json", help="Also write the numbers as JSON."),
-    styles: str | None = typer.Option(
-        None,
-        "--styles",
-        help="Score only sketches drawn in these comma-separated styles (e.g. sg); "
-        "default: every sketch of the split.",
-    ),
+    styles: str | None = styles_option("score"),
     normalise: bool | None = typer.Option(
         None,
         "--normalise/--raw",
@@ -147,8 +142,8 @@ def eval_tsn(
     """Paper-style table: 1-RMSE per head and overall, species-identification accuracy."""
     from weberpenn.fileio import atomic_write
 
+    keep = styles_kept(styles)
     try:
-        keep = None if styles is None else tuple(s.strip() for s in styles.split(",") if s.strip())
         res = evaluate(
             data, checkpoint, split, max_sketches=max_sketches, styles=keep, normalise=normalise
         )

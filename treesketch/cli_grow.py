@@ -8,10 +8,7 @@ from pathlib import Path
 
 import typer
 
-
-def _fail(message: str) -> None:
-    typer.echo(f"error: {message}", err=True)
-    raise typer.Exit(code=2)
+from .cli_common import fail, max_faces_option, preset_option, textures_option
 
 
 def grow_command(
@@ -48,37 +45,21 @@ def grow_command(
     save_params_path: Path | None = typer.Option(
         None, "--save-params", help="Also write the parameters used, as JSON."
     ),
-    preset_path: Path | None = typer.Option(
-        None,
-        "--preset",
-        help="Also write a Sapling preset (.py) that Blender's Sapling 'Import Preset' loads "
-        "(all levels and leaves; growing it here gives back the same tree).",
-    ),
+    preset_path: Path | None = preset_option(),
     yaw: float = typer.Option(
         0.0,
         "--yaw",
         help="Turn the exported tree so the view seen from this camera yaw (degrees) faces "
         "the front view (recorded in the preset's comment).",
     ),
-    max_faces: int | None = typer.Option(
-        None,
-        "--max-faces",
-        min=100,
-        help="Keep the mesh under this many triangles (coarser tubes, fewer and lighter "
-        "leaves, then decimation).",
-    ),
+    max_faces: int | None = max_faces_option(),
     lods: str | None = typer.Option(
         None,
         "--lods",
         help="Also write lighter copies, e.g. '50000,10000' writes OUT_lod1 and OUT_lod2 "
         "under those triangle counts (OUT itself is lod0).",
     ),
-    textures: bool = typer.Option(
-        True,
-        "--textures/--no-textures",
-        help="Bark and leaf textures (made by the project, embedded in GLB, PNGs beside OBJ) "
-        "or flat species colours.",
-    ),
+    textures: bool = textures_option(),
     settings: list[str] = typer.Option(
         [],
         "--set",
@@ -96,22 +77,29 @@ def grow_command(
     from weberpenn.controls import check_controls, grow_with_controls
     from weberpenn.export import mesh_files, mesh_paths, preset_text
     from weberpenn.fileio import OutputError, check_targets, write_together
-    from weberpenn.lod import MIN_FACES, lod
+    from weberpenn.lod import check_budget, lod
     from weberpenn.params import ParamError, params_text
 
     if (species_name is None) == (params_path is None):
-        _fail("give exactly one of --species NAME or --params FILE")
+        fail("give exactly one of --species NAME or --params FILE")
     suffix = out.suffix.lower()
     if suffix not in (".glb", ".obj"):
-        _fail(f"--out {out}: unknown mesh format {suffix or '(none)'!r}; use .glb or .obj")
+        fail(f"--out {out}: unknown mesh format {suffix or '(none)'!r}; use .glb or .obj")
     budgets: list[int] = []
     if lods is not None:
         try:
             budgets = [int(x) for x in lods.split(",") if x.strip()]
         except ValueError:
-            _fail(f"--lods {lods!r}: give triangle counts separated by commas, e.g. 50000,10000")
-        if not budgets or min(budgets) < MIN_FACES:
-            _fail(f"--lods {lods!r}: every triangle count must be at least {MIN_FACES}")
+            fail(f"--lods {lods!r}: give triangle counts separated by commas, e.g. 50000,10000")
+        if not budgets:
+            fail(f"--lods {lods!r}: give at least one triangle count")
+    # every triangle budget in range before the tree is grown (the exporters' own check)
+    asked = [] if max_faces is None else [("--max-faces", max_faces)]
+    for opt, budget in [*asked, *((f"--lods {lods!r}", b) for b in budgets)]:
+        try:
+            check_budget(budget)
+        except ValueError as exc:
+            fail(f"{opt}: {exc}")
     # every output before any work: a folder, a clash or a folder that takes no file
     # fails now, not after the tree is grown and half the files are written
     lod_outs = [out.with_name(f"{out.stem}_lod{i}{out.suffix}") for i in range(1, len(budgets) + 1)]
@@ -128,17 +116,17 @@ def grow_command(
             }
         )
     except OutputError as exc:
-        _fail(str(exc))
+        fail(str(exc))
     controls: dict[str, str] = {}
     for item in settings:
         key, eq, value = item.partition("=")
         if not eq or not key.strip():
-            _fail(f"--set {item!r}: give NAME=VALUE, e.g. --set crown_width=1.3")
+            fail(f"--set {item!r}: give NAME=VALUE, e.g. --set crown_width=1.3")
         controls[key.strip()] = value.strip()
     try:
         checked = check_controls(controls)
     except ValueError as exc:
-        _fail(f"--set: {exc}")
+        fail(f"--set: {exc}")
     name: str | None = None
     try:
         if species_name is not None:
@@ -156,7 +144,7 @@ def grow_command(
             full = build_mesh(grow(params), species=name)
         dt = time.perf_counter() - t0
         if full.is_empty:
-            _fail("these parameters grow an empty tree (no branches and no leaves)")
+            fail("these parameters grow an empty tree (no branches and no leaves)")
         tree = full if max_faces is None else lod(full, max_faces)
         # all the files or none (staged, then renamed together)
         files = dict(mesh_files(tree, out, yaw=yaw, textures=textures))
@@ -168,9 +156,9 @@ def grow_command(
             files[preset_path] = preset_text(params, yaw=yaw)
         write_together(files)
     except (ParamError, ValueError) as exc:
-        _fail(str(exc))
+        fail(str(exc))
     except OSError as exc:
-        _fail(f"cannot write output: {exc}")
+        fail(f"cannot write output: {exc}")
     typer.echo(
         f"{out}: {len(tree.branches.faces)} branch faces, {len(tree.leaves.faces)} leaf faces "
         f"(grow+mesh {dt:.2f} s)"

@@ -11,7 +11,13 @@ import typer
 
 from refine.search import DEFAULT_BUDGET
 
-from .cli_common import fail
+from .cli_common import (
+    checkpoint_option,
+    fail,
+    max_faces_option,
+    preset_option,
+    textures_option,
+)
 
 __all__ = ["predict_command", "register"]
 
@@ -58,9 +64,7 @@ def predict_command(
     params_path: Path | None = typer.Option(
         None, "--params", help="Also write the parameters (JSON)."
     ),
-    preset_path: Path | None = typer.Option(
-        None, "--preset", help="Also write a Blender Sapling preset (.py)."
-    ),
+    preset_path: Path | None = preset_option(),
     compare_path: Path | None = typer.Option(
         None,
         "--compare",
@@ -69,23 +73,17 @@ def predict_command(
     estimator: str = typer.Option(
         "tsn", "--estimator", help="First estimate: tsn, template (no network) or nns."
     ),
-    checkpoint: Path | None = typer.Option(
-        None, "--checkpoint", help="TSN checkpoint (default: the shipped one)."
-    ),
+    checkpoint: Path | None = checkpoint_option(),
     data: Path | None = typer.Option(
         None, "--data", help="Dataset folder (the nns estimator's index)."
     ),
-    max_faces: int | None = typer.Option(
-        None, "--max-faces", help="Keep the exported tree under this many triangles (LOD)."
-    ),
+    max_faces: int | None = max_faces_option(),
     face_view: bool = typer.Option(
         True,
         "--face-view/--no-face-view",
         help="Turn the exported tree so its front faces the way it was drawn (the found yaw).",
     ),
-    textures: bool = typer.Option(
-        True, "--textures/--no-textures", help="Embed bark and leaf textures (else flat colours)."
-    ),
+    textures: bool = textures_option(),
     summary_path: Path | None = typer.Option(
         None, "--summary", help="Also write a JSON summary: species, scores, distances, yaw."
     ),

@@ -10,6 +10,8 @@ import typer
 
 from refine.search import DEFAULT_BUDGET
 
+from .cli_common import fail
+
 LOCAL_HOSTS = ("127.0.0.1", "localhost", "::1")
 ANY_ADDRESS = ("0.0.0.0", "::", "")
 
@@ -135,8 +137,7 @@ def serve_command(
             DataOwner(config.data).probe()
             return create_app(config)
         except StoreError as exc:
-            typer.echo(f"error: {exc}", err=True)
-            raise typer.Exit(2) from None
+            fail(str(exc))
 
     if executor == "local":
         app = make_app()

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from .cli_common import dataset_option, fail
+from .cli_common import dataset_option, fail, styles_kept, styles_option
 
 
 def train_cmd(
@@ -41,12 +41,7 @@ def train_cmd(
     loss: str = typer.Option(
         "mse", "--loss", help="mse: sum of per-head MSE (paper); rmse: sum of per-head RMSE."
     ),
-    styles: str | None = typer.Option(
-        None,
-        "--styles",
-        help="Comma-separated drawing styles to train and validate on (default: every "
-        "sketch of the dataset); leave one out to test on it.",
-    ),
+    styles: str | None = styles_option("train and validate on", "; leave one out to test on it"),
     cache: Path | None = typer.Option(
         None,
         "--cache",
@@ -85,9 +80,7 @@ def train_cmd(
         resume=resume,
         loss=loss,
         more_data=tuple(str(d) for d in more_data),
-        styles=None
-        if styles is None
-        else tuple(s.strip().lower() for s in styles.split(",") if s.strip()),
+        styles=styles_kept(styles),
         init=str(init) if init else None,
         cache=str(cache) if cache else None,
         normalise=normalise,
