@@ -504,7 +504,22 @@ def _maple(rng: np.random.Generator) -> Strokes:
     return s + _crown_inside(rng, 0.5, h, cy, rx, ry)
 
 
+def _generic(rng: np.random.Generator) -> Strokes:
+    """"A tree" as most people draw one: a lollipop or a cloud on a stick (a round crown,
+    about as tall as wide, on a thin trunk), which means a round-crowned broadleaf."""
+    r = _u(rng, 45, 75)
+    rx, ry = r * _u(rng, 0.9, 1.2), r
+    h = r * _u(rng, 0.6, 1.4)
+    s = _trunk(rng, h, _u(rng, 2.5, 7))
+    cy = -h - ry * _u(rng, 0.8, 0.95)
+    bumps = int(rng.choice([0, 0, 6, 8, 10]))
+    s.append(_outline(rng, _crown_loop(rng, 0, cy, rx, ry, bumps)))
+    return s + _crown_inside(rng, 0.35, h, cy, rx, ry)
+
+
 def _oak(rng: np.random.Generator) -> Strokes:
+    if _chance(rng, 0.35):
+        return _generic(rng)
     rx, ry = _u(rng, 75, 100), _u(rng, 42, 58)
     h = ry * _u(rng, 0.55, 0.85)
     half = _u(rng, 9, 15)

@@ -29,15 +29,12 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from eval.doodles import NONTREE_KINDS, TREE_SPECIES, nontree_doodle, tree_doodle  # noqa: E402
+from eval.fitting import read_drawings, styled_trees  # noqa: E402
 from eval.pictures import PICTURE_KINDS, picture  # noqa: E402
-from render.reader import SketchError  # noqa: E402
-from render.sketch import SketchRenderer  # noqa: E402
-from render.styles import STYLES, Silhouettes, draw  # noqa: E402
-from treesketch.pipeline import load_sketch, prepare_input  # noqa: E402
+from treesketch.pipeline import load_sketch  # noqa: E402
 from tsn.checkpoint import load_checkpoint, save_checkpoint  # noqa: E402
 from tsn.predict import TSNModel  # noqa: E402
 from tsn.tree_detect import TreeDetector  # noqa: E402
-from weberpenn import build_mesh, grow, species  # noqa: E402
 
 FIT_SEEDS = {"doodle": 1000, "styled": 4000, "other": 20_000}
 HELD_SEEDS = {"doodle": 5000, "styled": 7000, "other": 30_000}
@@ -47,20 +44,6 @@ FIT_PICTURES = ("noise", "circle", "square", "house", "face", "text", "strokes",
 UNSEEN_PICTURES = tuple(k for k in PICTURE_KINDS if k not in FIT_PICTURES)
 
 
-def styled_trees(seed0: int, n: int) -> list[np.ndarray]:
-    """``n`` trees, the species and the renderer's styles in turn, each at a random view."""
-    rng = np.random.default_rng(seed0)
-    names, out = list(STYLES), []
-    for k in range(n):
-        name = species.SPECIES[k % len(species.SPECIES)]
-        renderer = SketchRenderer(
-            build_mesh(grow(species.sample(name, seed0 + k)), species=name), species=name
-        )
-        parts = renderer.parts(float(rng.uniform(0.0, 360.0)), 256)
-        out.append(draw(names[k % len(names)], Silhouettes.from_parts(parts), rng, 256))
-    return out
-
-
 def drawings(seeds: dict[str, int], args: argparse.Namespace) -> dict[str, list[np.ndarray]]:
     return {
         "tree doodles": [
@@ -68,7 +51,7 @@ def drawings(seeds: dict[str, int], args: argparse.Namespace) -> dict[str, list[
             for s in TREE_SPECIES
             for k in range(args.per_species)
         ],
-        "styled trees": styled_trees(seeds["styled"], args.styled),
+        "styled trees": styled_trees(seeds["styled"], args.styled)[0],
         "other things": [
             nontree_doodle(kind, seeds["other"] + k)
             for kind in NONTREE_KINDS
@@ -80,19 +63,9 @@ def drawings(seeds: dict[str, int], args: argparse.Namespace) -> dict[str, list[
     }
 
 
-def features(model: TSNModel, images: list[np.ndarray], batch: int = 32) -> np.ndarray:
-    """Pooled network features of the drawings the pipeline would accept (a blank page is
-    refused before the network sees it, so it is left out here too)."""
-    prepared = []
-    for im in images:
-        try:
-            prepared.append(prepare_input(load_sketch(im)))
-        except SketchError:
-            continue
-    out = [
-        model.raw_and_features(prepared[i : i + batch])[1] for i in range(0, len(prepared), batch)
-    ]
-    return np.concatenate(out)
+def features(model: TSNModel, images: list[np.ndarray]) -> np.ndarray:
+    """Pooled network features of the drawings the pipeline would accept."""
+    return read_drawings(model, images)[1]
 
 
 def labelled(model: TSNModel, sets: dict[str, list[np.ndarray]]) -> dict[str, np.ndarray]:

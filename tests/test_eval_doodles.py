@@ -100,8 +100,12 @@ def test_the_hand_varies_line_width_size_and_position() -> None:
 def test_tree_shapes_differ_by_species(shapes: dict[str, list[dict[str, float]]]) -> None:
     # a fir: taller than wide and pointed, every time
     assert all(r["aspect"] > 1.15 and r["top"] < 0.35 for r in shapes["fir"])
-    # an oak and a cherry: wider than tall, every time; a poplar: a tall column
-    assert all(r["aspect"] < 1.0 for r in shapes["oak"] + shapes["cherry"])
+    # a cherry: wider than tall, every time; an oak: mostly its broad crown, and sometimes
+    # "a tree" as most people draw one (a lollipop or a cloud on a stick: taller)
+    assert all(r["aspect"] < 1.0 for r in shapes["cherry"])
+    assert _median(shapes["oak"], "aspect") < 1.0
+    assert any(r["aspect"] > 1.0 for r in shapes["oak"])
+    # a poplar: a tall column
     assert _median(shapes["poplar"], "aspect") > 2.5
     assert all(r["aspect"] > 1.4 for r in shapes["poplar"])
     # a palm and a birch: the crown up high on a thin trunk; the lower half stays narrow

@@ -91,3 +91,37 @@ def test_classifier_is_accurate_calibrated_and_plain_data(identifier: SpeciesIde
     assert back.identify(m) == with_clf.identify(m) == y[0]
     assert back.scores(m) == pytest.approx(clf.probabilities(m))
     assert identifier.scores(m) == identifier.shares(m)  # no classifier: Algorithm 1's shares
+
+
+def test_a_classifier_that_reads_the_network_features(identifier: SpeciesIdentifier) -> None:
+    """reads="features": fitted on (N, m) pooled features; the identifier asks for them,
+    reads a dictionary (which has none) by Algorithm 1, and saves what it reads."""
+    from tsn.species_id import SpeciesClassifier
+
+    rng = np.random.default_rng(1)
+    names = list(identifier.species)
+    centres = rng.normal(0, 1, (len(names), 16))  # each species' features, and noise
+    y = [s for s in names for _ in range(30)]
+    feats = np.concatenate([centres[i] + rng.normal(0, 0.3, (30, 16)) for i in range(len(names))])
+    held = np.concatenate([centres[i] + rng.normal(0, 0.6, (30, 16)) for i in range(len(names))])
+    clf = SpeciesClassifier.fit(feats, y, identifier.scale, held_out=(held, y), reads="features")
+    assert clf.reads == "features" and clf.weight.shape == (len(names), 16)
+    with_clf = identifier.with_classifier(clf)
+    back = SpeciesIdentifier.from_dict(json.loads(json.dumps(with_clf.to_dict())))
+    assert back.classifier is not None and back.classifier.reads == "features"
+    mats = sampled_matrices(2)
+    m = mats[names[0]][0]
+    # the features decide, whatever the output says
+    for i, s in enumerate(names):
+        assert back.identify(m, centres[i]) == s
+        assert max(back.scores(m, centres[i]).items(), key=lambda kv: kv[1])[0] == s
+    # no features at hand (a dictionary): Algorithm 1, the paper's way
+    p = species.sample(names[1], 3)
+    assert back.identify(p) == identifier.identify(p)
+    assert back.scores(m) == identifier.shares(m)
+    with pytest.raises(SpeciesIdError, match="pooled features"):
+        clf.of(m, None)
+    with pytest.raises(SpeciesIdError, match="reads one of"):
+        SpeciesClassifier.from_dict({**clf.to_dict(), "reads": "pixels"})
+    with pytest.raises(SpeciesIdError, match=r"\(N, m\)"):
+        clf.probabilities_many(np.zeros((2, 4, 62)))
