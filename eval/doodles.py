@@ -505,7 +505,7 @@ def _maple(rng: np.random.Generator) -> Strokes:
 
 
 def _generic(rng: np.random.Generator) -> Strokes:
-    """"A tree" as most people draw one: a lollipop or a cloud on a stick (a round crown,
+    """A tree, as most people draw one: a lollipop or a cloud on a stick (a round crown,
     about as tall as wide, on a thin trunk), which means a round-crowned broadleaf."""
     r = _u(rng, 45, 75)
     rx, ry = r * _u(rng, 0.9, 1.2), r
