@@ -136,6 +136,13 @@ def test_cancel_a_running_job(client: TestClient, sketch: bytes) -> None:
     replaced = pool.replaced
     job_id = submit(client, sketch, **LONG)
     wait_for(client, job_id, refining)  # progress crossed from the actor
+    # the current best tree crossed too: the front wrote it for the page
+    body = wait_for(client, job_id, lambda b: bool((b["progress"] or {}).get("preview")))
+    assert body["state"] == "running"
+    glb = client.get(f"/jobs/{job_id}/preview/tree.glb")
+    assert glb.status_code == 200 and glb.content[:4] == b"glTF"
+    png_ = client.get(f"/jobs/{job_id}/preview/sketch.png")
+    assert png_.status_code == 200 and png_.content[:8] == b"\x89PNG\r\n\x1a\n"
     r = client.delete(f"/jobs/{job_id}")
     assert r.status_code == 202 and r.json()["cancelling"]
     t0 = time.monotonic()
@@ -143,6 +150,7 @@ def test_cancel_a_running_job(client: TestClient, sketch: bytes) -> None:
     assert body["state"] == "cancelled" and time.monotonic() - t0 < 25
     assert pool.replaced == replaced  # stopped by its flag, not killed
     assert client.get("/health").json()["busy"] == 0
+    assert client.get(f"/jobs/{job_id}/preview/tree.glb").status_code == 404  # no leftovers
 
 
 def test_two_drawings_of_one_tree(client: TestClient, sketch: bytes) -> None:

@@ -8,7 +8,10 @@ The Ray pool (``ray_pool``) calls, from its dispatcher thread:
   ``{"state": "done", "summary", "files"}``,
   ``{"state": "cancelled"}`` or ``{"state": "failed", "message", "input"}`` (``input``: the
   sketch or an option was at fault, not the program);
-- ``poll(job_id)`` -> the job's latest progress (the dict the API shows) or None;
+- ``poll(job_id, seen)`` -> the job's latest progress (the dict the API shows) or None;
+  when the job's current best tree (``preview.PreviewWriter``, made here in memory) is
+  newer than the version ``seen`` by the front, the row carries its version
+  (``preview``) and files (``preview_files``), which the front writes for the page;
 - ``cancel(job_id)``: the run stops at its next evaluation.
 
 The actor is threaded (``max_concurrency`` > 1) so that ``poll`` and ``cancel`` are
@@ -27,6 +30,7 @@ import time
 import traceback
 from typing import Any
 
+from .preview import PreviewWriter
 from .progress import ProgressRows
 from .worker import WORKER_NICE, progress_info
 
@@ -50,6 +54,7 @@ class JobActor:
         self._progress = ProgressRows()
         self._lock = threading.Lock()  # of _cancelled
         self._cancelled: set[str] = set()  # by job id: a cancel may overtake its run
+        self._previews: dict[str, tuple[int, dict[str, bytes]]] = {}  # job id -> the latest
 
     def ready(self) -> dict[str, Any]:
         import ray
@@ -62,8 +67,15 @@ class JobActor:
             "error": self.error,
         }
 
-    def poll(self, job_id: str) -> dict[str, Any] | None:
-        return self._progress.get(job_id)
+    def poll(self, job_id: str, seen: int = 0) -> dict[str, Any] | None:
+        row = self._progress.get(job_id)
+        if row is None:
+            return None
+        with self._lock:
+            made = self._previews.get(job_id)
+        if made is not None and made[0] > seen:
+            row["preview"], row["preview_files"] = made
+        return row
 
     def cancel(self, job_id: str) -> None:
         with self._lock:
@@ -77,8 +89,13 @@ class JobActor:
         if self.runner is None:
             return {"state": "failed", "message": self.error, "input": False}
         t0 = time.perf_counter()
+        preview = PreviewWriter(None)
 
         def progress(p: Any) -> None:
+            shown = preview.offer(p)
+            if shown is not None:
+                with self._lock:
+                    self._previews[job_id] = (shown, preview.files)
             self._progress.put(job_id, progress_info(p, time.perf_counter() - t0))
 
         def cancelled() -> bool:
@@ -102,4 +119,5 @@ class JobActor:
             self._progress.end(job_id)
             with self._lock:
                 self._cancelled.discard(job_id)
+                self._previews.pop(job_id, None)
             gc.collect()

@@ -11,7 +11,7 @@ job's current best tree.
 - ``GET /jobs/{id}/preview/tree.glb`` and ``.../sketch.png``: the job's current best tree
   while it runs (``preview.PreviewWriter``; the job's progress says which ``preview``
   version is there).  Local worker processes write it beside the job's results; a Ray
-  actor's job shows none (its files live on another node until the job ends).
+  actor hands it to the front with its progress, which writes it there.
 - ``GET /jobs/{id}/outline.png?turn=DEG&size=N``: a finished job's tree as a sketch seen
   from ``turn`` degrees about the trunk, relative to the side it was drawn from (the
   result's yaw + turn, as ``render.sketch.SketchRenderer.sketch`` turns; the page's

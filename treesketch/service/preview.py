@@ -6,7 +6,9 @@ finds.  :class:`PreviewWriter` writes the first one at once and then at most one
 :data:`PREVIEW_EVERY` seconds (a tree that waits is written at the next report after
 the pause, so the latest one always shows): ``results/<id>/preview/tree.glb`` (light,
 ``treesketch.trees.VIEW_FACES``) and ``preview/sketch.png``.  It returns the version it
-wrote, which the progress the API shows carries as ``preview``.
+wrote, which the progress the API shows carries as ``preview``.  Without a folder (a Ray
+actor, whose node shares no disk with the front) it only keeps the latest files
+(``files``), which the actor hands to the front with its progress.
 """
 
 from __future__ import annotations
@@ -26,10 +28,12 @@ PREVIEW_FILES = {"tree.glb": "model/gltf-binary", "sketch.png": "image/png"}
 class PreviewWriter:
     """``offer(progress)`` -> the version written now, or None."""
 
-    def __init__(self, folder: Path, every: float = PREVIEW_EVERY) -> None:
-        self.folder, self.every = Path(folder), float(every)
+    def __init__(self, folder: Path | None, every: float = PREVIEW_EVERY) -> None:
+        self.folder = None if folder is None else Path(folder)
+        self.every = float(every)
         self.written = 0
         self.last = -float("inf")
+        self.files: dict[str, bytes] = {}  # the latest preview's, by name in PREVIEW_FILES
 
     def offer(self, p: Any) -> int | None:
         version = int(getattr(p, "version", 0) or 0)
@@ -49,5 +53,7 @@ class PreviewWriter:
         mesh = build_mesh(grow(p.params), species=p.species)
         glb = light_glb(mesh, yaw=float(p.yaw))
         sketch = png_bytes(tree_sketch(p.params, p.species, float(p.yaw)))
-        self.folder.mkdir(parents=True, exist_ok=True)
-        write_together({self.folder / "tree.glb": glb, self.folder / "sketch.png": sketch})
+        self.files = {"tree.glb": glb, "sketch.png": sketch}
+        if self.folder is not None:
+            self.folder.mkdir(parents=True, exist_ok=True)
+            write_together({self.folder / name: data for name, data in self.files.items()})

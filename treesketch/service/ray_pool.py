@@ -9,6 +9,8 @@ from the same thread.  How things cross to an actor:
 
 - the job: its options and the uploaded drawings' bytes go with the ``run`` call;
 - progress: the dispatcher polls each busy actor (``poll``) every ``POLL_EVERY`` seconds;
+  a newer current best tree comes with the poll's answer and is written into the job's
+  results folder (``preview/``) before its version is shown, as a local worker writes it;
 - cancel: ``cancel(job_id)`` raises the actor's flag for that job, seen at the next
   evaluation; an actor that has not stopped ``cancel_grace`` seconds later is killed;
 - results: the actor returns the artefacts' bytes and the dispatcher writes them with the
@@ -57,6 +59,7 @@ class _Actor(Slot):
     run_ref: Any = None
     poll_ref: Any = None
     polled_at: float = 0.0
+    preview: int = 0  # the version of the running job's current best tree written here
 
 
 class RayWorkerPool(BasePool):
@@ -203,6 +206,7 @@ class RayWorkerPool(BasePool):
             return
         # (read with the job only: status shows an attempt once _begin gives the job)
         a.attempt, a.polled_at = self._attempts.get(job.id, 0) + 1, time.monotonic()
+        a.preview = 0
         self._begin(a, job)
         a.run_ref = a.handle.run.remote(job.id, job.options, drawings)
 
@@ -215,10 +219,29 @@ class RayWorkerPool(BasePool):
             with contextlib.suppress(self._ray.exceptions.RayError):  # run_ref tells why
                 info = self._ray.get(a.poll_ref)
                 if info is not None and a.job is not None:
-                    self._live.update(a.job, info)
+                    self._live.update(a.job, self._take_preview(a, a.job, info))
             a.poll_ref = None
         if self._done(a.run_ref):
             self._on_result(i)
+
+    def _take_preview(self, a: _Actor, job_id: str, info: dict[str, Any]) -> dict[str, Any]:
+        """The progress row to show: a current best tree that came with it is written
+        first (a full disk only costs the preview: the row then does not name it)."""
+        from weberpenn.fileio import write_together
+
+        files = info.pop("preview_files", None)
+        if files is None:
+            info.pop("preview", None)
+            return info
+        folder = self.store.result_dir(job_id) / "preview"
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            write_together({folder / name: data for name, data in files.items()})
+        except OSError:
+            info.pop("preview", None)
+            return info
+        a.preview = int(info["preview"])
+        return info
 
     def _on_ready(self, i: int) -> None:
         a = self._slots[i]
@@ -255,6 +278,7 @@ class RayWorkerPool(BasePool):
             self._lost(i, job_id, _first(exc))
             return
         except ray.exceptions.RayError as exc:  # e.g. a result that could not travel
+            self._drop_preview(job_id)
             self.store.fail(job_id, f"the worker's answer was lost: {_first(exc)}")
         else:
             if out["state"] == "done":
@@ -270,8 +294,16 @@ class RayWorkerPool(BasePool):
                 else:
                     self._record(job_id, "done", summary)
             else:
+                self._drop_preview(job_id)
                 self._record(job_id, out["state"], out)
         self._release(a, job_id)
+
+    def _drop_preview(self, job_id: str) -> None:
+        """A job that ends without results leaves no preview and no empty folder."""
+        folder = self.store.result_dir(job_id)
+        shutil.rmtree(folder / "preview", ignore_errors=True)
+        with contextlib.suppress(OSError):
+            folder.rmdir()  # only when empty
 
     def _lost(self, i: int, job_id: str, why: str) -> None:
         """The actor running ``job_id`` died: retry the job once elsewhere, replace it."""
@@ -311,7 +343,7 @@ class RayWorkerPool(BasePool):
                 self._probe(a)
             elif a.job is not None and a.poll_ref is None and now - a.polled_at > POLL_EVERY:
                 a.polled_at = now
-                a.poll_ref = a.handle.poll.remote(a.job)
+                a.poll_ref = a.handle.poll.remote(a.job, a.preview)
 
     def _kill(self, a: _Actor) -> None:
         self._retire(a)  # _on_result sees the actor lost and records the cancel
