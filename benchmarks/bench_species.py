@@ -5,6 +5,8 @@
     # the whole pipeline on held-out drawings (about 15 s a drawing on two cores)
     .venv/bin/python benchmarks/bench_species.py pipeline --data DS --per-cell 3 \
         --nontrees 40 --budget 20 --out runs.jsonl
+    # the network's species alone on hand-style doodles and examples/hand (a minute)
+    .venv/bin/python benchmarks/bench_species.py doodles [--per-species 40] [--checkpoint PT]
     # the network's "is it a tree?" alone on doodles, simple pictures and examples/hand
     .venv/bin/python benchmarks/bench_species.py detector
     # fit the species posterior and the warning on those runs; reliability diagram
@@ -13,6 +15,11 @@
 ``network``: the checkpoint's species (its calibrated classifier when it has one) on
 every test sketch of ``--data``, prepared as the pipeline prepares a drawing, per style and
 per species, with the confusions.
+
+``doodles``: the checkpoint's species on ``--per-species`` hand-style tree doodles per
+species (``eval.doodles``, the benchmark seeds from 0) and on the drawings of
+``examples/hand`` (right: the species a person names in its ``species.json``, or one of
+its ``also``), each read and prepared as the pipeline does.
 
 ``pipeline``: ``Pipeline.run`` at ``--budget`` on ``--per-cell`` test drawings per species
 and style of ``--data`` (trees the network never saw), the hand-style tree doodles and the
@@ -357,6 +364,50 @@ def _reliability_png(rows: list, e: float, n: int, path: Path) -> None:
     fig.savefig(path, bbox_inches="tight")
 
 
+def doodles(args: argparse.Namespace) -> None:
+    from eval import doodles as dd
+    from treesketch.pipeline import load_sketch, prepare_input
+    from tsn.predict import load_model
+
+    model = load_model(args.checkpoint)
+    t0 = time.perf_counter()
+    names = list(dd.TREE_SPECIES)
+    truth = [s for s in names for _ in range(args.per_species)]
+    imgs = [dd.tree_doodle(s, k) for s in names for k in range(args.per_species)]
+    preds = []
+    for i in range(0, len(imgs), 32):
+        batch = [prepare_input(load_sketch(im)) for im in imgs[i : i + 32]]
+        preds += [p.species for p in model.predict_batch(batch)]
+    hand_dir = Path(__file__).resolve().parents[1] / "examples" / "hand"
+    people = json.loads((hand_dir / "species.json").read_text(encoding="utf-8"))
+    hand = sorted(people)
+    hand_pred = [
+        p.species
+        for p in model.predict_batch(
+            [prepare_input(load_sketch(hand_dir / f"{k}.png")) for k in hand]
+        )
+    ]
+    secs = time.perf_counter() - t0
+    ok = [p == t for p, t in zip(preds, truth, strict=True)]
+    print(f"## Species, network alone, doodles ({args.checkpoint or 'shipped'}), {_stamp()}")
+    print(f"{len(imgs)} hand-style doodles (seeds 0-{args.per_species - 1}) and "
+          f"{len(hand)} drawings of examples/hand in {secs:.0f} s\n")  # fmt: skip
+    print("| species | doodles right |")
+    print("|---|---:|")
+    for name in names:
+        mine = [o for o, t in zip(ok, truth, strict=True) if t == name]
+        print(f"| {name} | {np.mean(mine):.1%} |")
+    print(f"| **all** | **{np.mean(ok):.1%}** |\n")
+    right = [
+        p == people[k]["species"] or p in people[k]["also"]
+        for k, p in zip(hand, hand_pred, strict=True)
+    ]
+    print(f"examples/hand, as a person names them: **{sum(right)} of {len(hand)}**")
+    for k, p, r in zip(hand, hand_pred, right, strict=True):
+        if not r:
+            print(f"- {k}: {p} (a person: {people[k]['species']})")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="part", required=True)
@@ -374,6 +425,9 @@ def main() -> None:
     p.add_argument("--tries", type=int, default=2)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", required=True)
+    o = sub.add_parser("doodles")
+    o.add_argument("--checkpoint", default=None)
+    o.add_argument("--per-species", type=int, default=40)
     d = sub.add_parser("detector")
     d.add_argument("--checkpoint", default=None)
     d.add_argument("--per-species", type=int, default=20)
@@ -382,7 +436,13 @@ def main() -> None:
     c.add_argument("runs")
     c.add_argument("--png", default=None)
     args = ap.parse_args()
-    parts = {"network": network, "pipeline": pipeline, "detector": detector, "calibrate": calibrate}
+    parts = {
+        "network": network,
+        "doodles": doodles,
+        "pipeline": pipeline,
+        "detector": detector,
+        "calibrate": calibrate,
+    }
     parts[args.part](args)
 
 
