@@ -56,3 +56,21 @@ def test_the_lollipop_tree_is_refined_towards_its_shape() -> None:
     assert res.losses["after"] <= res.losses["before"]
     assert res.losses["after"] < 1.5 * LOW_CONFIDENCE_LOSS, res.losses
     assert res.tree_mesh.branches.faces.shape[0] > 0
+
+
+@pytest.mark.slow
+def test_a_palm_with_line_fronds_stays_a_palm() -> None:
+    """Fronds drawn as single lines cover little of a filled crown's hull: the species is
+    decided by the network's reading of the drawing and the refined distances together,
+    and a confident palm is not overruled by a cherry whose crown happens to fit."""
+    from eval.doodles import tree_doodle
+
+    pipe = Pipeline("tsn", RefineSettings(budget=6))
+    res = pipe.run(HAND / "palm_lines.png")
+    assert res.species == "palm", res.species_text
+    assert [c.species for c in res.candidates][0] == "palm"
+    assert len(res.candidates) >= 3 and res.candidates[0].probability > 0.5, res.species_text
+    # palms doodled by hand (made by code: fronds as strokes), read by the network alone
+    for seed in range(4):
+        est = pipe.estimate(tree_doodle("palm", seed))
+        assert est.species == "palm", (seed, est.scores)
