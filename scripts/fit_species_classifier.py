@@ -32,7 +32,7 @@ sys.path.insert(0, str(ROOT))
 from eval.doodles import TREE_SPECIES, tree_doodle  # noqa: E402
 from eval.fitting import read_drawings, styled_trees  # noqa: E402
 from render.dataset import read_manifest  # noqa: E402
-from tsn.checkpoint import load_checkpoint, save_checkpoint  # noqa: E402
+from tsn.checkpoint import load_checkpoint, save_loaded  # noqa: E402
 from tsn.predict import TSNModel  # noqa: E402
 from tsn.species_id import READS, SpeciesClassifier  # noqa: E402
 
@@ -111,16 +111,7 @@ def main() -> None:
         },
     }
     out = args.out or args.checkpoint
-    save_checkpoint(
-        out,
-        loaded.model,
-        loaded.size,
-        int(info.get("cut", 12)),
-        loaded.normaliser,
-        loaded.species_id.with_classifier(clf),
-        info,
-        loaded.tree_detector,
-    )
+    save_loaded(loaded, out, info, species_id=loaded.species_id.with_classifier(clf))
     for kind, acc in accuracy.items():
         print(f"held out, {kind}: species right {acc:.1%} ({len(held[kind][1])} drawings)")
     print(f"temperature {clf.temperature:.2f}; wrote {out} ({time.perf_counter() - t0:.0f} s)")

@@ -32,7 +32,7 @@ from eval.doodles import NONTREE_KINDS, TREE_SPECIES, nontree_doodle, tree_doodl
 from eval.fitting import read_drawings, styled_trees  # noqa: E402
 from eval.pictures import PICTURE_KINDS, picture  # noqa: E402
 from treesketch.pipeline import load_sketch  # noqa: E402
-from tsn.checkpoint import load_checkpoint, save_checkpoint  # noqa: E402
+from tsn.checkpoint import load_checkpoint, save_loaded  # noqa: E402
 from tsn.predict import TSNModel  # noqa: E402
 from tsn.tree_detect import TreeDetector  # noqa: E402
 
@@ -116,16 +116,7 @@ def main() -> None:
         },
     }
     out = args.out or args.checkpoint
-    save_checkpoint(
-        out,
-        loaded.model,
-        loaded.size,
-        int(loaded.info.get("cut", 12)),
-        loaded.normaliser,
-        loaded.species_id,
-        info,
-        det,
-    )
+    save_loaded(loaded, out, info, tree_detector=det)
     for k, v in rates.items():
         print(f"held out, {k}: {v:.1%} judged wrongly ({len(held_rates[k])} drawings)")
     print(f"examples/hand (all trees): {np.mean(hand_p < 0.5):.1%} judged not trees")

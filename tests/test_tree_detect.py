@@ -60,3 +60,21 @@ def _prepared(img: np.ndarray) -> np.ndarray:
     from treesketch.pipeline import prepare_input
 
     return prepare_input(img)
+
+
+def test_a_new_detector_is_saved_into_a_checkpoint_with_the_rest_kept(tmp_path) -> None:
+    from tsn.checkpoint import load_checkpoint, save_loaded
+    from tsn.predict import DEFAULT_CHECKPOINT
+
+    loaded = load_checkpoint(DEFAULT_CHECKPOINT)
+    fake = TreeDetector.fit(
+        np.random.default_rng(0).normal(size=(40, 1280)), np.arange(40) % 2 == 0
+    )
+    again = load_checkpoint(save_loaded(loaded, tmp_path / "t.pt", {"x": 1}, tree_detector=fake))
+    assert again.info == {"x": 1}
+    assert again.tree_detector is not None
+    assert np.allclose(again.tree_detector.weight, fake.weight)
+    assert again.species_id.to_dict() == loaded.species_id.to_dict()
+    assert again.normaliser.to_dict() == loaded.normaliser.to_dict()
+    a, b = loaded.model.state_dict(), again.model.state_dict()
+    assert a.keys() == b.keys() and all(bool((a[k] == b[k]).all()) for k in a)

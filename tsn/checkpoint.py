@@ -88,6 +88,29 @@ def save_checkpoint(
     )
 
 
+def save_loaded(
+    loaded: Loaded,
+    path: str | os.PathLike[str],
+    info: dict[str, Any],
+    *,
+    species_id: SpeciesIdentifier | None = None,
+    tree_detector: TreeDetector | None = None,
+) -> Path:
+    """Write a loaded checkpoint again with new ``info`` and, when given, a new species
+    identifier or tree detector (the small parts fitted after training); the weights and
+    normaliser as they were."""
+    return save_checkpoint(
+        path,
+        loaded.model,
+        loaded.size,
+        int(loaded.info.get("cut", 12)),
+        loaded.normaliser,
+        species_id or loaded.species_id,
+        info,
+        tree_detector or loaded.tree_detector,
+    )
+
+
 def load_checkpoint(path: str | os.PathLike[str], device: str = "cpu") -> Loaded:
     path = Path(path)
     if not path.is_file():
