@@ -4,12 +4,13 @@ The species classifier (``scripts/fit_species_classifier.py``) and the tree dete
 (``scripts/fit_tree_detector.py``) are fitted on drawings made by code: trees of every
 species drawn in the renderer's styles (:func:`styled_trees`), and the doodles of
 ``eval.doodles``.  :func:`read_drawings` puts each through the pipeline's own reader and
-preparation, as at inference, and returns what the classifiers read.
+preparation (given by the caller: this package sits below the pipeline), as at inference,
+and returns what the classifiers read.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -39,17 +40,19 @@ def styled_trees(seed0: int, n: int) -> tuple[list[np.ndarray], list[str]]:
 
 
 def read_drawings(
-    model: Any, images: Sequence[Any], batch: int = 32
+    model: Any,
+    images: Sequence[Any],
+    prepare: Callable[[Any], np.ndarray],
+    batch: int = 32,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(outputs (N, 4, 62) un-normalised, pooled features (N, m), kept (len(images),)
-    bool)`` of the drawings the pipeline accepts (a blank page is refused before the
-    network sees it, so it is left out here too); ``model`` is a ``tsn.predict.TSNModel``."""
-    from treesketch.pipeline import load_sketch, prepare_input
-
+    bool)`` of the drawings the pipeline accepts (``prepare``: its reader and preparation;
+    a blank page is refused before the network sees it, so it is left out here too);
+    ``model`` is a ``tsn.predict.TSNModel``."""
     prepared, kept = [], []
     for im in images:
         try:
-            prepared.append(prepare_input(load_sketch(im)))
+            prepared.append(prepare(im))
             kept.append(True)
         except SketchError:
             kept.append(False)

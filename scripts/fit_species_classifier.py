@@ -23,6 +23,7 @@ import argparse
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -32,6 +33,7 @@ sys.path.insert(0, str(ROOT))
 from eval.doodles import TREE_SPECIES, tree_doodle  # noqa: E402
 from eval.fitting import read_drawings, styled_trees  # noqa: E402
 from render.dataset import read_manifest  # noqa: E402
+from treesketch.pipeline import load_sketch, prepare_input  # noqa: E402
 from tsn.checkpoint import load_checkpoint, save_loaded  # noqa: E402
 from tsn.predict import TSNModel  # noqa: E402
 from tsn.species_id import READS, SpeciesClassifier  # noqa: E402
@@ -39,6 +41,11 @@ from tsn.species_id import READS, SpeciesClassifier  # noqa: E402
 FIT_SEEDS = {"doodle": 1000, "styled": 4000, "split": "train"}
 HELD_SEEDS = {"doodle": 5000, "styled": 7000, "split": "val"}
 HELD_PART = 0.4  # held-out drawings per fitted one, for the temperature and the accuracies
+
+
+def prepared(image: Any) -> np.ndarray:
+    """A drawing read and prepared as the pipeline does at inference."""
+    return prepare_input(load_sketch(image))
 
 
 def drawings(seeds: dict, args: argparse.Namespace, part: float) -> dict[str, tuple[list, list]]:
@@ -66,7 +73,7 @@ def drawings(seeds: dict, args: argparse.Namespace, part: float) -> dict[str, tu
 def read(model: TSNModel, sets: dict, reads: str) -> dict[str, tuple[np.ndarray, list[str]]]:
     out = {}
     for kind, (images, labels) in sets.items():
-        mats, pooled, kept = read_drawings(model, images)
+        mats, pooled, kept = read_drawings(model, images, prepared)
         x = pooled if reads == "features" else mats
         out[kind] = (x, [s for s, k in zip(labels, kept, strict=True) if k])
     return out

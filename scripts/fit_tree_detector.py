@@ -22,6 +22,7 @@ import argparse
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -31,7 +32,7 @@ sys.path.insert(0, str(ROOT))
 from eval.doodles import NONTREE_KINDS, TREE_SPECIES, nontree_doodle, tree_doodle  # noqa: E402
 from eval.fitting import read_drawings, styled_trees  # noqa: E402
 from eval.pictures import PICTURE_KINDS, picture  # noqa: E402
-from treesketch.pipeline import load_sketch  # noqa: E402
+from treesketch.pipeline import load_sketch, prepare_input  # noqa: E402
 from tsn.checkpoint import load_checkpoint, save_loaded  # noqa: E402
 from tsn.predict import TSNModel  # noqa: E402
 from tsn.tree_detect import TreeDetector  # noqa: E402
@@ -42,6 +43,11 @@ HELD_SEEDS = {"doodle": 5000, "styled": 7000, "other": 30_000}
 # see how the detector does on kinds of picture it has never been shown
 FIT_PICTURES = ("noise", "circle", "square", "house", "face", "text", "strokes", "grid", "car")
 UNSEEN_PICTURES = tuple(k for k in PICTURE_KINDS if k not in FIT_PICTURES)
+
+
+def prepared(image: Any) -> np.ndarray:
+    """A drawing read and prepared as the pipeline does at inference."""
+    return prepare_input(load_sketch(image))
 
 
 def drawings(seeds: dict[str, int], args: argparse.Namespace) -> dict[str, list[np.ndarray]]:
@@ -65,7 +71,7 @@ def drawings(seeds: dict[str, int], args: argparse.Namespace) -> dict[str, list[
 
 def features(model: TSNModel, images: list[np.ndarray]) -> np.ndarray:
     """Pooled network features of the drawings the pipeline would accept."""
-    return read_drawings(model, images)[1]
+    return read_drawings(model, images, prepared)[1]
 
 
 def labelled(model: TSNModel, sets: dict[str, list[np.ndarray]]) -> dict[str, np.ndarray]:
