@@ -50,7 +50,7 @@ def prepared(image: Any) -> np.ndarray:
 
 def drawings(seeds: dict, args: argparse.Namespace, part: float) -> dict[str, tuple[list, list]]:
     """``{kind: (images, species)}`` for one side (fit or held out)."""
-    names = [s for s in TREE_SPECIES]
+    names = list(TREE_SPECIES)
     n = max(1, round(args.doodles * part))
     out = {
         "hand-style doodles": (
