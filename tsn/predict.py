@@ -98,6 +98,12 @@ class TSNModel:
         mats = encoding.join_heads({h: v.float().cpu().numpy() for h, v in out.items()})
         return mats, pooled.float().cpu().numpy()
 
+    def pooled_features(self, images: Any) -> tuple[np.ndarray, np.ndarray]:
+        """The pooled features ``(N, m)`` the heads read, of the images and of their
+        left-right mirrors (what a refit of the heads learns from: ``tsn.heads``)."""
+        pooled = self._forward(images, True)[1]
+        return pooled[: len(pooled) // 2], pooled[len(pooled) // 2 :]
+
     def raw_views(self, images: Any, mirrored: bool = True) -> tuple[np.ndarray, ...]:
         """Normalised network outputs ``(N, 4, 62)`` for the images as given and, with
         ``mirrored``, for their left-right mirrors (one batch of 2N)."""
