@@ -121,7 +121,15 @@ class ShapeEmbedder:
         if not targets:
             return np.zeros((0, self.net.dim), np.float32)
         x = torch.from_numpy(np.stack([shape_input(t) for t in targets]))
-        return self.net(x).numpy().astype(np.float32)
+        # one thread: the network (about 1 ms a sketch) is too small to share, and torch's
+        # thread pool waits for a busy core: with two threads on a loaded 2-core machine
+        # it took 42 ms a call on average against 1.3 ms with one (RESULTS.md)
+        threads = torch.get_num_threads()
+        torch.set_num_threads(1)
+        try:
+            return self.net(x).numpy().astype(np.float32)
+        finally:
+            torch.set_num_threads(threads)
 
     def embed(self, target: ShapeTarget) -> np.ndarray:
         """(dim,) point of one prepared sketch."""

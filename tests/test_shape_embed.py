@@ -59,6 +59,22 @@ def test_embedding_is_deterministic_and_reads_its_own_size(embedder) -> None:
         shape_input(ShapeTarget.from_image(img, 64))
 
 
+def test_embedding_runs_on_one_thread_and_leaves_torch_as_it_was(embedder) -> None:
+    import torch
+
+    img = _drawings("palm", 4, ("pen",), 0.0)[0]
+    before = torch.get_num_threads()
+    torch.set_num_threads(2)
+    try:
+        one = ShapeTarget.from_image(img, 128, embedder=embedder).embedding
+        assert torch.get_num_threads() == 2
+        torch.set_num_threads(1)
+        assert np.allclose(ShapeTarget.from_image(img, 128, embedder=embedder).embedding, one)
+        assert torch.get_num_threads() == 1
+    finally:
+        torch.set_num_threads(before)
+
+
 # pairs where the hand-made shape distance alone put the other tree closer (felt and cloud
 # smooth the crown, a scribble fills it raggedly); fresh seeds, not the benchmark's
 HARD = [

@@ -36,6 +36,7 @@ from weberpenn import species as wp_species
 from .estimate import Estimate, Estimator
 from .estimators import load_estimator
 from .species_choice import Candidate, describe, posterior
+from .trees import sketch_renderer, tree_sketch
 from .views import SketchView, ViewResult, as_views, fuse_estimates
 
 __all__ = [
@@ -355,19 +356,18 @@ def _view_turns(
     views: list[SketchView],
     refined: RefineResult | None,
     drawings: list[PreparedDrawing],
-    mesh: Any,
+    r: Any,
     yaw: float,
 ) -> list[float]:
     """The other views' yaws relative to the first: as the refinement used them, else as
     given; a view of unknown yaw and no refinement: the turn of the first estimate's
-    tree whose sketch is nearest that drawing (every 15 degrees)."""
+    tree (drawn by the renderer ``r``) whose sketch is nearest that drawing (every 15
+    degrees)."""
     if refined is not None and refined.view_yaws:
         return list(refined.view_yaws)
     from refine.search import START_YAWS
-    from render.sketch import SketchRenderer
 
     out = []
-    r = SketchRenderer(mesh)  # the scene built once for every view and turn
     for v, d in zip(views[1:], drawings[1:], strict=True):
         if v.yaw is not None:
             out.append(float(v.yaw))
@@ -530,20 +530,21 @@ class Pipeline:
         from render.sketch import SketchRenderer
 
         start = est.params if chosen is None else est.params_for(chosen)
-        mesh0 = build_mesh(grow(start), species=est.species if chosen is None else chosen)
-        draw0 = SketchRenderer(mesh0)  # each tree's scene built once for all its views
-        before = draw0.sketch(yaw0, SKETCH_SIZE)
-        if params1 is start:
-            mesh1, after, draw1 = mesh0, before, draw0
+        start_species = est.species if chosen is None else chosen
+        mesh1 = build_mesh(grow(params1), species=name)
+        draw1 = SketchRenderer(mesh1)  # the result's scene built once for all its views
+        after = draw1.sketch(yaw1, SKETCH_SIZE)
+        if result_refine is None:  # nothing refined: the estimate is the result
+            draw0, before = draw1, after
         else:
-            mesh1 = build_mesh(grow(params1), species=name)
-            draw1 = SketchRenderer(mesh1)
-            after = draw1.sketch(yaw1, SKETCH_SIZE)
-        turns = _view_turns(views, result_refine, drawings, mesh0, yaw0)
+            # the estimate's tree is only shown: drawn the cheap way, as the search drew it
+            draw0 = sketch_renderer(start, start_species, SKETCH_SIZE)
+            before = draw0.sketch(yaw0, SKETCH_SIZE)
+        turns = _view_turns(views, result_refine, drawings, draw0, yaw0)
         view_results = [ViewResult(0.0, img, before, after, math.nan, math.nan)]
         for i, turn in enumerate(turns, start=1):
             b = draw0.sketch((yaw0 + turn) % 360.0, SKETCH_SIZE)
-            a = b if mesh1 is mesh0 else draw1.sketch((yaw1 + turn) % 360.0, SKETCH_SIZE)
+            a = b if draw1 is draw0 else draw1.sketch((yaw1 + turn) % 360.0, SKETCH_SIZE)
             view_results.append(
                 ViewResult(turn, imgs[i], b, a, math.nan, math.nan, views[i].yaw is None)
             )
@@ -628,8 +629,6 @@ class Pipeline:
         """The result's species and the next most probable, at least ``CANDIDATES`` in
         all: each with its tree (refined, else the estimate for it), its distance (refined
         ones), its probability and a small sketch to pick it by."""
-        from render.sketch import SketchRenderer
-
         # by probability, then (an estimator that scores few species) the species' order
         ranked = sorted(wp_species.SPECIES, key=lambda s: -post.get(s, 0.0))
         names = [name, *[s for s in ranked if s != name]][: max(CANDIDATES, len(refined))]
@@ -641,8 +640,7 @@ class Pipeline:
             else:
                 rr = refined.get(s)
                 p = rr.params if rr is not None else est.params_for(s)
-                mesh = build_mesh(grow(p), species=s)
-                img = SketchRenderer(mesh).sketch(rr.yaw if rr is not None else 0.0, THUMB_SIZE)
+                img = tree_sketch(p, s, rr.yaw if rr is not None else 0.0, THUMB_SIZE)
             rr = refined.get(s)
             prob = 1.0 if chosen is not None and s == chosen else post.get(s, 0.0)
             out.append(

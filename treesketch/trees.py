@@ -105,11 +105,17 @@ def light_glb(mesh: TreeMesh, yaw: float = 0.0, max_faces: int | None = VIEW_FAC
     return glb_bytes(mesh, yaw=yaw, max_faces=max_faces)
 
 
-def tree_sketch(params: TreeParams, species: str, yaw: float = 0.0, size: int = 256) -> np.ndarray:
-    """The tree's sketch the cheap way (thin stems left out, numpy rasteriser): what a
-    running job shows of its current best tree."""
+def sketch_renderer(params: TreeParams, species: str, size: int = 256) -> Any:
+    """A renderer of the tree's sketches the cheap way, for any view at up to ``size``
+    pixels (thin stems left out, numpy rasteriser: the same sketch as mitsuba's up to a
+    few pixels, as the refinement draws its candidates)."""
     from render.sketch import SketchRenderer, sketch_mesh
     from weberpenn import grow
 
-    mesh = sketch_mesh(grow(params), size, species)
-    return SketchRenderer(mesh, engine="raster").sketch(yaw, size)
+    return SketchRenderer(sketch_mesh(grow(params), size, species), engine="raster")
+
+
+def tree_sketch(params: TreeParams, species: str, yaw: float = 0.0, size: int = 256) -> np.ndarray:
+    """The tree's sketch the cheap way (:func:`sketch_renderer`): what a running job shows
+    of its current best tree, and a candidate's thumbnail."""
+    return sketch_renderer(params, species, size).sketch(yaw, size)
