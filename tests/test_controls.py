@@ -128,3 +128,27 @@ def test_a_tree_past_the_generators_limits_is_refused_with_words() -> None:
     p = species.sample("cherry", 1)
     with pytest.raises(ValueError, match="controls make a tree the generator refuses"):
         apply_controls(p, {"branch_count": 2.5, "leaf_density": 3.0})
+
+
+def test_fit_controls_stops_each_moved_slider_at_what_the_generator_grows() -> None:
+    from weberpenn.controls import CONTROLS, fit_controls, grow_with_controls
+    from weberpenn.params import ParamError
+
+    step = {c.name: c.step for c in CONTROLS}
+    p = species.sample("fir", 1)
+    asked = {"leaf_density": 3.0, "branch_count": 2.5, "leaf_size": 1.5}
+    fitted, adjusted = fit_controls(p, asked, "fir")
+    assert set(adjusted) == {"leaf_density", "branch_count", "leaf_size"}
+    for k, v in adjusted.items():
+        assert 1.0 <= v < asked[k]
+        assert abs(round((v - 1.0) / step[k]) * step[k] - (v - 1.0)) < 1e-6  # on its step
+    grow_with_controls(p, fitted, "fir")  # grows
+    # one slider, the others kept: a step further would not grow
+    fitted, adjusted = fit_controls(p, {"leaf_density": 3.0}, "fir", ["leaf_density"])
+    assert set(adjusted) == {"leaf_density"}
+    with pytest.raises(ParamError):
+        grow_with_controls(p, {"leaf_density": adjusted["leaf_density"] + 0.2}, "fir")
+    # within the limits: as asked
+    assert fit_controls(p, {"crown_width": 1.2}, "fir") == ({"crown_width": 1.2}, {})
+    with pytest.raises(ValueError, match="wings"):
+        fit_controls(p, {"leaf_density": 3.0}, "fir", ["wings"])

@@ -84,6 +84,36 @@ def test_post_trees_answers_a_light_glb(client: TestClient) -> None:
     assert _faces(small.content) <= 5000
 
 
+def test_an_edit_past_the_limits_is_refused_or_brought_back_within_them(
+    client: TestClient,
+) -> None:
+    params = species.sample("fir", 1).to_dict()
+    past = {"leaf_density": 3.0, "branch_count": 2.5}  # a fir of millions of leaves
+    r = client.post("/trees", json={"params": params, "controls": past, "species": "fir"})
+    assert r.status_code == 422 and "leaves" in r.json()["detail"]
+    # the page says which slider is being dragged: only it moves back
+    body = {"params": params, "controls": past, "species": "fir", "fit": ["leaf_density"]}
+    r = client.post("/trees", json=body)
+    assert r.status_code == 422 and "leaf density back" in r.json()["detail"]
+    body = {**body, "controls": {"leaf_density": 3.0, "branch_count": 1.05}}
+    r = client.post("/trees", json=body, headers=GLB)
+    assert r.status_code == 200 and r.content[:4] == b"glTF"
+    adjusted = json.loads(r.headers["x-tree-adjusted"])
+    assert set(adjusted) == {"leaf_density"} and 1.0 <= adjusted["leaf_density"] < 3.0
+    # all of them, by one fraction of their move; the tree is the one those values grow
+    r = client.post("/trees", json={"params": params, "controls": past, "fit": True})
+    assert r.status_code == 200, r.text
+    got = r.json()
+    assert set(got["adjusted"]) == {"leaf_density", "branch_count"}
+    again = client.post(
+        "/trees", json={"params": params, "controls": {**past, **got["adjusted"]}}
+    ).json()
+    assert again["params"] == got["params"]
+    # within the limits nothing is adjusted
+    fine = client.post("/trees", json={"params": params, "fit": True}).json()
+    assert fine["adjusted"] == {} and fine["params"] == params
+
+
 @pytest.mark.parametrize(
     ("body", "status", "match"),
     [
@@ -98,6 +128,8 @@ def test_post_trees_answers_a_light_glb(client: TestClient) -> None:
         ({"params": "P", "species": "oak-ish"}, 422, "species"),
         ({"params": "P", "yaw": "north"}, 422, "yaw"),
         ({"params": "P", "yaw": True}, 422, "yaw"),
+        ({"params": "P", "fit": "yes"}, 422, "fit"),
+        ({"params": "P", "fit": ["wings"]}, 422, "wings"),
     ],
 )
 def test_post_trees_refuses_bad_requests(

@@ -159,3 +159,18 @@ def test_a_phone_shows_and_switches_the_candidates(browser: Any, server: str) ->
         cands.nth(2).tap()
         pg.wait_for_function(f"Number(document.body.dataset.loads) > {n}", timeout=30_000)
         assert pg.get_attribute("body", "data-shown") == job["result"]["candidates"][2]["species"]
+
+
+def test_a_slider_past_the_generators_limits_stops_at_the_most_it_grows(page: Any) -> None:
+    _make_tree(page, "fir")
+    n = int(page.get_attribute("body", "data-edits") or 0)
+    # three times the branches of a fir: more leaves than the generator grows
+    page.evaluate(
+        """() => { const s = document.getElementById('c-branch_count');
+        s.value = s.max; s.dispatchEvent(new Event('input')); }"""
+    )
+    page.wait_for_function(f"Number(document.body.dataset.edits || 0) > {n}", timeout=30_000)
+    status = page.inner_text("#edit-status")
+    assert "Refused" not in status and "branch count held at" in status, status
+    held = float(page.input_value("#c-branch_count"))
+    assert 1.0 <= held < float(page.get_attribute("#c-branch_count", "max"))

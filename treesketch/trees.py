@@ -40,20 +40,24 @@ class TreeRequest:
     species: str | None = None
     max_faces: int | None = VIEW_FACES
     yaw: float = 0.0
+    # bring controls past the generator's limits back within them: all (True) or these
+    fit: bool | tuple[str, ...] = False
 
     @classmethod
     def from_json(cls, body: Any) -> TreeRequest:
         """From a JSON object (``POST /trees``); ValueError naming the bad field."""
-        from weberpenn.controls import check_controls
+        from weberpenn.controls import CONTROLS, check_controls
         from weberpenn.lod import check_budget
 
         if not isinstance(body, Mapping):
             raise ValueError("the body must be a JSON object with 'params'")
-        unknown = sorted(set(body) - {"params", "controls", "seed", "species", "max_faces", "yaw"})
+        unknown = sorted(
+            set(body) - {"params", "controls", "seed", "species", "max_faces", "yaw", "fit"}
+        )
         if unknown:
             raise ValueError(
                 f"unknown field(s) {', '.join(unknown)}; "
-                "send params, controls, seed, species, max_faces, yaw"
+                "send params, controls, seed, species, max_faces, yaw, fit"
             )
         if "params" not in body or not isinstance(body["params"], Mapping):
             raise ValueError("'params' must be a parameter dictionary (a JSON object)")
@@ -71,7 +75,17 @@ class TreeRequest:
         yaw = body.get("yaw", 0.0)
         if isinstance(yaw, bool) or not isinstance(yaw, int | float) or not math.isfinite(yaw):
             raise ValueError(f"'yaw' must be a finite number of degrees, got {yaw!r:.40}")
-        return cls(params, controls, controls.get("seed"), name, max_faces, float(yaw) % 360.0)
+        fit = body.get("fit", False)
+        if isinstance(fit, list) and all(isinstance(k, str) for k in fit):
+            unknown = sorted(set(fit) - {c.name for c in CONTROLS})
+            if unknown:
+                raise ValueError(f"'fit' names unknown control(s) {', '.join(unknown)}")
+            fit = tuple(fit)
+        elif not isinstance(fit, bool):
+            raise ValueError(
+                f"'fit' must be true, false or a list of control names, got {fit!r:.40}"
+            )
+        return cls(params, controls, controls.get("seed"), name, max_faces, float(yaw) % 360.0, fit)
 
 
 @dataclass(frozen=True)
@@ -81,21 +95,34 @@ class EditedTree:
     mesh: TreeMesh
     height: float
     controls: dict[str, Any]  # the values that leave ``params`` as it is (see ``current``)
+    adjusted: dict[str, Any] = field(default_factory=dict)  # controls ``fit`` brought back
 
 
 def edit_tree(request: TreeRequest) -> EditedTree:
-    """Apply the request's controls and grow the tree (``weberpenn.controls``)."""
+    """Apply the request's controls and grow the tree (``weberpenn.controls``); with
+    ``request.fit``, controls that make a tree past the generator's limits are brought
+    back within them (``weberpenn.controls.fit_controls``) instead of refused."""
     from refine.search import guess_species
-    from weberpenn.controls import current, grow_with_controls
+    from weberpenn.controls import current, fit_controls, grow_with_controls
+    from weberpenn.params import ParamError
 
     name = request.species or guess_species(request.params)
     controls = dict(request.controls)
     if request.seed is not None:
         controls["seed"] = request.seed
-    params, mesh = grow_with_controls(request.params, controls, name)
+    adjusted: dict[str, Any] = {}
+    try:
+        params, mesh = grow_with_controls(request.params, controls, name)
+    except ParamError:
+        if not request.fit:
+            raise
+        # only a tree past the limits pays for the search of the nearest one that grows
+        only = None if request.fit is True else request.fit
+        controls, adjusted = fit_controls(request.params, controls, name, only)
+        params, mesh = grow_with_controls(request.params, controls, name)
     lo, hi = mesh.bounds()
     height = float(np.asarray(hi)[2] - np.asarray(lo)[2])
-    return EditedTree(params, name, mesh, height, current(params, height))
+    return EditedTree(params, name, mesh, height, current(params, height), adjusted)
 
 
 def light_glb(mesh: TreeMesh, yaw: float = 0.0, max_faces: int | None = VIEW_FACES) -> bytes:

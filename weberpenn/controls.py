@@ -24,7 +24,7 @@ Blender add-on all read this table.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from functools import cache
 from typing import Any
@@ -41,6 +41,7 @@ __all__ = [
     "check_controls",
     "current",
     "defaults",
+    "fit_controls",
     "grow_with_controls",
     "table",
     "tree_height",
@@ -435,6 +436,76 @@ def grow_with_controls(
         mesh = build_mesh(grow(out), species=species_name)
         tried.append((f, _mesh_height(mesh)))
     return out, mesh
+
+
+FIT_STEPS = 7  # halvings of the move when controls are brought back within the limits
+
+
+def fit_controls(
+    params: TreeParams,
+    controls: Mapping[str, Any],
+    species_name: str | None = None,
+    only: Collection[str] | None = None,
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """``(controls, adjusted)``: the controls as asked when the tree they make is within
+    the generator's limits (``adjusted`` empty), else with the relative number controls
+    moved back from the asked values towards their neutral ones, all by one fraction, the
+    largest that grows (halved ``FIT_STEPS`` times, then snapped to each control's step
+    towards neutral), ``adjusted`` naming the new values. A slider pushed past what the
+    generator can grow (a fir's leaf density and branch count together make more leaves
+    than it grows) so gives the nearest tree it can grow instead of a refusal. ``only``
+    names the controls that may move (the slider being dragged; default: every one).
+    Raises ValueError for a bad value, or ParamError when even the others alone make a
+    tree past the limits."""
+    checked = check_controls(controls)
+    unknown = sorted(set(only or ()) - set(_BY_NAME))
+    if unknown:
+        raise ValueError(f"unknown control(s) to fit: {', '.join(map(repr, unknown))}")
+    movable = {
+        k: v
+        for k, v in checked.items()
+        if _BY_NAME[k].relative
+        and _BY_NAME[k].kind == "number"
+        and v != _BY_NAME[k].neutral
+        and (only is None or k in only)
+    }
+
+    def at(t: float) -> dict[str, Any]:
+        out = dict(checked)
+        for k, v in movable.items():
+            c = _BY_NAME[k]
+            x = c.neutral + t * (v - c.neutral)
+            # the step towards neutral, so a snapped value never moves past the fitted one
+            n = math.floor(abs(x - c.neutral) / c.step + 1e-9) * c.step
+            out[k] = round(c.neutral + math.copysign(n, x - c.neutral), 6)
+        return out
+
+    def grown(values: Mapping[str, Any]) -> None:
+        grow(apply_controls(params, {k: v for k, v in values.items() if k != "height"}))
+
+    def grows(values: Mapping[str, Any]) -> bool:
+        try:
+            grown(values)
+        except ParamError:
+            return False
+        return True
+
+    if grows(checked):
+        return dict(checked), {}
+    if not movable or not grows(at(0.0)):
+        try:
+            grown(checked)  # not a matter of how far these sliders went
+        except ParamError as exc:
+            if not movable:
+                raise
+            names = ", ".join(_BY_NAME[k].label.lower() for k in movable)
+            raise ParamError(f"{exc} (even with {names} back where the tree had it)") from None
+    lo, hi = 0.0, 1.0
+    for _ in range(FIT_STEPS):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if grows(at(mid)) else (lo, mid)
+    fitted = at(lo)
+    return fitted, {k: fitted[k] for k in movable if fitted[k] != checked[k]}
 
 
 def current(params: TreeParams, height: float | None = None) -> dict[str, Any]:

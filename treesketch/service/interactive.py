@@ -87,6 +87,7 @@ def grow_request(body: Any, want_glb: bool) -> tuple[bytes | dict[str, Any], dic
         "X-Tree-Species": tree.species,
         "X-Tree-Height": f"{tree.height:.4f}",
         "X-Tree-Controls": json.dumps(tree.controls, separators=(",", ":")),
+        "X-Tree-Adjusted": json.dumps(tree.adjusted, separators=(",", ":")),
     }
     if want_glb:
         return light_glb(tree.mesh, yaw=request.yaw, max_faces=request.max_faces), facts
@@ -95,6 +96,7 @@ def grow_request(body: Any, want_glb: bool) -> tuple[bytes | dict[str, Any], dic
         "species": tree.species,
         "height": tree.height,
         "controls": tree.controls,
+        "adjusted": tree.adjusted,
     }, facts
 
 

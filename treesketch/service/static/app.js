@@ -517,7 +517,11 @@ async function loadControls() {
     help.id = `${id}-help`;
     help.className = "sr-only";
     help.textContent = `${c.help} Moves: ${c.moves.join("; ")}.`;
-    input.addEventListener(c.kind === "toggle" || c.kind === "choice" ? "change" : "input", () => { showValue(c, input, out); scheduleEdit(); });
+    input.addEventListener(c.kind === "toggle" || c.kind === "choice" ? "change" : "input", () => {
+      showValue(c, input, out);
+      if (edit) edit.moved = c;
+      scheduleEdit();
+    });
     row.append(label, input, out, help);
     box.append(row);
   }
@@ -546,9 +550,9 @@ function showValue(c, input, out) {
   else out.textContent = `${Number(input.value).toFixed(c.step < 1 ? 2 : 0)}${c.unit === "x" ? "×" : ` ${c.unit}`}`;
 }
 
-async function treeRequest(controls, accept, maxFaces) {
+async function treeRequest(controls, accept, maxFaces, fit = false) {
   // turned like the job's files, so an edit keeps the side the tree was drawn from
-  const body = { params: edit.params, species: edit.species, controls, max_faces: maxFaces, yaw: edit.yaw };
+  const body = { params: edit.params, species: edit.species, controls, max_faces: maxFaces, yaw: edit.yaw, fit };
   return api("/trees", {
     method: "POST",
     body: JSON.stringify(body),
@@ -608,8 +612,12 @@ async function runEdit() {
   mine.busy = true;
   const t0 = performance.now();
   const controls = changedControls();
+  // past the generator's limits the slider being dragged stops at the most it can grow
+  // (another kind of control: every slider moved comes back by one fraction)
+  const moved = mine.moved;
+  const fit = moved && moved.kind === "number" && moved.neutral !== null ? [moved.name] : true;
   try {
-    const r = await treeRequest(controls, "model/gltf-binary", table.view_faces);
+    const r = await treeRequest(controls, "model/gltf-binary", table.view_faces, fit);
     if (edit !== mine) return; // switched to another tree meanwhile
     if (!r.ok) {
       const body = await r.json().catch(() => ({}));
@@ -623,7 +631,15 @@ async function runEdit() {
       document.body.dataset.edits = String(edit.count);
       setPreset(!edit.edited && !edit.switched);
       updateSideButton();
-      $("edit-status").textContent = `${Math.round(performance.now() - t0)} ms`;
+      const adjusted = JSON.parse(r.headers.get("X-Tree-Adjusted") || "{}");
+      const notes = [];
+      for (const [name, v] of Object.entries(adjusted)) {
+        const c = table.controls.find((x) => x.name === name);
+        if (!c) continue;
+        setControl(c, v);
+        notes.push(`${c.label.toLowerCase()} held at ${v} (the generator's limit)`);
+      }
+      $("edit-status").textContent = [`${Math.round(performance.now() - t0)} ms`, ...notes].join(" · ");
       $("view-note").textContent = edit.edited ? "edited" : "";
     }
   } finally {
