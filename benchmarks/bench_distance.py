@@ -22,24 +22,19 @@ from __future__ import annotations
 
 import argparse
 import functools
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from benchmarks.shape_v1 import ShapeTarget as ShapeTargetV1  # noqa: E402
-from benchmarks.shape_v1 import shape_distance as shape_distance_v1  # noqa: E402
-from refine.embed import load_embedder  # noqa: E402
-from refine.objective import SketchTarget, framed, sketch_distance  # noqa: E402
-from refine.shape import ShapeTarget, embedding_distance, shape_distance  # noqa: E402
-from render.reader import normalise_drawing  # noqa: E402
-from render.sketch import SketchRenderer  # noqa: E402
-from render.styles import STYLES, Silhouettes, draw  # noqa: E402
-from weberpenn import build_mesh, grow, species  # noqa: E402
+from benchmarks.shape_v1 import ShapeTarget as ShapeTargetV1
+from benchmarks.shape_v1 import shape_distance as shape_distance_v1
+from refine.embed import load_embedder
+from refine.objective import SketchTarget, framed, sketch_distance
+from refine.shape import ShapeTarget, embedding_distance, shape_distance
+from render.reader import normalise_drawing
+from render.sketch import SketchRenderer
+from render.styles import STYLES, Silhouettes, draw
+from weberpenn import build_mesh, grow, species
 
 PAIR_STYLES = ("sg", "pen", "cloud", "scribble", "pencil", "felt")
 BASE_METRICS = {"shape": shape_distance, "shape_v1": shape_distance_v1, "ink": sketch_distance}

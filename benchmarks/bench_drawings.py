@@ -43,7 +43,6 @@ import math
 import os
 import platform
 import statistics
-import sys
 import time
 from collections.abc import Callable
 from datetime import UTC, datetime
@@ -52,16 +51,15 @@ from typing import Any
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from eval.pictures import non_trees
+from render.sketch import SketchRenderer
+from render.styles import Silhouettes, draw
+from treesketch import Pipeline, RefineSettings, SketchError
+from treesketch import pipeline as ts_pipeline
+from weberpenn import build_mesh, grow, species
+from weberpenn.fileio import atomic_target, atomic_write
 
-from eval.pictures import non_trees  # noqa: E402
-from render.sketch import SketchRenderer  # noqa: E402
-from render.styles import Silhouettes, draw  # noqa: E402
-from treesketch import Pipeline, RefineSettings, SketchError  # noqa: E402
-from treesketch import pipeline as ts_pipeline  # noqa: E402
-from weberpenn import build_mesh, grow, species  # noqa: E402
-from weberpenn.fileio import atomic_target, atomic_write  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 SIZE = 256
 HELD_OUT_STYLES = ("pen", "cloud", "scribble", "pencil", "felt")

@@ -31,17 +31,14 @@ import argparse
 import hashlib
 import os
 import platform
-import sys
 import tempfile
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from render.dataset import DatasetConfig, build_dataset  # noqa: E402
-from treesketch.executor import (  # noqa: E402
+from render.dataset import DatasetConfig, build_dataset
+from treesketch.executor import (
     InlineExecutor,
     LocalExecutor,
     Outcome,

@@ -30,16 +30,11 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import argparse  # noqa: E402
 import datetime as dt  # noqa: E402
 import statistics  # noqa: E402
-import sys  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from results_md import cpu_name, write_section  # noqa: E402  (benchmarks/ is on the path)
-
+from benchmarks.results_md import cpu_name, write_section  # noqa: E402
 from benchmarks.sapling_run import (  # noqa: E402
     REFERENCE_STATS,
     SaplingError,

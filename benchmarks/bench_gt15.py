@@ -36,17 +36,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from eval.hausdorff import (  # noqa: E402
+from eval.hausdorff import (
     DEFAULT_SAMPLES,
     FAMILY,
     FAMILY_PARTS,
@@ -55,11 +51,13 @@ from eval.hausdorff import (  # noqa: E402
     seed_floor,
     tree_hausdorff,
 )
-from treesketch import Pipeline, RefineSettings, load_estimator  # noqa: E402
-from treesketch.estimators import SeededEstimator  # noqa: E402
-from treesketch.pipeline import rescale_height, tree_height  # noqa: E402
-from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
-from weberpenn.fileio import atomic_write  # noqa: E402
+from treesketch import Pipeline, RefineSettings, load_estimator
+from treesketch.estimators import SeededEstimator
+from treesketch.pipeline import rescale_height, tree_height
+from weberpenn import build_mesh, grow, load_params, species
+from weberpenn.fileio import atomic_write
+
+ROOT = Path(__file__).resolve().parents[1]
 
 GT_DIR = ROOT / "tests" / "data" / "treesketchnet_test_params"
 SKETCH_SIZE = 256

@@ -31,7 +31,6 @@ from __future__ import annotations
 import argparse
 import functools
 import json
-import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,22 +38,19 @@ from typing import Any
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from eval.hausdorff import (  # noqa: E402
+from eval.hausdorff import (
     aligned_tree_hausdorff,
     bbox_diagonal,
     hausdorff,
     rotate_about_trunk,
 )
-from refine.objective import SearchSpace  # noqa: E402
-from render.dataset import read_manifest  # noqa: E402
-from render.reader import read_sketch  # noqa: E402
-from treesketch import Estimate, Pipeline, RefineSettings, load_estimator  # noqa: E402
-from treesketch.executor import ExecutorError, from_options  # noqa: E402
-from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
-from weberpenn.fileio import atomic_write  # noqa: E402
+from refine.objective import SearchSpace
+from render.dataset import read_manifest
+from render.reader import read_sketch
+from treesketch import Estimate, Pipeline, RefineSettings, load_estimator
+from treesketch.executor import ExecutorError, from_options
+from weberpenn import build_mesh, grow, load_params, species
+from weberpenn.fileio import atomic_write
 
 VIEW_ORDER = ("front", "left", "back", "right")
 

@@ -21,12 +21,9 @@ import statistics
 import sys
 import tempfile
 import time
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from render.backend import init_mitsuba  # noqa: E402
-from render.camera import VIEWS  # noqa: E402
+from render.backend import init_mitsuba
+from render.camera import VIEWS
 
 
 def bench_sketch(size: int, repeats: int, seed: int) -> list[dict]:

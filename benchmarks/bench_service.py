@@ -28,8 +28,7 @@ from pathlib import Path
 import httpx
 import psutil
 
-# benchmarks/ is on the path when this runs as a script
-from serve_process import FINISHED, ServeProcess
+from benchmarks.serve_process import FINISHED, ServeProcess
 
 ROOT = Path(__file__).resolve().parents[1]
 SKETCH = ROOT / "examples" / "sketch_maple.png"

@@ -34,8 +34,7 @@ from typing import Any
 
 import httpx
 
-# benchmarks/ is on the path when this runs as a script
-from serve_process import FINISHED, ServeProcess
+from benchmarks.serve_process import FINISHED, ServeProcess
 
 ROOT = Path(__file__).resolve().parents[1]
 SKETCH = ROOT / "examples" / "hand" / "palm.png"

@@ -40,18 +40,15 @@ import argparse
 import json
 import math
 import platform
-import sys
 import time
 from collections import Counter, defaultdict
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import numpy as np
 
-import numpy as np  # noqa: E402
-
-from treesketch.species_choice import DISTANCE_SCALE, NET_WEIGHT  # noqa: E402
+from treesketch.species_choice import DISTANCE_SCALE, NET_WEIGHT
 
 
 def _machine() -> str:

@@ -31,18 +31,17 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from benchmarks.sapling_run import (  # noqa: E402
+from benchmarks.sapling_run import (
     SPECIES_STATS,
     SaplingError,
     record,
     recorded,
     sizes,
 )
-from weberpenn import build_mesh, load_params, species  # noqa: E402
-from weberpenn.grow import grow  # noqa: E402
+from weberpenn import build_mesh, load_params, species
+from weberpenn.grow import grow
+
+ROOT = Path(__file__).resolve().parents[1]
 
 DEFAULT_REF = ROOT.parent / "shared" / "reference"
 LEAF_FACES = {"hex": 2, "rect": 1}

@@ -14,16 +14,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 import time
 from collections import Counter
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from eval.doodles import NONTREE_KINDS, TREE_SPECIES, nontree_doodle, tree_doodle  # noqa: E402
-from treesketch import Pipeline, RefineSettings  # noqa: E402
+from eval.doodles import NONTREE_KINDS, TREE_SPECIES, nontree_doodle, tree_doodle
+from treesketch import Pipeline, RefineSettings
 
 
 def main() -> None:

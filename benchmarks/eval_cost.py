@@ -20,16 +20,11 @@ import argparse
 import statistics
 import sys
 import time
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-from refine.objective import METRICS, framed, make_target  # noqa: E402
-from refine.search import RefineSettings  # noqa: E402
-from render.sketch import SketchRenderer, sketch_mesh  # noqa: E402
-from weberpenn import build_mesh, grow, species  # noqa: E402
+from refine.objective import METRICS, framed, make_target
+from refine.search import RefineSettings
+from render.sketch import SketchRenderer, sketch_mesh
+from weberpenn import build_mesh, grow, species
 
 STAGES = ("grow", "mesh", "scene", "sketch", "frame", "loss", "view only")
 COUNTED = STAGES[:-1]  # a new point's evaluation; "view only" is the yaw-only move

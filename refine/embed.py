@@ -122,8 +122,9 @@ class ShapeEmbedder:
             return np.zeros((0, self.net.dim), np.float32)
         x = torch.from_numpy(np.stack([shape_input(t) for t in targets]))
         # one thread: the network (about 1 ms a sketch) is too small to share, and torch's
-        # thread pool waits for a busy core: with two threads on a loaded 2-core machine
-        # it took 42 ms a call on average against 1.3 ms with one (RESULTS.md)
+        # thread pool waits for a busy core: beside two busy processes on a 2-core machine
+        # 8.9 ms a call on average with two threads, 2.2 ms with one
+        # (benchmarks/probes/embed_threads.py, RESULTS.md)
         threads = torch.get_num_threads()
         torch.set_num_threads(1)
         try:

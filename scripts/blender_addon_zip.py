@@ -17,13 +17,12 @@ import sys
 import zipfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from refine.search import DEFAULT_BUDGET
+from weberpenn import species
+from weberpenn.controls import table
+from weberpenn.fileio import atomic_write
 
-from refine.search import DEFAULT_BUDGET  # noqa: E402
-from weberpenn import species  # noqa: E402
-from weberpenn.controls import table  # noqa: E402
-from weberpenn.fileio import atomic_write  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 ADDON = ROOT / "blender" / "treesketch_addon"
 

@@ -2,15 +2,11 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 from PIL import Image
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from weberpenn.fileio import atomic_write  # noqa: E402
+from weberpenn.fileio import atomic_write
 
 
 def write_palette_png(image: Image.Image, out: str | Path, colors: int = 128) -> Path:

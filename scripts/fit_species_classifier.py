@@ -27,16 +27,15 @@ from typing import Any
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from eval.doodles import TREE_SPECIES, tree_doodle
+from eval.fitting import read_drawings, styled_trees
+from render.dataset import read_manifest
+from treesketch.pipeline import load_sketch, prepare_input
+from tsn.checkpoint import load_checkpoint, save_loaded
+from tsn.predict import TSNModel
+from tsn.species_id import READS, SpeciesClassifier
 
-from eval.doodles import TREE_SPECIES, tree_doodle  # noqa: E402
-from eval.fitting import read_drawings, styled_trees  # noqa: E402
-from render.dataset import read_manifest  # noqa: E402
-from treesketch.pipeline import load_sketch, prepare_input  # noqa: E402
-from tsn.checkpoint import load_checkpoint, save_loaded  # noqa: E402
-from tsn.predict import TSNModel  # noqa: E402
-from tsn.species_id import READS, SpeciesClassifier  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 FIT_SEEDS = {"doodle": 1000, "styled": 4000, "split": "train"}
 HELD_SEEDS = {"doodle": 5000, "styled": 7000, "split": "val"}

@@ -26,16 +26,15 @@ from typing import Any
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from eval.doodles import NONTREE_KINDS, TREE_SPECIES, nontree_doodle, tree_doodle
+from eval.fitting import read_drawings, styled_trees
+from eval.pictures import PICTURE_KINDS, picture
+from treesketch.pipeline import load_sketch, prepare_input
+from tsn.checkpoint import load_checkpoint, save_loaded
+from tsn.predict import TSNModel
+from tsn.tree_detect import TreeDetector
 
-from eval.doodles import NONTREE_KINDS, TREE_SPECIES, nontree_doodle, tree_doodle  # noqa: E402
-from eval.fitting import read_drawings, styled_trees  # noqa: E402
-from eval.pictures import PICTURE_KINDS, picture  # noqa: E402
-from treesketch.pipeline import load_sketch, prepare_input  # noqa: E402
-from tsn.checkpoint import load_checkpoint, save_loaded  # noqa: E402
-from tsn.predict import TSNModel  # noqa: E402
-from tsn.tree_detect import TreeDetector  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 FIT_SEEDS = {"doodle": 1000, "styled": 4000, "other": 20_000}
 HELD_SEEDS = {"doodle": 5000, "styled": 7000, "other": 30_000}

@@ -22,12 +22,10 @@ import sys
 import tempfile
 from pathlib import Path
 
+from blender_addon_zip import main as addon_zip
 from PIL import Image, ImageDraw, ImageFont
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "scripts"))
-
-from blender_addon_zip import main as addon_zip  # noqa: E402
 
 SKETCH = ROOT / "examples" / "hand" / "oak.png"
 CLI = ROOT / ".venv" / "bin" / "treesketch"

@@ -13,21 +13,19 @@ the middle where it has one), grown by ``grow_with_controls`` and rendered in co
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from docs_png import write_palette_png
 from PIL import Image, ImageDraw
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from render.camera import Framing
+from render.sketch import SketchRenderer
+from weberpenn import species
+from weberpenn.controls import CONTROLS, Control, current, grow_with_controls
 
-from render.camera import Framing  # noqa: E402
-from render.sketch import SketchRenderer  # noqa: E402
-from scripts.docs_png import write_palette_png  # noqa: E402
-from weberpenn import species  # noqa: E402
-from weberpenn.controls import CONTROLS, Control, current, grow_with_controls  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 LABEL_W = 190
 

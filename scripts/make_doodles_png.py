@@ -11,18 +11,16 @@ from __future__ import annotations
 
 import argparse
 import io
-import sys
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 from PIL import Image, ImageDraw
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from eval.doodles import NONTREE_KINDS, TREE_SPECIES, nontree_doodle, tree_doodle
+from weberpenn.fileio import atomic_write
 
-from eval.doodles import NONTREE_KINDS, TREE_SPECIES, nontree_doodle, tree_doodle  # noqa: E402
-from weberpenn.fileio import atomic_write  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 GAP, HEAD = 16, 28
 

@@ -23,7 +23,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import NamedTuple
@@ -31,11 +30,10 @@ from typing import NamedTuple
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from eval.strokes import Stroke, arc, branches, bumpy, curve, jag, line, wobble
+from weberpenn.fileio import atomic_target, atomic_write
 
-from eval.strokes import Stroke, arc, branches, bumpy, curve, jag, line, wobble  # noqa: E402
-from weberpenn.fileio import atomic_target, atomic_write  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 EXAMPLES = ROOT / "examples" / "hand"
 

@@ -8,26 +8,18 @@ tree's sketch, and the ground truth's sketch and colour render.
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
 
+from benchmarks.bench_refine import KnownStart, perturbed, pick_rows
+from render.reader import read_sketch
+from render.sketch import SketchRenderer
+from treesketch import Pipeline, RefineSettings, load_estimator
+from weberpenn import build_mesh, grow, load_params, species
+from weberpenn.fileio import atomic_write
+
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "benchmarks"))
-
-from bench_refine import (  # noqa: E402
-    KnownStart,  # noqa: E402
-    perturbed,
-    pick_rows,
-)
-
-from render.reader import read_sketch  # noqa: E402
-from render.sketch import SketchRenderer  # noqa: E402
-from treesketch import Pipeline, RefineSettings, load_estimator  # noqa: E402
-from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
-from weberpenn.fileio import atomic_write  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -13,17 +13,15 @@ from __future__ import annotations
 
 import argparse
 import io
-import sys
 from pathlib import Path
 
 import numpy as np
 from PIL import Image, ImageDraw
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from render.sketch import VIEWS, SketchRenderer
+from weberpenn.fileio import atomic_write
 
-from render.sketch import VIEWS, SketchRenderer  # noqa: E402
-from weberpenn.fileio import atomic_write  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 EXAMPLE_SEED = 100000
 

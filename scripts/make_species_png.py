@@ -26,17 +26,16 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+from docs_png import write_palette_png
 from PIL import Image, ImageDraw, ImageFont
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from benchmarks.compare_sapling import TOLERANCE, compare_species, dims
+from benchmarks.sapling_run import SaplingError, recorded, sizes, write_untouched
+from weberpenn import build_mesh, grow, species
+from weberpenn.export import save_sapling_preset
+from weberpenn.textures import colours
 
-from benchmarks.compare_sapling import TOLERANCE, compare_species, dims  # noqa: E402
-from benchmarks.sapling_run import SaplingError, recorded, sizes, write_untouched  # noqa: E402
-from scripts.docs_png import write_palette_png  # noqa: E402
-from weberpenn import build_mesh, grow, species  # noqa: E402
-from weberpenn.export import save_sapling_preset  # noqa: E402
-from weberpenn.textures import colours  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 LABEL_H = 70
 INK, GREY, WARN = (25, 25, 25), (95, 95, 95), (190, 40, 20)

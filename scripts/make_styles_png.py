@@ -10,19 +10,17 @@ from __future__ import annotations
 
 import argparse
 import io
-import sys
 from pathlib import Path
 
 import numpy as np
 from PIL import Image, ImageDraw
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from render.dataset import mesher_in_use
+from render.sketch import SketchRenderer
+from render.styles import STYLES, Silhouettes, draw
+from weberpenn.fileio import atomic_write
 
-from render.dataset import mesher_in_use  # noqa: E402
-from render.sketch import SketchRenderer  # noqa: E402
-from render.styles import STYLES, Silhouettes, draw  # noqa: E402
-from weberpenn.fileio import atomic_write  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 BLURB = {
     "sg": "paper's SG chain",

@@ -11,23 +11,23 @@ after the other (each on top of the last) and puts the 3D view after each side b
 
     PYTHONPATH=$PWD .venv/bin/python scripts/make_web_png.py --out docs/web.png \
         --side-out docs/side.png --edit-out docs/edit.png
+
+``PYTHONPATH=$PWD`` is needed even in the main checkout: the mouse strokes and the browser
+are the page tests' own (``tests.web_helpers``), and tests/ is no installed package.
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 import tempfile
 from pathlib import Path
 
+from tests.web_helpers import CHROMIUM, CHROMIUM_ARGS, draw_with_mouse, tree_strokes
+from treesketch.service import ServiceConfig, create_app
+from treesketch.service.inprocess import serve
+from weberpenn.fileio import atomic_target
+
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
-
-from service_helpers import serve  # noqa: E402
-from web_helpers import CHROMIUM, CHROMIUM_ARGS, draw_with_mouse, tree_strokes  # noqa: E402
-
-from treesketch.service import ServiceConfig, create_app  # noqa: E402
-from weberpenn.fileio import atomic_target  # noqa: E402
 
 
 def main() -> None:

@@ -31,7 +31,7 @@ from eval.stamp import file_sha256
 from render.dataset import read_manifest
 from treesketch.pipeline import prepare_input
 from tsn import encoding
-from tsn.checkpoint import load_checkpoint, save_loaded
+from tsn.checkpoint import CheckpointError, load_checkpoint, save_loaded
 from tsn.heads import HeadData, RidgeFit, choose_ridge, head_outputs, heads_of, set_heads
 from tsn.predict import DEFAULT_CHECKPOINT, TSNModel
 from weberpenn import TreeParams
@@ -95,7 +95,13 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=None, help="default: --checkpoint")
     args = ap.parse_args()
     t0 = time.perf_counter()
-    loaded = load_checkpoint(args.checkpoint)
+    for data, _ in args.data:  # every dataset checked before any sketch is read
+        if not read_manifest(data, split="train") or not read_manifest(data, split="val"):
+            raise SystemExit(f"error: {data} needs a train and a val split")
+    try:
+        loaded = load_checkpoint(args.checkpoint)
+    except CheckpointError as exc:
+        raise SystemExit(f"error: {exc}") from None
     model = TSNModel(loaded)
     normalise = bool(loaded.info.get("config", {}).get("normalise", False))
     sha = file_sha256(args.checkpoint)
@@ -105,8 +111,7 @@ def main() -> None:
             s: read_split(model, data, s, normalise, args.cache, sha)
             for s in ("train", "val", "test")
         }
-        if got["train"] is None or got["val"] is None:
-            raise SystemExit(f"error: {data} needs a train and a val split")
+        assert got["train"] is not None and got["val"] is not None  # checked above
         f, fm, t = got["train"]
         train.append(HeadData(np.concatenate([f, fm]), np.concatenate([t, t]), weight))
         f, fm, t = got["val"]

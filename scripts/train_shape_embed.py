@@ -11,16 +11,12 @@ as many pairs); ``--hold-out STYLE`` trains without a style (leave-one-style-out
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 from pathlib import Path
 
 import torch
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from refine.embed import PAIR_STYLES, PairData, build_pairs, save_embedder, train_embedder  # noqa: E402
+from refine.embed import PAIR_STYLES, PairData, build_pairs, save_embedder, train_embedder
 
 
 def log(msg: str) -> None:

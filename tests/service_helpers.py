@@ -11,6 +11,8 @@ from typing import Any
 import numpy as np
 
 from treesketch import Estimate
+from treesketch.service.inprocess import serve
+from treesketch.service.store import FINISHED
 from weberpenn import species
 
 
@@ -24,7 +26,6 @@ class PalmEstimator:
 
 
 palm_estimator = PalmEstimator()
-FINISHED = ("done", "failed", "cancelled", "expired")  # a job's end states
 
 
 class LeaningPalmEstimator:
@@ -61,37 +62,9 @@ def palm_sketch_png(seed: int = 3) -> bytes:
 
 
 @contextlib.contextmanager
-def serve(app: Any, log_level: str = "warning") -> Iterator[str]:
-    """Run ``app`` under uvicorn in a thread on a free localhost port; yields its base URL.
-    (A real server, unlike TestClient: streamed bodies, disconnects, sockets.)"""
-    import socket
-    import threading
-    import time
-
-    import uvicorn
-
-    sock = socket.socket()
-    sock.bind(("127.0.0.1", 0))
-    port = sock.getsockname()[1]
-    server = uvicorn.Server(uvicorn.Config(app, log_level=log_level, lifespan="on"))
-    thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, daemon=True)
-    thread.start()
-    deadline = time.monotonic() + 60
-    while not server.started:
-        if time.monotonic() > deadline or not thread.is_alive():
-            raise RuntimeError("the test server did not start")
-        time.sleep(0.05)
-    try:
-        yield f"http://127.0.0.1:{port}"
-    finally:
-        server.should_exit = True
-        thread.join(30)
-        sock.close()
-
-
-@contextlib.contextmanager
 def http_service(config: Any) -> Iterator[Any]:
-    """A real server of ``config``'s app (see :func:`serve`) and an httpx client on it."""
+    """A real server of ``config``'s app (``treesketch.service.inprocess.serve``) and an
+    httpx client on it."""
     import httpx
 
     from treesketch.service import create_app

@@ -33,6 +33,15 @@ def backend():
     del sys.modules[spec.name]
 
 
+@pytest.fixture(scope="module")
+def addon_zip(tmp_path_factory: pytest.TempPathFactory) -> zipfile.ZipFile:
+    """The add-on zip as ``make blender-addon`` builds it (scripts/blender_addon_zip.py)."""
+    out = tmp_path_factory.mktemp("addon") / "a.zip"
+    script = ROOT / "scripts" / "blender_addon_zip.py"
+    subprocess.run([sys.executable, str(script), str(out)], check=True, cwd=ROOT)
+    return zipfile.ZipFile(out)
+
+
 def test_cli_command(backend, tmp_path):
     out = backend.Outputs.in_folder(tmp_path)
     cmd = backend.cli_command("/v/bin/treesketch", "d.png", out, refine=True, budget=20)
@@ -93,17 +102,11 @@ def test_multipart_body(backend):
     assert b'name="sketch"; filename="d.png"' in body and b'name="budget"\r\n\r\n5' in body
 
 
-def test_addon_zip(tmp_path):
-    sys.path.insert(0, str(ROOT / "scripts"))
-    try:
-        from blender_addon_zip import main
-    finally:
-        sys.path.remove(str(ROOT / "scripts"))
-    assert main([str(tmp_path / "a.zip")]) == 0
-    names = zipfile.ZipFile(tmp_path / "a.zip").namelist()
+def test_addon_zip(addon_zip):
+    names = addon_zip.namelist()
     assert "treesketch_addon/__init__.py" in names and "treesketch_addon/backend.py" in names
     assert "treesketch_addon/drawing_maple.png" in names
-    init = zipfile.ZipFile(tmp_path / "a.zip").read("treesketch_addon/__init__.py").decode()
+    init = addon_zip.read("treesketch_addon/__init__.py").decode()
     assert '"blender": (3, 4, 0)' in init
 
 
@@ -331,18 +334,10 @@ def test_species_and_unique_preset_names(backend):
     assert backend.preset_name(None, []) == "treesketch_tree_1.py"
 
 
-def test_controls_in_the_zip_and_the_grow_command(backend, tmp_path):
+def test_controls_in_the_zip_and_the_grow_command(backend, addon_zip, tmp_path):
     """The panel's controls are the project's table (shipped in the zip); only the ones
     moved from their keep value go to `treesketch grow --set`."""
-    sys.path.insert(0, str(ROOT / "scripts"))
-    try:
-        from blender_addon_zip import main
-    finally:
-        sys.path.remove(str(ROOT / "scripts"))
-    assert main([str(tmp_path / "a.zip")]) == 0
-    (tmp_path / "controls.json").write_bytes(
-        zipfile.ZipFile(tmp_path / "a.zip").read("treesketch_addon/controls.json")
-    )
+    (tmp_path / "controls.json").write_bytes(addon_zip.read("treesketch_addon/controls.json"))
     from refine.search import DEFAULT_BUDGET
     from weberpenn.controls import CONTROLS
 
@@ -370,9 +365,8 @@ def test_post_trees_against_the_service(backend, tmp_path):
     """The service path of the panel's controls: the real ``POST /trees``."""
     import json
 
-    from service_helpers import serve
-
     from treesketch.service import ServiceConfig, create_app
+    from treesketch.service.inprocess import serve
 
     config = ServiceConfig(
         data=tmp_path / "data", workers=1, estimator="service_helpers:palm_estimator"
@@ -389,19 +383,12 @@ def test_post_trees_against_the_service(backend, tmp_path):
 
 
 # ------------------------------------------------ issue 27, item 4: the species meant
-def test_species_in_the_zip_and_the_species_meant_reaches_the_cli(backend, tmp_path):
+def test_species_in_the_zip_and_the_species_meant_reaches_the_cli(backend, addon_zip, tmp_path):
     """The panel's species are the project's list (shipped in the zip as species.json);
     the one picked goes to ``treesketch predict --species``; the CLI's "it is ..." line is
     the species in words the panel shows."""
-    sys.path.insert(0, str(ROOT / "scripts"))
-    try:
-        from blender_addon_zip import main
-    finally:
-        sys.path.remove(str(ROOT / "scripts"))
-    assert main([str(tmp_path / "a.zip")]) == 0
-    zf = zipfile.ZipFile(tmp_path / "a.zip")
-    assert zf.namelist().count("treesketch_addon/species.json") == 1
-    (tmp_path / "species.json").write_bytes(zf.read("treesketch_addon/species.json"))
+    assert addon_zip.namelist().count("treesketch_addon/species.json") == 1
+    (tmp_path / "species.json").write_bytes(addon_zip.read("treesketch_addon/species.json"))
     rows = backend.load_species(tmp_path / "species.json")
     assert [r["name"] for r in rows] == list(species.SPECIES)
     assert all(r["display"] == species.display_name(r["name"]) for r in rows)
@@ -425,9 +412,10 @@ def test_species_in_the_zip_and_the_species_meant_reaches_the_cli(backend, tmp_p
 def test_post_predict_asks_the_service_for_the_species_meant(backend, tmp_path):
     """The service path: the species picked reaches the real service's job (the
     estimator says palm; a fir is asked for) and its answer says the species in words."""
-    from service_helpers import palm_sketch_png, serve
+    from service_helpers import palm_sketch_png
 
     from treesketch.service import ServiceConfig, create_app
+    from treesketch.service.inprocess import serve
 
     config = ServiceConfig(
         data=tmp_path / "data", workers=1, estimator="service_helpers:palm_estimator"

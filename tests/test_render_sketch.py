@@ -150,12 +150,17 @@ def test_scalar_fallback_matches_llvm_roughly(tmp_path):
     """The scalar_rgb path (no LLVM) gives nearly the same sketch (random sub-pixel
     positions there, so not bit-identical)."""
     code = (
-        "import sys, numpy as np; sys.path.insert(0, 'tests');"
+        "import numpy as np;"
         "from render_helpers import simple_tree; from render.sketch import SketchRenderer;"
         "r = SketchRenderer(simple_tree()); print(r.variant);"
         f"np.save(r'{tmp_path}/s.npy', r.sketch(0, 64))"
     )
-    env = {**os.environ, "TREESKETCH_MI_VARIANT": "scalar_rgb"}
+    # the test's own path (tests/ for render_helpers, this checkout's code) for the child
+    env = {
+        **os.environ,
+        "TREESKETCH_MI_VARIANT": "scalar_rgb",
+        "PYTHONPATH": os.pathsep.join(sys.path),
+    }
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     out = subprocess.run(
         [sys.executable, "-c", code], env=env, cwd=root, capture_output=True, text=True, timeout=120

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from render_helpers import simple_tree
 from scipy import ndimage
 
 from render.sketch import SketchRenderer
 from render.styles import STYLES, Silhouettes, check_styles, draw
-from tests.render_helpers import simple_tree
 
 OTHER = [s for s in STYLES if s != "sg"]
 
@@ -168,8 +168,6 @@ def test_doodle_draws_palm_fronds_as_strokes_when_the_species_says_so():
 
 
 def test_doodle_of_a_bare_tree_is_its_limbs():
-    from tests.render_helpers import simple_tree
-
     r = SketchRenderer(simple_tree(side_branch=True))
     p = r.parts("front", 256)
     white = np.ones_like(np.asarray(p.leaf_silhouette))

@@ -16,9 +16,10 @@ from pathlib import Path
 
 import httpx
 import pytest
-from service_helpers import finished, http_service, refining, serve, submit, wait_for
+from service_helpers import finished, http_service, refining, submit, wait_for
 
 from treesketch.service import ServiceConfig, create_app
+from treesketch.service.inprocess import serve
 
 pytestmark = pytest.mark.slow
 

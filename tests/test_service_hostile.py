@@ -18,9 +18,10 @@ from pathlib import Path
 
 import httpx
 import pytest
-from service_helpers import finished, http_service, refining, serve, submit, wait_for
+from service_helpers import finished, http_service, refining, submit, wait_for
 
 from treesketch.service import JobStore, ServiceConfig, create_app
+from treesketch.service.inprocess import serve
 from treesketch.service.limits import MAX_PARTS
 
 pytestmark = pytest.mark.slow

@@ -32,9 +32,8 @@ INK = """() => {
 def palm_service(data: Path, estimator: str = "service_helpers:palm_estimator") -> Iterator[str]:
     """A real server on ``data`` with one worker and a palm test estimator (no network
     to load); yields its base URL."""
-    from service_helpers import serve
-
     from treesketch.service import ServiceConfig, create_app
+    from treesketch.service.inprocess import serve
 
     config = ServiceConfig(data=data, workers=1, estimator=estimator)
     with serve(create_app(config)) as url:

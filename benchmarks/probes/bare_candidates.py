@@ -17,20 +17,18 @@ listed as the reference in the same run: there the leafy candidates must stay ah
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
+from refine.objective import framed, make_target
+from refine.search import RefineSettings
+from render.sketch import SketchRenderer, sketch_mesh
+from render.styles import Silhouettes, bare
+from treesketch.pipeline import Pipeline, load_sketch, prepare_input
+from weberpenn import grow, species
 
-from refine.objective import framed, make_target  # noqa: E402
-from refine.search import RefineSettings  # noqa: E402
-from render.sketch import SketchRenderer, sketch_mesh  # noqa: E402
-from render.styles import Silhouettes, bare  # noqa: E402
-from treesketch.pipeline import Pipeline, load_sketch, prepare_input  # noqa: E402
-from weberpenn import grow, species  # noqa: E402
+ROOT = Path(__file__).resolve().parents[2]
 
 SIZE = 128  # the refinement's own size (RefineSettings.size)
 

@@ -21,18 +21,12 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import sys
-from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-from refine.objective import metric_distance  # noqa: E402
-from render.sketch import SketchRenderer, sketch_mesh  # noqa: E402
-from weberpenn import build_mesh, grow, species  # noqa: E402
+from refine.objective import metric_distance
+from render.sketch import SketchRenderer, sketch_mesh
+from weberpenn import build_mesh, grow, species
 
 
 def compare(a: np.ndarray, b: np.ndarray) -> tuple[float, float, int, float]:

@@ -15,19 +15,13 @@ only (Metro took more than 15 minutes on such a pair).
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-from eval.hausdorff import bbox_diagonal, hausdorff, tree_hausdorff  # noqa: E402
-from eval.metro import metro  # noqa: E402
-from weberpenn import build_mesh, grow, species  # noqa: E402
+from eval.hausdorff import bbox_diagonal, hausdorff, tree_hausdorff
+from eval.metro import metro
+from weberpenn import build_mesh, grow, species
 
 
 def metro_norm(a, b, samples: int, diag: float) -> tuple[float, float]:

@@ -22,23 +22,17 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "benchmarks"))
-
-from bench_refine import pick_rows  # noqa: E402
-
-from eval.hausdorff import bbox_diagonal, hausdorff  # noqa: E402
-from refine.objective import SearchSpace, SketchObjective, framed, make_target  # noqa: E402
-from refine.search import RefineSettings  # noqa: E402
-from render.sketch import SketchRenderer  # noqa: E402
-from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
+from benchmarks.bench_refine import pick_rows
+from eval.hausdorff import bbox_diagonal, hausdorff
+from refine.objective import SearchSpace, SketchObjective, framed, make_target
+from refine.search import RefineSettings
+from render.sketch import SketchRenderer
+from weberpenn import build_mesh, grow, load_params, species
 
 
 def measure(data: Path, per_species: int, step: float, samples: int) -> list[dict]:

@@ -11,21 +11,13 @@ the limits.
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
+from weberpenn import grow, limits, load_params, species
 
-from weberpenn import (  # noqa: E402
-    grow,
-    limits,  # noqa: E402
-    load_params,
-    species,
-)
+ROOT = Path(__file__).resolve().parents[2]
 
 COLS = ("stems", "points", "leaves", "vertices", "triangles")
 

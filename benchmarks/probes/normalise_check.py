@@ -18,18 +18,16 @@ of the tree were taken for paper ruling (e.g. a long straight trunk).
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
 from scipy import ndimage
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
+from render.reader import normalise_drawing
+from render.sketch import SketchRenderer
+from weberpenn import build_mesh, grow, load_params, species
 
-from render.reader import normalise_drawing  # noqa: E402
-from render.sketch import SketchRenderer  # noqa: E402
-from weberpenn import build_mesh, grow, load_params, species  # noqa: E402
+ROOT = Path(__file__).resolve().parents[2]
 
 GT_DIR = ROOT / "tests" / "data" / "treesketchnet_test_params"
 PAD = 0.5  # white border, as a share of the side: no stroke spans 80 % of such a page

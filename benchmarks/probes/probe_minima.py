@@ -22,21 +22,17 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
-
-from refine.objective import SearchSpace, SketchObjective, framed, make_target  # noqa: E402
-from refine.search import RefineSettings  # noqa: E402
-from render.sketch import SketchRenderer  # noqa: E402
-from weberpenn import build_mesh, grow, species  # noqa: E402
-from weberpenn.fileio import atomic_write  # noqa: E402
+from refine.objective import SearchSpace, SketchObjective, framed, make_target
+from refine.search import RefineSettings
+from render.sketch import SketchRenderer
+from weberpenn import build_mesh, grow, species
+from weberpenn.fileio import atomic_write
 
 METRICS = ("ink", "shape")
 

@@ -14,17 +14,11 @@ same way for both, on the full sketch (``metric_distance``).
 from __future__ import annotations
 
 import argparse
-import sys
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-from refine.objective import metric_distance  # noqa: E402
-from refine.search import RefineSettings, refine  # noqa: E402
-from render.sketch import SketchRenderer  # noqa: E402
-from weberpenn import build_mesh, grow, species  # noqa: E402
+from refine.objective import metric_distance
+from refine.search import RefineSettings, refine
+from render.sketch import SketchRenderer
+from weberpenn import build_mesh, grow, species
 
 
 def main() -> None:

@@ -31,13 +31,10 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
-
-from benchmarks.compare_sapling import replay_trunk_splines  # noqa: E402
-from benchmarks.sapling_run import PRESETS, preset_line, run_sapling, sizes  # noqa: E402
-from weberpenn import build_mesh, grow, species  # noqa: E402
-from weberpenn.export import save_sapling_preset  # noqa: E402
+from benchmarks.compare_sapling import replay_trunk_splines
+from benchmarks.sapling_run import PRESETS, preset_line, run_sapling, sizes
+from weberpenn import build_mesh, grow, species
+from weberpenn.export import save_sapling_preset
 
 
 def _dims(v: list[float], digits: int = 1) -> str:

@@ -32,22 +32,16 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial import cKDTree
 
-ROOT = Path(__file__).resolve().parents[2]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-from scipy.spatial import cKDTree  # noqa: E402
-
-from eval.hausdorff import bbox_diagonal, hausdorff  # noqa: E402
-from refine.objective import SearchSpace  # noqa: E402
-from weberpenn import build_mesh, grow, species  # noqa: E402
-from weberpenn.fileio import atomic_write  # noqa: E402
+from eval.hausdorff import bbox_diagonal, hausdorff
+from refine.objective import SearchSpace
+from weberpenn import build_mesh, grow, species
+from weberpenn.fileio import atomic_write
 
 DELTAS = (0.001, 0.003, 0.01, 0.03, 0.1)
 

@@ -25,7 +25,8 @@ that were running are marked failed and queued ones run.  Modules: ``store`` (th
 database), ``pool`` and ``worker`` (local processes), ``ray_pool`` and ``actor`` (the same
 workers as Ray actors, ``ServiceConfig(executor="ray", address=...)``), ``runner`` (the
 pipeline run), ``limits`` (checks before work), ``guards`` (the Host, Origin and token
-checks), ``owner`` (one server per data folder), ``app`` (routes).
+checks), ``owner`` (one server per data folder), ``app`` (routes), ``inprocess`` (the app
+served from a thread of this process, for tests and scripts).
 """
 
 from .app import ServiceConfig, create_app
