@@ -509,7 +509,8 @@ def _generic(rng: np.random.Generator) -> Strokes:
     about as tall as wide, on a thin trunk), which means a round-crowned broadleaf."""
     r = _u(rng, 45, 75)
     rx, ry = r * _u(rng, 0.9, 1.2), r
-    h = r * _u(rng, 0.6, 1.4)
+    # the stick: from a stub to longer than the crown is wide (a lollipop on a tall stick)
+    h = r * _u(rng, 0.6, 2.2)
     s = _trunk(rng, h, _u(rng, 2.5, 7))
     cy = -h - ry * _u(rng, 0.8, 0.95)
     bumps = int(rng.choice([0, 0, 6, 8, 10]))
@@ -527,6 +528,8 @@ def _oak(rng: np.random.Generator) -> Strokes:
     if _chance(rng, 0.4):  # flared roots
         s += [line((-half, 0), (-half - 12, 3)), line((half, 0), (half + 12, 3))]
     cy = -h - ry * 0.8
+    if _chance(rng, 0.35):  # a stout trunk that forks into two or three limbs under the crown
+        s += _limbs(rng, half, h, rx, ry)
     if _chance(rng, 0.25):  # the crown drawn as a chain of loops around its edge
         loops, r = int(rng.integers(9, 15)), _u(rng, 0.16, 0.24) * ry
         t = np.linspace(0, 2 * math.pi, loops * 24) + math.pi / 2
@@ -536,6 +539,18 @@ def _oak(rng: np.random.Generator) -> Strokes:
     else:
         s.append(_outline(rng, _crown_loop(rng, 0, cy, rx, ry, int(rng.integers(6, 11)))))
     return s + _crown_inside(rng, 0.6, h, cy, rx, ry)
+
+
+def _limbs(rng: np.random.Generator, half: float, h: float, rx: float, ry: float) -> Strokes:
+    """Limbs from a trunk's top (half-width ``half``, ``h`` tall) up into a crown of radii
+    ``rx``, ``ry``: two spreading, sometimes a third straight up."""
+    s = [
+        line((side * half, -h), (side * rx * _u(rng, 0.3, 0.6), -h - ry * _u(rng, 0.3, 0.7)))
+        for side in (-1, 1)
+    ]
+    if _chance(rng, 0.6):
+        s.append(line((0, -h), (_u(rng, -8, 8), -h - ry * _u(rng, 0.4, 0.8))))
+    return s
 
 
 def _cherry(rng: np.random.Generator) -> Strokes:
@@ -701,8 +716,8 @@ def _poplar(rng: np.random.Generator) -> Strokes:
 
 
 def _winter(rng: np.random.Generator) -> Strokes:
-    h = _u(rng, 70, 110)
-    s = _trunk(rng, h, _u(rng, 6, 10))
+    h = _u(rng, 70, 130)
+    s = _trunk(rng, h, _u(rng, 4, 10))
 
     def fork(x: float, y: float, angle: float, length: float, depth: int) -> None:
         a = math.radians(angle)
@@ -712,8 +727,19 @@ def _winter(rng: np.random.Generator) -> Strokes:
             for _ in range(int(rng.integers(2, 4))):
                 fork(x2, y2, angle + _u(rng, -45, 45), length * _u(rng, 0.55, 0.8), depth - 1)
 
-    for angle in np.linspace(50, 130, int(rng.integers(2, 4))):
-        fork(0, -h, float(angle) + _u(rng, -10, 10), _u(rng, 50, 75), int(rng.integers(2, 4)))
+    if _chance(rng, 0.5):  # the trunk fans out at its top into a few limbs
+        for angle in np.linspace(50, 130, int(rng.integers(2, 4))):
+            fork(0, -h, float(angle) + _u(rng, -10, 10), _u(rng, 50, 75), int(rng.integers(2, 4)))
+        return s
+    # a leader goes on up through the crown, limbs forking off it at a few heights
+    leader = _u(rng, 0.8, 1.3) * h
+    s.append(line((0, -h), (_u(rng, -6, 6), -h - leader)))
+    for k in range(int(rng.integers(2, 5))):
+        y = -h - leader * (0.1 + 0.75 * k / 4 + _u(rng, -0.05, 0.05))
+        for side in (-1, 1):
+            if _chance(rng, 0.85):
+                angle = 90 - side * _u(rng, 25, 60)
+                fork(0, y, angle, _u(rng, 30, 55) * (1 - 0.15 * k), int(rng.integers(1, 3)))
     return s
 
 

@@ -1,7 +1,7 @@
 """Refit a TSN checkpoint's species classifier for more kinds of drawing.
 
     .venv/bin/python scripts/fit_species_classifier.py [--checkpoint checkpoints/tsn_lite0.pt] \
-        [--data DS] [--doodles 100] [--styled 330] [--reads features] [--out PT]
+        [--data DS] [--doodles 300] [--styled 330] [--reads features] [--out PT]
 
 The classifier (``tsn.species_id.SpeciesClassifier``) reads the network's pooled features
 (``--reads features``, the default: they describe a drawing much more richly than the 62
@@ -86,7 +86,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--checkpoint", default=str(ROOT / "checkpoints" / "tsn_lite0.pt"))
     ap.add_argument("--data", type=Path, default=None, help="the network's training dataset")
-    ap.add_argument("--doodles", type=int, default=100, help="hand-style doodles per species")
+    ap.add_argument("--doodles", type=int, default=300, help="hand-style doodles per species")
     ap.add_argument("--styled", type=int, default=330, help="trees in the renderer's styles")
     ap.add_argument("--reads", choices=READS, default="features")
     ap.add_argument("--l2", type=float, default=3e-3)
