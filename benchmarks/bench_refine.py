@@ -193,7 +193,7 @@ def main(argv: list[str] | None = None) -> int:
         "--markdown", type=Path, default=None, help="only print the tables of a --json file"
     )
     ap.add_argument("--samples", type=int, default=10_000, help="Hausdorff samples per side")
-    ap.add_argument("--algorithm", default="bobyqa", help="bobyqa, sbplx or cobyla")
+    ap.add_argument("--algorithm", default=RefineSettings.algorithm, help="cobyla, bobyqa or sbplx")
     ap.add_argument(
         "--align-step", type=float, default=15.0, help="turns tried for the aligned distance"
     )

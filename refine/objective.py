@@ -364,7 +364,7 @@ class SearchSpace:
         Many unfixed values only act through a structure the base does not have (a
         trunk-split rotation with ``baseSplits`` 0, the last-angle memory of a level whose
         stems take another rule, a pine's whorl-placed branches); searching them costs
-        BOBYQA two start evaluations each and lets them drift without a signal.  Costs
+        the local search start evaluations and lets them drift without a signal.  Costs
         ``2 n`` skeleton grows (no mesh, no render): well under a second.
         """
         from weberpenn import grow

@@ -76,7 +76,11 @@ def test_two_drawings_make_one_tree_with_both_views(client: TestClient, two_view
     views = job["result"]["views"]
     assert [v["yaw"] for v in views] == [0.0, 90.0]
     assert [v["searched"] for v in views] == [False, False]
-    assert all(v["loss_after"] <= v["loss_before"] + 1e-9 for v in views)
+    # the search minimises the views' mean distance: one view may give a little for the other
+    before = np.mean([v["loss_before"] for v in views])
+    after = np.mean([v["loss_after"] for v in views])
+    assert after <= before + 1e-9
+    assert after == pytest.approx(job["result"]["losses"]["after"])
     for name in ("view2_before.png", "view2_after.png"):
         r = client.get(job["links"][name])
         assert r.status_code == 200 and r.headers["content-type"] == "image/png", name

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import typer
 
-from refine.search import DEFAULT_BUDGET
+from refine.search import DEFAULT_BUDGET, RefineSettings
 
 from .cli_common import (
     checkpoint_option,
@@ -87,7 +87,9 @@ def predict_command(
     summary_path: Path | None = typer.Option(
         None, "--summary", help="Also write a JSON summary: species, scores, distances, yaw."
     ),
-    algorithm: str = typer.Option("bobyqa", "--algorithm", help="bobyqa, sbplx or cobyla."),
+    algorithm: str = typer.Option(
+        RefineSettings.algorithm, "--algorithm", help="cobyla, bobyqa or sbplx."
+    ),
     embedding: str = typer.Option(
         "shipped",
         "--embedding",

@@ -271,7 +271,7 @@ function showPreview(job, version) {
   shownPreview = version;
   document.body.dataset.preview = String(version);
   $("before").src = `${job.links["preview/sketch.png"]}?v=${version}`;
-  loadModel(`${job.links["preview/tree.glb"]}?v=${version}`, framedJob !== job.id);
+  loadModel(`${job.links["preview/tree.glb"]}?v=${version}`, frameFor(job));
   framedJob = job.id;
   $("view-note").textContent = "best so far; refining...";
   if (version === 1 && phone()) $("result-panel").scrollIntoView({ behavior: "smooth" });
@@ -301,7 +301,7 @@ function showResult(job) {
   updateSideButton();
   $("view-note").textContent = "";
   // the viewer's light tree; the GLB download keeps full detail
-  loadModel(links["tree_view.glb"], framedJob !== job.id);
+  loadModel(links["tree_view.glb"], frameFor(job));
   framedJob = job.id;
   if (phone()) $("result-panel").scrollIntoView({ behavior: "smooth" });
   startEdit(r);
@@ -684,6 +684,10 @@ $("dl-json").addEventListener("click", (ev) => downloadEdited(ev, "application/j
 const view = $("view");
 let renderer = null, scene = null, camera = null, controls = null, model = null, ground = null;
 let framedJob = null; // the job whose tree the camera was framed on
+let turnedByHand = false; // the person moved the camera since it was last framed
+// frame a job's newer tree (a better one while refining, the final one) unless the person
+// has turned the view to look at it: then the camera stays where they put it
+function frameFor(job) { return framedJob !== job.id || !turnedByHand; }
 
 function render() { if (renderer) renderer.render(scene, camera); }
 
@@ -710,6 +714,7 @@ function setupView() {
   camera = new THREE.PerspectiveCamera(40, 1, 0.01, 1000);
   controls = new OrbitControls(camera, renderer.domElement);
   controls.addEventListener("change", () => { render(); showTurn(); });
+  controls.addEventListener("start", () => { turnedByHand = true; });
   new ResizeObserver(resize).observe(view);
   resize();
 }
@@ -735,6 +740,7 @@ function frameModel() {
   camera.updateProjectionMatrix();
   controls.target.copy(centre);
   controls.update();
+  turnedByHand = false;
   render();
 }
 $("reset-view").onclick = frameModel;
@@ -817,6 +823,7 @@ function walk(deg) {
   off.applyAxisAngle(new THREE.Vector3(0, 1, 0), (deg * Math.PI) / 180);
   camera.position.copy(controls.target).add(off);
   controls.update();
+  turnedByHand = true;
 }
 $("turn-left").onclick = () => walk(-15);
 $("turn-right").onclick = () => walk(15);
