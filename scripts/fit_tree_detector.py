@@ -69,8 +69,9 @@ def drawings(seeds: dict[str, int], args: argparse.Namespace) -> dict[str, list[
 
 
 def features(model: TSNModel, images: list[np.ndarray]) -> np.ndarray:
-    """Pooled network features of the drawings the pipeline would accept."""
-    return read_drawings(model, images, prepared)[1]
+    """The pooled features the network's heads read, of the drawings the pipeline would
+    accept."""
+    return model.head_features(read_drawings(model, images, prepared)[1])
 
 
 def labelled(model: TSNModel, sets: dict[str, list[np.ndarray]]) -> dict[str, np.ndarray]:

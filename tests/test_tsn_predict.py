@@ -173,3 +173,69 @@ def test_shipped_checkpoint_reads_bare_winter_trees() -> None:
     tree = build_mesh(grow(species.sample("winter", 9024)), species="winter")
     img = SketchRenderer(tree).sketch(40.0, 256)
     assert model.predict(normalise_drawing(img)).species == "winter"
+
+
+def test_a_species_branch_is_stored_read_and_feeds_the_classifier(tmp_path: Path) -> None:
+    """A checkpoint with a species branch: only the copied stages are stored, the features
+    are the heads' pooled features then the branch's, the heads and the tree detector read
+    the first part, the species classifier the whole; a damaged branch is named."""
+    import torch
+
+    from tsn.checkpoint import load_checkpoint, save_loaded
+    from tsn.model import ModelError, SpeciesBranch
+    from tsn.species_id import SpeciesClassifier
+
+    loaded = load_checkpoint(make_checkpoint(tmp_path / "base.pt", size=64))
+    branch = SpeciesBranch("lite0", 12)
+    with pytest.raises(ModelError, match="starts inside"):
+        SpeciesBranch("lite0", 0)
+    state = branch.stage_state()
+    assert state and all(k.startswith(("backbone._blocks.1", "backbone._conv_head",
+                                       "backbone._bn1.")) for k in state)  # fmt: skip
+    assert not any(k.startswith(("backbone._blocks.0.", "backbone._conv_stem")) for k in state)
+    # the copy starts as the network's own stages: its features equal the heads'
+    branch.load_stage_state({k: v for k, v in loaded.model.state_dict().items() if k in state})
+    names = ("palm", "pine", "maple")
+    nf = loaded.model.backbone.out_features
+    rng = np.random.default_rng(0)
+    clf = SpeciesClassifier(
+        names, np.zeros(2 * nf), np.ones(2 * nf),
+        np.hstack([np.zeros((3, nf)), rng.normal(size=(3, nf))]), np.zeros(3), 1.0,
+        loaded.normaliser.scale, "features",
+    )  # fmt: skip
+    path = save_loaded(
+        loaded, tmp_path / "b.pt", {}, species_id=loaded.species_id.with_classifier(clf),
+        species_branch=branch,
+    )  # fmt: skip
+    stored = torch.load(path, weights_only=True)["species_branch"]
+    assert stored["start"] == 12 and set(stored["state_dict"]) == set(state)
+    model = tp.load_model(path, device="cpu")
+    assert model.branch is not None and model.head_width == nf
+    img = np.full((64, 64), 255, np.uint8)  # symmetric: its mirror is itself
+    img[10:54, 30:34] = 0
+    img[10:30, 16:48] = 0
+    raw, feats = model.raw_and_features([img])
+    assert feats.shape == (1, 2 * nf)
+    np.testing.assert_allclose(feats[:, nf:], feats[:, :nf], rtol=1e-3, atol=1e-3)
+    np.testing.assert_allclose(model.head_features(feats), feats[:, :nf])
+    base = tp.load_model(tmp_path / "base.pt", device="cpu")
+    np.testing.assert_allclose(base.raw_and_features([img])[1], feats[:, :nf], atol=1e-4)
+    np.testing.assert_allclose(base.raw_batch([img]), raw, atol=1e-4)  # the heads unchanged
+    pred = model.predict(img)
+    p = clf.probabilities(feats[0])
+    assert pred.species == max(p, key=lambda s: p[s])
+    # a damaged branch is refused by name when the checkpoint is read
+    ck = torch.load(path, weights_only=True)
+    ck["species_branch"]["state_dict"].pop(next(iter(state)))
+    torch.save(ck, tmp_path / "bad.pt")
+    with pytest.raises(CheckpointError, match="species branch"):
+        tp.load_model(tmp_path / "bad.pt")
+
+
+def test_the_shipped_checkpoint_reads_the_species_from_its_branch() -> None:
+    model = tp.load_model()
+    assert model.branch is not None
+    clf = model.species_id.classifier
+    assert clf is not None and clf.weight.shape[1] == 2 * model.head_width
+    assert model.loaded.tree_detector is not None
+    assert len(model.loaded.tree_detector.mean) == model.head_width

@@ -11,6 +11,8 @@ strings, numbers), written to a temporary name and renamed::
     normaliser    ``tsn.encoding.Normaliser.to_dict()``
     species_id    ``tsn.species_id.SpeciesIdentifier.to_dict()``
     tree_detector ``tsn.tree_detect.TreeDetector.to_dict()`` (optional: is it a tree?)
+    species_branch  ``{"start": stage, "state_dict": fp16 weights}`` of a
+                  ``tsn.model.SpeciesBranch`` (optional: features for the species)
     train         how it was trained (config, epochs, wall time, validation scores)
 """
 
@@ -26,7 +28,7 @@ import torch
 from weberpenn.fileio import atomic_target
 
 from .encoding import Normaliser
-from .model import TSN
+from .model import TSN, SpeciesBranch
 from .species_id import SpeciesIdentifier
 from .tree_detect import TreeDetector
 
@@ -46,6 +48,7 @@ class Loaded:
     info: dict[str, Any]
     path: Path | None = None
     tree_detector: TreeDetector | None = None
+    species_branch: SpeciesBranch | None = None
 
 
 def atomic_torch_save(obj: Any, path: str | os.PathLike[str]) -> Path:
@@ -55,10 +58,18 @@ def atomic_torch_save(obj: Any, path: str | os.PathLike[str]) -> Path:
 
 
 def half_state(model: torch.nn.Module) -> dict[str, torch.Tensor]:
+    return _half(model.state_dict())
+
+
+def _half(state: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
     return {
         k: (v.detach().to("cpu", torch.float16) if v.is_floating_point() else v.detach().cpu())
-        for k, v in model.state_dict().items()
+        for k, v in state.items()
     }
+
+
+def _full(state: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+    return {k: v.float() if v.is_floating_point() else v for k, v in state.items()}
 
 
 def save_checkpoint(
@@ -70,8 +81,16 @@ def save_checkpoint(
     species_id: SpeciesIdentifier,
     info: dict[str, Any],
     tree_detector: TreeDetector | None = None,
+    species_branch: SpeciesBranch | None = None,
 ) -> Path:
-    extra = {} if tree_detector is None else {"tree_detector": tree_detector.to_dict()}
+    extra: dict[str, Any] = {}
+    if tree_detector is not None:
+        extra["tree_detector"] = tree_detector.to_dict()
+    if species_branch is not None:
+        extra["species_branch"] = {
+            "start": species_branch.start,
+            "state_dict": _half(species_branch.stage_state()),
+        }
     return atomic_torch_save(
         {
             "format": FORMAT,
@@ -95,10 +114,11 @@ def save_loaded(
     *,
     species_id: SpeciesIdentifier | None = None,
     tree_detector: TreeDetector | None = None,
+    species_branch: SpeciesBranch | None = None,
 ) -> Path:
     """Write a loaded checkpoint again with new ``info`` and, when given, a new species
-    identifier or tree detector (the small parts fitted after training); the weights and
-    normaliser as they were."""
+    identifier, tree detector or species branch (the parts fitted after training); the
+    network's weights and normaliser as they were."""
     return save_checkpoint(
         path,
         loaded.model,
@@ -108,6 +128,7 @@ def save_loaded(
         species_id or loaded.species_id,
         info,
         tree_detector or loaded.tree_detector,
+        species_branch or loaded.species_branch,
     )
 
 
@@ -125,8 +146,7 @@ def load_checkpoint(path: str | os.PathLike[str], device: str = "cpu") -> Loaded
         raise CheckpointError(f"{path}: not a TSN checkpoint (format {FORMAT!r} expected)")
     try:
         model = TSN(ck["backbone"], pretrained=False)
-        sd = {k: v.float() if v.is_floating_point() else v for k, v in ck["state_dict"].items()}
-        model.load_state_dict(sd)
+        model.load_state_dict(_full(ck["state_dict"]))
     except (KeyError, RuntimeError, ValueError) as e:
         raise CheckpointError(f"{path}: weights do not fit the network: {e}") from None
     model.eval().to(device)
@@ -134,6 +154,14 @@ def load_checkpoint(path: str | os.PathLike[str], device: str = "cpu") -> Loaded
         detector = TreeDetector.from_dict(ck["tree_detector"]) if "tree_detector" in ck else None
     except (KeyError, TypeError, ValueError) as e:
         raise CheckpointError(f"{path}: unreadable tree detector: {e}") from None
+    branch = None
+    if "species_branch" in ck:
+        try:
+            branch = SpeciesBranch(ck["backbone"], int(ck["species_branch"]["start"]))
+            branch.load_stage_state(_full(ck["species_branch"]["state_dict"]))
+        except (KeyError, TypeError, ValueError, RuntimeError) as e:
+            raise CheckpointError(f"{path}: unreadable species branch: {e}") from None
+        branch.eval().to(device)
     return Loaded(
         model,
         Normaliser.from_dict(ck["normaliser"]),
@@ -142,4 +170,5 @@ def load_checkpoint(path: str | os.PathLike[str], device: str = "cpu") -> Loaded
         dict(ck.get("train", {})),
         path,
         detector,
+        branch,
     )

@@ -20,6 +20,7 @@ import copy
 import math
 from collections.abc import Callable
 from pathlib import Path
+from typing import TypeVar
 
 import torch
 import torch.nn.functional as F
@@ -60,6 +61,12 @@ class Conv2dSame(nn.Conv2d):
         )
 
 
+def _relu6(x: torch.Tensor) -> torch.Tensor:
+    """ReLU6 of a fresh activation: in place when no gradient is kept (inference: one pass
+    over memory less, about a tenth of the network's CPU time), a new tensor otherwise."""
+    return F.relu6(x, inplace=not torch.is_grad_enabled())
+
+
 def _bn(c: int) -> nn.BatchNorm2d:
     return nn.BatchNorm2d(c, eps=1e-3, momentum=0.1)
 
@@ -83,8 +90,8 @@ class MBConv(nn.Module):
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         y = x
         if self.expand:
-            y = F.relu6(self._bn0(self._expand_conv(y)))
-        y = F.relu6(self._bn1(self._depthwise_conv(y)))
+            y = _relu6(self._bn0(self._expand_conv(y)))
+        y = _relu6(self._bn1(self._depthwise_conv(y)))
         y = self._bn2(self._project_conv(y))
         return y + x if self.skip else y
 
@@ -107,7 +114,7 @@ class _Stem(nn.Module):
         self.conv, self.bn = conv, bn
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        return F.relu6(self.bn(self.conv(x)))
+        return _relu6(self.bn(self.conv(x)))
 
 
 class EfficientNetLite0(nn.Module):
@@ -137,11 +144,11 @@ class EfficientNetLite0(nn.Module):
         """Stages ``start..stop-1``: 0 = stem, 1..16 = blocks, 17 = head conv (pooled after)."""
         for i in range(start, stop):
             if i == 0:
-                x = F.relu6(self._bn0(self._conv_stem(x)))
+                x = _relu6(self._bn0(self._conv_stem(x)))
             elif i <= len(self._blocks):
                 x = self._blocks[i - 1](x)
             else:
-                x = F.relu6(self._bn1(self._conv_head(x)))
+                x = _relu6(self._bn1(self._conv_head(x)))
         return x
 
     def conv_bn_pairs(self) -> list[tuple[nn.Module, str, str]]:
@@ -322,7 +329,13 @@ class TSN(nn.Module):
 
     def forward_pooled(self, x: torch.Tensor) -> tuple[dict[str, torch.Tensor], torch.Tensor]:
         """:meth:`forward` and the pooled features the heads read, ``(N, m)``."""
-        v = self.backbone.run_stages(self.features(x, 0), 0, self.n_stages).mean(dim=(2, 3))
+        return self.pooled_from(self.features(x, 0), 0)
+
+    def pooled_from(
+        self, f: torch.Tensor, start: int
+    ) -> tuple[dict[str, torch.Tensor], torch.Tensor]:
+        """:meth:`forward_from` and the pooled features the heads read, ``(N, m)``."""
+        v = self.backbone.run_stages(f, start, self.n_stages).mean(dim=(2, 3))
         return {h: m(v).view(-1, 4, HEAD_SIZES[h]) for h, m in self.heads.items()}, v
 
     def frozen_modules(self, upto: int) -> list[nn.Module]:
@@ -332,10 +345,61 @@ class TSN(nn.Module):
         return mods
 
 
-def fold_batchnorm(net: TSN) -> TSN:
-    """A copy of ``net`` in eval mode for inference, every batch norm folded into the
-    convolution before it (same outputs to float rounding, ~1e-7; a third less time on CPU).
-    The copy is not for training: its batch norms are gone."""
+class SpeciesBranch(nn.Module):
+    """A second copy of a backbone's last stages, from stage ``start`` on, trained for the
+    species only (``scripts/fit_species_branch.py``): it reads the map the network's
+    stage ``start`` makes and returns its own pooled features ``(N, m)``.  The heads were
+    trained for the tree's values; features trained for the kind of tree tell a lollipop
+    doodle from a birch better (measured in ``benchmarks/RESULTS.md``, "A species branch").
+
+    Only the copied stages' weights are kept (:meth:`stage_state`); the earlier stages of
+    the inner backbone exist for its layout and are never run."""
+
+    def __init__(self, backbone: str, start: int) -> None:
+        super().__init__()
+        self.backbone = make_backbone(backbone, pretrained=False)
+        if not 0 < start < self.backbone.n_stages:
+            raise ModelError(
+                f"a species branch starts inside the backbone (1..{self.backbone.n_stages - 1}),"
+                f" not at stage {start}"
+            )
+        self.start = int(start)
+
+    def forward(self, f: torch.Tensor) -> torch.Tensor:
+        return self.backbone.run_stages(f, self.start, self.backbone.n_stages).mean(dim=(2, 3))
+
+    def _stage_prefixes(self) -> tuple[str, ...]:
+        names = {id(m): n for n, m in self.backbone.named_modules()}
+        return tuple(
+            f"backbone.{names[id(m)]}."
+            for i in range(self.start, self.backbone.n_stages)
+            for m in self.backbone.stage_modules(i)
+        )
+
+    def stage_state(self) -> dict[str, torch.Tensor]:
+        """The copied stages' weights (what a checkpoint stores)."""
+        keep = self._stage_prefixes()
+        return {k: v for k, v in self.state_dict().items() if k.startswith(keep)}
+
+    def load_stage_state(self, state: dict[str, torch.Tensor]) -> None:
+        """Load :meth:`stage_state`'s weights; every copied stage's weight must be there."""
+        want = set(self.stage_state())
+        if set(state) != want:
+            missing, extra = sorted(want - set(state)), sorted(set(state) - want)
+            raise ModelError(
+                f"species branch weights do not fit: missing {missing[:3]}, unexpected {extra[:3]}"
+            )
+        self.load_state_dict(state, strict=False)
+
+
+_Net = TypeVar("_Net", TSN, SpeciesBranch)
+
+
+def fold_batchnorm(net: _Net) -> _Net:
+    """A copy of ``net`` (the network or a species branch) in eval mode for inference, every
+    batch norm of its backbone folded into the convolution before it (same outputs to float
+    rounding, ~1e-7; a third less time on CPU).  The copy is not for training: its batch
+    norms are gone."""
     out = copy.deepcopy(net).eval()
     for owner, conv, bn in out.backbone.conv_bn_pairs():
         setattr(owner, conv, fuse_conv_bn_eval(getattr(owner, conv), getattr(owner, bn)))

@@ -10,11 +10,18 @@ RGB, or RGBA composited on white) and returns a :class:`Prediction`:
   the sketch and its mirror image (test-time averaging: a mirrored tree sketch is an
   equally plausible drawing of a tree with the same parameters; measured on the test split
   in ``benchmarks/RESULTS.md``);
-* ``species``: Algorithm 1 on the denormalised output (``tsn.species_id``);
+* ``species``: the checkpoint's species classifier on the drawing's features, or
+  Algorithm 1 on the denormalised output (``tsn.species_id``);
 * ``decoded``: the output decoded to a valid dictionary (``tsn.encoding.decode``: rounded,
   thresholded, snapped, clamped to the training range);
 * ``params``: ``decoded`` projected onto the identified species
   (``weberpenn.species.project``: its fixed values, unfixed ones clipped to its ranges).
+
+A drawing's *features* (``raw_and_features``) are the pooled features the six heads read
+(the first :attr:`TSNModel.head_width` columns, what the tree detector and a refit of the
+heads read) followed, when the checkpoint has a species branch (``tsn.model.SpeciesBranch``),
+by the branch's pooled features of the drawing as given (the heads' part is, with
+``flip``, the mean over the drawing and its mirror): the species classifier reads them all.
 
 ``preprocess(image)`` is the network's input preparation (``tsn.data.preprocess``: crop
 to the drawing, pad square, area-resize; float32, 1 = white), identical to training.
@@ -37,7 +44,7 @@ from weberpenn.params import TreeParams
 from . import data as tdata
 from . import encoding
 from .checkpoint import CheckpointError, Loaded, load_checkpoint
-from .model import fold_batchnorm
+from .model import TSN, fold_batchnorm
 
 __all__ = [
     "DEFAULT_CHECKPOINT",
@@ -70,7 +77,12 @@ class TSNModel:
         self.flip = bool(flip)
         # inference only: batch norms folded into the convolutions and channels-last layout
         # (oneDNN), each faster on CPU; outputs differ by float rounding only (~1e-7)
-        self.net = fold_batchnorm(loaded.model).to(memory_format=torch.channels_last)
+        self.net: TSN = fold_batchnorm(loaded.model).to(memory_format=torch.channels_last)
+        branch = loaded.species_branch
+        self.branch = (
+            None if branch is None else fold_batchnorm(branch).to(memory_format=torch.channels_last)
+        )
+        self.head_width = int(self.net.backbone.out_features)
         self.normaliser = loaded.normaliser
         self.species_id = loaded.species_id
         self.size = loaded.size
@@ -87,22 +99,40 @@ class TSNModel:
         return tdata.preprocess(image, self.size)
 
     @torch.no_grad()
-    def _forward(self, images: Any, mirrored: bool) -> tuple[np.ndarray, np.ndarray]:
-        """Normalised outputs ``(B, 4, 62)`` and pooled features ``(B, m)`` of the images
-        (then, with ``mirrored``, of their left-right mirrors: one batch of 2N)."""
+    def _forward(
+        self, images: Any, mirrored: bool
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """Of the N images (then, with ``mirrored``, of their left-right mirrors: one
+        batch of B = 2N): normalised outputs ``(B, 4, 62)``, the pooled features the heads
+        read ``(B, m)``, and the species branch's pooled features of the N images as given
+        (None without a branch)."""
         x = torch.from_numpy(np.stack([self.preprocess(im) for im in images]))[:, None]
+        n = len(x)
         if mirrored:
             x = torch.cat([x, torch.flip(x, dims=[3])])
         x = x.to(self.device).contiguous(memory_format=torch.channels_last)
-        out, pooled = self.net.forward_pooled(x)
+        species = None
+        if self.branch is None:
+            out, pooled = self.net.forward_pooled(x)
+        else:
+            # the branch reads the map of stage `start` the rest of the network reads; of
+            # the drawing alone: its mirror costs a sixth of the estimate's time and adds
+            # nothing to the species (benchmarks/RESULTS.md, "A species branch")
+            f = self.net.features(x, self.branch.start)
+            out, pooled = self.net.pooled_from(f, self.branch.start)
+            species = self.branch(f[:n]).float().cpu().numpy()
         mats = encoding.join_heads({h: v.float().cpu().numpy() for h, v in out.items()})
-        return mats, pooled.float().cpu().numpy()
+        return mats, pooled.float().cpu().numpy(), species
 
     def pooled_features(self, images: Any) -> tuple[np.ndarray, np.ndarray]:
         """The pooled features ``(N, m)`` the heads read, of the images and of their
         left-right mirrors (what a refit of the heads learns from: ``tsn.heads``)."""
         pooled = self._forward(images, True)[1]
         return pooled[: len(pooled) // 2], pooled[len(pooled) // 2 :]
+
+    def head_features(self, features: np.ndarray) -> np.ndarray:
+        """The columns of ``(N, m)`` features that the heads read (see the module text)."""
+        return np.asarray(features)[:, : self.head_width]
 
     def raw_views(self, images: Any, mirrored: bool = True) -> tuple[np.ndarray, ...]:
         """Normalised network outputs ``(N, 4, 62)`` for the images as given and, with
@@ -112,17 +142,19 @@ class TSNModel:
     def views_and_features(
         self, images: Any, mirrored: bool = True
     ) -> tuple[tuple[np.ndarray, ...], np.ndarray]:
-        """:meth:`raw_views` and the pooled features the heads read, ``(N, m)`` (with
-        ``mirrored``, each the mean over the image and its mirror)."""
-        mats, pooled = self._forward(images, mirrored)
-        if not mirrored:
-            return (mats,), pooled
-        n = len(mats) // 2
-        return (mats[:n], mats[n:]), 0.5 * (pooled[:n] + pooled[n:])
+        """:meth:`raw_views` and the drawings' features, ``(N, m)`` (see the module text;
+        with ``mirrored``, the heads' part is the mean over the image and its mirror)."""
+        mats, pooled, species = self._forward(images, mirrored)
+        if mirrored:
+            n = len(mats) // 2
+            views, pooled = (mats[:n], mats[n:]), 0.5 * (pooled[:n] + pooled[n:])
+        else:
+            views = (mats,)
+        return views, pooled if species is None else np.concatenate([pooled, species], axis=1)
 
     def raw_and_features(self, images: Any) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`raw_batch` and the pooled features the heads read, ``(N, m)`` (with
-        ``self.flip``, each the mean over the image and its mirror)."""
+        """:meth:`raw_batch` and the drawings' features, ``(N, m)`` (see the module text;
+        with ``self.flip``, the heads' part is the mean over the image and its mirror)."""
         views, pooled = self.views_and_features(images, self.flip)
         return (0.5 * (views[0] + views[1]) if self.flip else views[0]), pooled
 
@@ -130,7 +162,7 @@ class TSNModel:
         """P(each drawing is a tree) from :meth:`raw_and_features`' features, or None when
         the checkpoint has no tree detector."""
         det = self.loaded.tree_detector
-        return None if det is None else det.probabilities(features)
+        return None if det is None else det.probabilities(self.head_features(features))
 
     def raw_batch(self, images: Any) -> np.ndarray:
         """Normalised network output ``(N, 4, 62)`` for a sequence of images: with
@@ -139,7 +171,7 @@ class TSNModel:
         return 0.5 * (views[0] + views[1]) if self.flip else views[0]
 
     def from_raw(self, raw: np.ndarray, features: np.ndarray | None = None) -> Prediction:
-        """Decode one normalised ``(4, 62)`` network output (its species from the pooled
+        """Decode one normalised ``(4, 62)`` network output (its species from the drawing's
         ``(m,)`` features too, when the checkpoint's species classifier reads them)."""
         mat = self.normaliser.denormalise(raw)
         name = self.species_id.identify(mat, features)

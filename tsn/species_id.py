@@ -99,7 +99,6 @@ class SpeciesClassifier:
         features) and their species; the temperature on ``held_out`` (the same kind of
         input, species) when given (else 1)."""
         import torch
-        from scipy.optimize import minimize_scalar
 
         names = tuple(sorted(set(labels), key=list(labels).index))
         x = cls.design(inputs, scale, reads)
@@ -122,20 +121,28 @@ class SpeciesClassifier:
             names, mean, std, w.detach().numpy(), b.detach().numpy(), 1.0,
             np.asarray(scale, np.float64), reads,
         )  # fmt: skip
-        if held_out is not None and len(held_out[1]):
-            logits = out.logits(held_out[0])
-            known = [i for i, s in enumerate(held_out[1]) if s in names]
-            yh = np.array([names.index(held_out[1][i]) for i in known])
+        return out if held_out is None else out.calibrated(*held_out)
 
-            def nll(t: float) -> float:
-                z = logits[known] / t
-                z = z - z.max(axis=1, keepdims=True)
-                logp = z - np.log(np.exp(z).sum(axis=1, keepdims=True))
-                return float(-logp[np.arange(len(yh)), yh].mean())
+    def calibrated(self, inputs: np.ndarray, labels: Sequence[str]) -> SpeciesClassifier:
+        """This classifier with the temperature that makes its probabilities most likely
+        on held-out ``inputs`` (of the kind it ``reads``) and their species (species it
+        does not know are left out; none known: unchanged)."""
+        from scipy.optimize import minimize_scalar
 
-            t = minimize_scalar(nll, bounds=(0.05, 20.0), method="bounded").x
-            out = dataclasses.replace(out, temperature=float(t))
-        return out
+        known = [i for i, s in enumerate(labels) if s in self.species]
+        if not known:
+            return self
+        raw = self.logits(np.asarray(inputs)[known])
+        yh = np.array([self.species.index(labels[i]) for i in known])
+
+        def nll(t: float) -> float:
+            z = raw / t
+            z = z - z.max(axis=1, keepdims=True)
+            logp = z - np.log(np.exp(z).sum(axis=1, keepdims=True))
+            return float(-logp[np.arange(len(yh)), yh].mean())
+
+        t = minimize_scalar(nll, bounds=(0.05, 20.0), method="bounded").x
+        return dataclasses.replace(self, temperature=float(t))
 
     def logits(self, inputs: np.ndarray) -> np.ndarray:
         x = (self.design(inputs, self.scale, self.reads) - self.mean) / self.std

@@ -1,28 +1,33 @@
-"""Would the species read better from a fine-tuned copy of the network's last stages?
+"""Fit a TSN checkpoint's species branch: a copy of the network's last stages for the species.
 
-    .venv/bin/python benchmarks/probes/species_branch.py cache --data DS_PEOPLE --cache DIR \
-        [--doodles 300] [--styled 330] [--start 12]
-    .venv/bin/python benchmarks/probes/species_branch.py train --cache DIR \
-        [--epochs 4] [--lr 3e-4] [--out branch.pt]
+    .venv/bin/python scripts/fit_species_branch.py cache --data DS_PEOPLE --cache DIR \
+        [--doodles 300] [--styled 330] [--start 12]              # 20 min on two cores
+    .venv/bin/python scripts/fit_species_branch.py train --cache DIR \
+        [--epochs 4] [--lr 3e-4] --out branch.pt                   # 14 min on two cores
+    .venv/bin/python scripts/fit_species_branch.py install --cache DIR --branch branch.pt \
+        [--checkpoint checkpoints/tsn_lite0.pt] [--out PT]         # a minute
 
-The shipped species classifier is a logistic regression on the network's pooled features,
-which were trained for the tree's values, not for telling a lollipop doodle from a birch.
-This probe keeps the whole network as it is and trains a *copy* of its last stages (from
-stage ``--start``: 12 is the start of the 6 x 6 stages of EfficientNet-Lite0) with a
-linear layer on top, on species labels only: what a species branch beside the heads would
-read.
+The network's six heads read pooled features trained for the tree's values, not for telling
+a lollipop doodle from a birch.  A species branch (``tsn.model.SpeciesBranch``) is a second
+copy of the network's stages from ``--start`` on (12: the start of the 6 x 6 stages of
+EfficientNet-Lite0), which reads the same map of that stage and is trained, with a linear
+layer on top, on species labels only; the network, its heads and its tree detector stay as
+they are.
 
-``cache`` runs the frozen first stages once over the drawings the shipped classifier is
-fitted on (``scripts/fit_species_classifier.py``: hand-style doodles from seed 1000, trees
-in the renderer's styles from seed 4000, the dataset's training split), its held-out sets
-(doodle seeds from 5000, styled trees from 7000, the validation split) and the test sets
-(the dataset's test split by style, the hand-style doodles of seeds 0-39 that
+``cache`` runs the frozen first stages once over the drawings the species classifier is
+fitted on (``scripts/fit_species_classifier.py``'s: hand-style doodles from seed 1000,
+trees in the renderer's styles from seed 4000, the dataset's training split), its held-out
+sets (doodle seeds from 5000, styled trees from 7000, the validation split) and the test
+sets (the dataset's test split by style, the hand-style doodles of seeds 0-39 that
 ``bench_species.py doodles`` scores, ``examples/hand``), each drawing and its mirror, and
 keeps the maps (float16) in ``--cache``.  ``train`` starts the linear layer from the
-shipped classifier (so epoch 0 is the shipped checkpoint's accuracy), trains the copy with
-AdamW and a one-cycle schedule for ``--epochs`` (batch norms fixed, label smoothing
-0.05, the mean of a drawing's and its mirror's pooled features as at inference), and
-prints the accuracy on every held-out and test set after each epoch.
+checkpoint's classifier (so epoch 0 is its accuracy), trains the copy with AdamW and a
+one-cycle schedule for ``--epochs`` (batch norms fixed, label smoothing 0.05, each drawing
+or its mirror at random), prints the accuracy on every held-out and test set after each
+epoch (the drawings as given, as at inference) and saves the branch.  ``install`` writes the
+checkpoint with the branch and, as its species classifier, the trained linear layer on the
+branch's features with its temperature fitted on the held-out sets (the test sets are not
+used).  Measured in ``benchmarks/RESULTS.md``, "A species branch".
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ from __future__ import annotations
 import argparse
 import copy
 import json
+import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -44,9 +50,11 @@ from render.dataset import read_manifest, row_style
 from render.reader import SketchError
 from treesketch.pipeline import load_sketch, prepare_input
 from tsn import data as tdata
-from tsn.checkpoint import Loaded, load_checkpoint
+from tsn.checkpoint import Loaded, load_checkpoint, save_loaded
+from tsn.model import SpeciesBranch
+from tsn.species_id import SpeciesClassifier
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[1]
 CHECKPOINT = ROOT / "checkpoints" / "tsn_lite0.pt"
 FIT = ("doodle_fit", "styled_fit", "ds_train")
 HELD = ("doodle_held", "styled_held", "ds_val")
@@ -125,17 +133,28 @@ def cache(args: argparse.Namespace) -> None:
 
 class Branch(nn.Module):
     """A copy of the backbone's stages from ``start`` on, pooled, and a linear layer
-    started from the shipped classifier (its standardisation and temperature folded in)."""
+    started from the checkpoint's classifier (its standardisation and temperature folded
+    in).  A checkpoint that has a branch already goes on from that branch and the
+    classifier's columns on its features; else the copy starts as the network's own
+    stages and the classifier must read the heads' features."""
 
     def __init__(self, loaded: Loaded, start: int) -> None:
         super().__init__()
         clf = loaded.species_id.classifier
-        if clf is None or clf.reads != "features":
+        nf = loaded.model.backbone.out_features
+        old = loaded.species_branch
+        cols = slice(0, nf) if old is None else slice(nf, 2 * nf)
+        if clf is None or clf.reads != "features" or clf.weight.shape[1] != cols.stop:
             raise SystemExit("error: the checkpoint has no species classifier on pooled features")
+        if old is not None and old.start != start:
+            raise SystemExit(
+                f"error: the checkpoint's branch starts at stage {old.start}, not {start}"
+            )
         self.start = start
-        self.backbone = copy.deepcopy(loaded.model.backbone)
-        w = clf.weight / clf.std[None, :] / clf.temperature
-        b = (clf.bias - (clf.mean / clf.std) @ clf.weight.T) / clf.temperature
+        self.backbone = copy.deepcopy(loaded.model.backbone if old is None else old.backbone)
+        mean, std, weight = clf.mean[cols], clf.std[cols], clf.weight[:, cols]
+        w = weight / std[None, :] / clf.temperature
+        b = (clf.bias - (mean / std) @ weight.T) / clf.temperature
         self.linear = nn.Linear(w.shape[1], w.shape[0])
         self.linear.weight.data = torch.from_numpy(w).float()
         self.linear.bias.data = torch.from_numpy(b).float()
@@ -146,11 +165,10 @@ class Branch(nn.Module):
                 for p in mod.parameters():
                     p.requires_grad = True
 
-    def forward(self, pairs: torch.Tensor) -> torch.Tensor:
-        """``(B, 2, C, H, W)`` maps of drawings and mirrors -> ``(B, k)`` logits."""
-        b = pairs.shape[0]
-        f = self.backbone.run_stages(pairs.flatten(0, 1), self.start, self.backbone.n_stages)
-        return self.linear(f.mean(dim=(2, 3)).view(b, 2, -1).mean(dim=1))
+    def forward(self, maps: torch.Tensor) -> torch.Tensor:
+        """``(B, C, H, W)`` maps of drawings -> ``(B, k)`` logits."""
+        f = self.backbone.run_stages(maps, self.start, self.backbone.n_stages)
+        return self.linear(f.mean(dim=(2, 3)))
 
 
 def _load(cache_dir: Path, tag: str) -> dict[str, np.ndarray]:
@@ -164,7 +182,7 @@ def _load(cache_dir: Path, tag: str) -> dict[str, np.ndarray]:
 def _predict(net: Branch, names: list[str], maps: np.ndarray) -> np.ndarray:
     net.eval()
     out = [
-        net(torch.from_numpy(maps[i : i + 256]).float()).argmax(1).numpy()
+        net(torch.from_numpy(maps[i : i + 256, 0]).float()).argmax(1).numpy()
         for i in range(0, len(maps), 256)
     ]
     return np.asarray(names)[np.concatenate(out)]
@@ -218,11 +236,14 @@ def train(args: argparse.Namespace) -> None:
     for epoch in range(1, args.epochs + 1):
         net.train()
         net.backbone.eval()  # the batch norms keep the statistics the network was trained with
-        order = np.random.default_rng(args.seed + epoch).permutation(len(maps))
+        rng = np.random.default_rng(args.seed + epoch)
+        order = rng.permutation(len(maps))
         t0, total = time.perf_counter(), 0.0
         for i in range(per_epoch):
             idx = order[i * args.batch : (i + 1) * args.batch]
-            logits = net(torch.from_numpy(maps[idx]).float())
+            # each drawing or its mirror at random: a drawing faces either way
+            side = rng.integers(0, 2, len(idx))
+            logits = net(torch.from_numpy(maps[idx, side]).float())
             loss = nn.functional.cross_entropy(logits, labels[idx], label_smoothing=0.05)
             opt.zero_grad()
             loss.backward()
@@ -234,9 +255,78 @@ def train(args: argparse.Namespace) -> None:
             json.dumps(_score(net, names, sets)),
             flush=True,
         )
-    if args.out is not None:
-        torch.save({"start": start, "species": names, "state": net.state_dict()}, args.out)
-        print(f"wrote {args.out}")
+    trained = {k: getattr(args, k) for k in ("epochs", "lr", "batch", "seed")}
+    saved = {"start": start, "species": names, "state": net.state_dict(), "trained": trained}
+    torch.save(saved, args.out)
+    print(f"wrote {args.out}")
+
+
+@torch.no_grad()
+def _features(loaded: Loaded, branch: SpeciesBranch, maps: np.ndarray) -> np.ndarray:
+    """``(N, m)`` features as ``tsn.predict`` makes them from cached maps: the heads'
+    pooled features (the mean over each drawing and its mirror), then the branch's of the
+    drawing."""
+    out = []
+    for i in range(0, len(maps), 128):
+        pairs = torch.from_numpy(maps[i : i + 128]).float()
+        heads = loaded.model.pooled_from(pairs.flatten(0, 1), branch.start)[1]
+        heads = heads.view(len(pairs), 2, -1).mean(dim=1)
+        out.append(torch.cat([heads, branch(pairs[:, 0])], dim=1).numpy())
+    return np.concatenate(out).astype(np.float64)
+
+
+def install(args: argparse.Namespace) -> None:
+    t0 = time.perf_counter()
+    loaded = load_checkpoint(args.checkpoint)
+    saved = torch.load(args.branch, map_location="cpu", weights_only=True)
+    state = saved["state"]
+    branch = SpeciesBranch(loaded.model.backbone_name, int(saved["start"])).eval()
+    try:
+        branch.load_stage_state({k: state[k] for k in branch.stage_state()})
+    except KeyError as e:
+        raise SystemExit(f"error: {args.branch} lacks the branch weight {e}") from None
+    names = tuple(saved["species"])
+    w = state["linear.weight"].double().numpy()
+    nf = loaded.model.backbone.out_features
+    m = nf + w.shape[1]
+    # the classifier reads the whole feature vector; the heads' part carries no weight
+    clf = SpeciesClassifier(
+        names, np.zeros(m), np.ones(m), np.hstack([np.zeros((len(names), nf)), w]),
+        state["linear.bias"].double().numpy(), 1.0, loaded.normaliser.scale, "features",
+    )  # fmt: skip
+    held = {t: _load(args.cache, t) for t in HELD}
+    if any(int(d["start"]) != branch.start for d in held.values()):
+        raise SystemExit(f"error: {args.cache} holds maps of another stage than {branch.start}")
+    feats = {t: _features(loaded, branch, d["maps"]) for t, d in held.items()}
+    clf = clf.calibrated(
+        np.concatenate(list(feats.values())), [s for d in held.values() for s in d["species"]]
+    )
+    accuracy = {
+        t: float(
+            np.mean(np.asarray(names)[clf.probabilities_many(x).argmax(1)] == held[t]["species"])
+        )
+        for t, x in feats.items()
+    }
+    info = {
+        **loaded.info,
+        "classifier": {
+            "reads": "features (the species branch's)",
+            "held_out_accuracy": accuracy,
+            "temperature": clf.temperature,
+        },
+        "species_branch": {
+            "start": branch.start,
+            "trained": saved.get("trained", {}),
+            "command": " ".join(sys.argv),
+        },
+    }
+    out = args.out or args.checkpoint
+    save_loaded(
+        loaded, out, info, species_id=loaded.species_id.with_classifier(clf), species_branch=branch
+    )
+    for t, acc in accuracy.items():
+        print(f"held out, {t}: species right {acc:.1%} ({len(held[t]['species'])} drawings)")
+    print(f"temperature {clf.temperature:.2f}; wrote {out} ({time.perf_counter() - t0:.0f} s)")
 
 
 def main() -> None:
@@ -255,9 +345,13 @@ def main() -> None:
     t.add_argument("--lr", type=float, default=3e-4)
     t.add_argument("--batch", type=int, default=64)
     t.add_argument("--seed", type=int, default=0)
-    t.add_argument("--out", type=Path, default=None, help="save the trained branch here")
+    t.add_argument("--out", type=Path, required=True, help="save the trained branch here")
+    i = sub.add_parser("install", help="write the checkpoint with the branch and its classifier")
+    i.add_argument("--cache", type=Path, required=True, help="for the held-out drawings' maps")
+    i.add_argument("--branch", type=Path, required=True, help="what train saved")
+    i.add_argument("--out", type=Path, default=None, help="default: --checkpoint")
     args = ap.parse_args()
-    cache(args) if args.step == "cache" else train(args)
+    {"cache": cache, "train": train, "install": install}[args.step](args)
 
 
 if __name__ == "__main__":
