@@ -78,3 +78,6 @@ def test_a_new_detector_is_saved_into_a_checkpoint_with_the_rest_kept(tmp_path) 
     assert again.normaliser.to_dict() == loaded.normaliser.to_dict()
     a, b = loaded.model.state_dict(), again.model.state_dict()
     assert a.keys() == b.keys() and all(bool((a[k] == b[k]).all()) for k in a)
+    assert loaded.species_branch is not None and again.species_branch is not None
+    a, b = loaded.species_branch.stage_state(), again.species_branch.stage_state()
+    assert a.keys() == b.keys() and all(bool((a[k] == b[k]).all()) for k in a)

@@ -62,8 +62,8 @@ class Conv2dSame(nn.Conv2d):
 
 
 def _relu6(x: torch.Tensor) -> torch.Tensor:
-    """ReLU6 of a fresh activation: in place when no gradient is kept (inference: one pass
-    over memory less, about a tenth of the network's CPU time), a new tensor otherwise."""
+    """ReLU6 of a fresh activation: in place when no gradient is kept (inference: no new
+    tensor for each activation), a new tensor otherwise."""
     return F.relu6(x, inplace=not torch.is_grad_enabled())
 
 

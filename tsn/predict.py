@@ -115,8 +115,8 @@ class TSNModel:
         if self.branch is None:
             out, pooled = self.net.forward_pooled(x)
         else:
-            # the branch reads the map of stage `start` the rest of the network reads; of
-            # the drawing alone: its mirror costs a sixth of the estimate's time and adds
+            # the branch reads the map of stage `start` the rest of the network reads, of
+            # the drawing alone: its mirror too would add about 5 ms to each estimate and
             # nothing to the species (benchmarks/RESULTS.md, "A species branch")
             f = self.net.features(x, self.branch.start)
             out, pooled = self.net.pooled_from(f, self.branch.start)
