@@ -45,8 +45,8 @@ def read_drawings(
     prepare: Callable[[Any], np.ndarray],
     batch: int = 32,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(outputs (N, 4, 62) un-normalised, pooled features (N, m), kept (len(images),)
-    bool)`` of the drawings the pipeline accepts (``prepare``: its reader and preparation;
+    """``(outputs (N, 4, 62) un-normalised, features (N, m) as ``tsn.predict`` makes them,
+    kept (len(images),) bool)`` of the drawings the pipeline accepts (``prepare``: its reader and preparation;
     a blank page is refused before the network sees it, so it is left out here too);
     ``model`` is a ``tsn.predict.TSNModel``."""
     prepared, kept = [], []

@@ -5,7 +5,8 @@
 
 The classifier (``tsn.species_id.SpeciesClassifier``) reads the network's pooled features
 (``--reads features``, the default: they describe a drawing much more richly than the 62
-predicted values, and tell a lollipop doodle from a birch) or its outputs
+predicted values, and tell a lollipop doodle from a birch; with a species branch in the
+checkpoint, the branch's features too: ``tsn.predict``) or its outputs
 (``--reads outputs``), so it can learn from drawings that have a species but no exact
 parameters.  It is fitted on ``--doodles`` hand-style tree doodles per species
 (``eval.doodles.tree_doodle``, seeds from 1000; the benchmarks score seeds below 1000),
