@@ -3,9 +3,9 @@
     .venv/bin/python scripts/fit_species_branch.py cache --data DS_PEOPLE --cache DIR \
         [--doodles 300] [--styled 330] [--start 12]              # 20 min on two cores
     .venv/bin/python scripts/fit_species_branch.py train --cache DIR \
-        [--epochs 4] [--lr 3e-4] --out branch.pt                   # 14 min on two cores
+        [--epochs 4] [--lr 3e-4] --out branch.pt                   # 7 min on two cores
     .venv/bin/python scripts/fit_species_branch.py install --cache DIR --branch branch.pt \
-        [--checkpoint checkpoints/tsn_lite0.pt] [--out PT]         # a minute
+        [--checkpoint checkpoints/tsn_lite0.pt] [--out PT]         # 30 s
 
 The network's six heads read pooled features trained for the tree's values, not for telling
 a lollipop doodle from a birch.  A species branch (``tsn.model.SpeciesBranch``) is a second

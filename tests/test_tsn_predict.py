@@ -203,9 +203,12 @@ def test_a_species_branch_is_stored_read_and_feeds_the_classifier(tmp_path: Path
         np.hstack([np.zeros((3, nf)), rng.normal(size=(3, nf))]), np.zeros(3), 1.0,
         loaded.normaliser.scale, "features",
     )  # fmt: skip
+    from tsn.tree_detect import TreeDetector
+
+    det = TreeDetector.fit(rng.normal(size=(40, nf)), np.arange(40) % 2 == 0)
     path = save_loaded(
         loaded, tmp_path / "b.pt", {}, species_id=loaded.species_id.with_classifier(clf),
-        species_branch=branch,
+        tree_detector=det, species_branch=branch,
     )  # fmt: skip
     stored = torch.load(path, weights_only=True)["species_branch"]
     assert stored["start"] == 12 and set(stored["state_dict"]) == set(state)
@@ -217,7 +220,10 @@ def test_a_species_branch_is_stored_read_and_feeds_the_classifier(tmp_path: Path
     raw, feats = model.raw_and_features([img])
     assert feats.shape == (1, 2 * nf)
     np.testing.assert_allclose(feats[:, nf:], feats[:, :nf], rtol=1e-3, atol=1e-3)
-    np.testing.assert_allclose(model.head_features(feats), feats[:, :nf])
+    # the detector reads the heads' part (it was fitted on nf columns)
+    tree = model.tree_probabilities(feats)
+    assert tree is not None
+    np.testing.assert_allclose(tree, det.probabilities(feats[:, :nf]))
     base = tp.load_model(tmp_path / "base.pt", device="cpu")
     np.testing.assert_allclose(base.raw_and_features([img])[1], feats[:, :nf], atol=1e-4)
     np.testing.assert_allclose(base.raw_batch([img]), raw, atol=1e-4)  # the heads unchanged
