@@ -245,3 +245,25 @@ def test_the_shipped_checkpoint_reads_the_species_from_its_branch() -> None:
     assert clf is not None and clf.weight.shape[1] == 2 * model.head_width
     assert model.loaded.tree_detector is not None
     assert len(model.loaded.tree_detector.mean) == model.head_width
+
+
+def test_drawing_and_mirror_side_by_side_give_the_batch_s_numbers(sketch: np.ndarray) -> None:
+    """On one torch thread (as the estimator runs) the drawing and its mirror, run as two
+    passes on two threads, give the one batch's outputs and features to the last bit."""
+    import torch
+
+    model = tp.load_model()
+    n = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        side = model._forward([sketch], True, side_by_side=True)
+        batch = model._forward([sketch], True, side_by_side=False)
+        alone = model._forward([sketch], False, side_by_side=True)
+    finally:
+        torch.set_num_threads(n)
+    for a, b in zip(side, batch, strict=True):
+        assert a is not None and b is not None and a.shape == b.shape
+        assert np.array_equal(a, b)
+    assert side[0].shape[0] == 2 and side[2] is not None and side[2].shape[0] == 1
+    # without the mirror, one pass: the drawing's features of the batch
+    assert np.array_equal(alone[1], batch[1][:1]) and np.array_equal(alone[2], batch[2])

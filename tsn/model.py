@@ -320,8 +320,14 @@ class TSN(nn.Module):
 
     def forward_from(self, f: torch.Tensor, start: int) -> dict[str, torch.Tensor]:
         """Feature map after ``start`` stages -> ``{head: (N, 4, n)}``."""
-        f = self.backbone.run_stages(f, start, self.n_stages)
-        v = f.mean(dim=(2, 3))
+        return self.head_outputs(self.pool(f, start))
+
+    def pool(self, f: torch.Tensor, start: int) -> torch.Tensor:
+        """Feature map after ``start`` stages -> the pooled features the heads read, ``(N, m)``."""
+        return self.backbone.run_stages(f, start, self.n_stages).mean(dim=(2, 3))
+
+    def head_outputs(self, v: torch.Tensor) -> dict[str, torch.Tensor]:
+        """Pooled features ``(N, m)`` -> ``{head: (N, 4, n)}``."""
         return {h: m(v).view(-1, 4, HEAD_SIZES[h]) for h, m in self.heads.items()}
 
     def forward(self, x: torch.Tensor) -> dict[str, torch.Tensor]:
@@ -335,8 +341,8 @@ class TSN(nn.Module):
         self, f: torch.Tensor, start: int
     ) -> tuple[dict[str, torch.Tensor], torch.Tensor]:
         """:meth:`forward_from` and the pooled features the heads read, ``(N, m)``."""
-        v = self.backbone.run_stages(f, start, self.n_stages).mean(dim=(2, 3))
-        return {h: m(v).view(-1, 4, HEAD_SIZES[h]) for h, m in self.heads.items()}, v
+        v = self.pool(f, start)
+        return self.head_outputs(v), v
 
     def frozen_modules(self, upto: int) -> list[nn.Module]:
         mods: list[nn.Module] = []

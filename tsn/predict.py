@@ -31,6 +31,7 @@ Bad input raises ``render.reader.SketchError`` (a ``ValueError``).
 from __future__ import annotations
 
 import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -58,6 +59,11 @@ __all__ = [
 
 DEFAULT_CHECKPOINT = Path(__file__).resolve().parents[1] / "checkpoints" / "tsn_lite0.pt"
 ENV_CHECKPOINT = "TREESKETCH_TSN_CHECKPOINT"
+
+
+def _cores() -> int:
+    """The cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
 @dataclass(frozen=True)
@@ -100,29 +106,57 @@ class TSNModel:
 
     @torch.no_grad()
     def _forward(
-        self, images: Any, mirrored: bool
+        self, images: Any, mirrored: bool, side_by_side: bool | None = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """Of the N images (then, with ``mirrored``, of their left-right mirrors: one
-        batch of B = 2N): normalised outputs ``(B, 4, 62)``, the pooled features the heads
-        read ``(B, m)``, and the species branch's pooled features of the N images as given
-        (None without a branch)."""
+        """Of the N images (then, with ``mirrored``, of their left-right mirrors: B = 2N):
+        normalised outputs ``(B, 4, 62)``, the pooled features the heads read ``(B, m)``,
+        and the species branch's pooled features of the N images as given (None without
+        a branch).
+
+        ``side_by_side`` (default: one image, torch on one thread, more than one core)
+        runs the drawing and its mirror as two passes on two threads at once instead of
+        one batch of two: the same numbers to the last bit (on one thread a batch of one
+        takes the kernels a batch of two does; ``tests/test_tsn_predict.py``) in about
+        half the time, which is most of a first estimate."""
         x = torch.from_numpy(np.stack([self.preprocess(im) for im in images]))[:, None]
         n = len(x)
-        if mirrored:
-            x = torch.cat([x, torch.flip(x, dims=[3])])
-        x = x.to(self.device).contiguous(memory_format=torch.channels_last)
-        species = None
-        if self.branch is None:
-            out, pooled = self.net.forward_pooled(x)
+        if side_by_side is None:
+            side_by_side = n == 1 and torch.get_num_threads() == 1 and _cores() > 1
+        if mirrored and side_by_side:
+            pooled, species = self._side_by_side(x)
         else:
-            # the branch reads the map of stage `start` the rest of the network reads, of
-            # the drawing alone: its mirror too would add about 5 ms to each estimate and
-            # nothing to the species (benchmarks/RESULTS.md, "A species branch")
-            f = self.net.features(x, self.branch.start)
-            out, pooled = self.net.pooled_from(f, self.branch.start)
-            species = self.branch(f[:n]).float().cpu().numpy()
+            batch = torch.cat([x, torch.flip(x, dims=[3])]) if mirrored else x
+            pooled, species = self._pooled(batch, n)
+        out = self.net.head_outputs(pooled)
         mats = encoding.join_heads({h: v.float().cpu().numpy() for h, v in out.items()})
         return mats, pooled.float().cpu().numpy(), species
+
+    def _pooled(self, x: torch.Tensor, n: int) -> tuple[torch.Tensor, np.ndarray | None]:
+        """The heads' pooled features of a batch and the branch's of its first ``n``
+        images (none for ``n`` 0 or without a branch)."""
+        x = x.to(self.device).contiguous(memory_format=torch.channels_last)
+        if self.branch is None or n == 0:
+            return self.net.pool(self.net.features(x, 0), 0), None
+        # the branch reads the map of stage `start` the rest of the network reads, of the
+        # drawing alone: its mirror too would add about 5 ms to each estimate and nothing
+        # to the species (benchmarks/RESULTS.md, "A species branch")
+        f = self.net.features(x, self.branch.start)
+        species = self.branch(f[:n]).float().cpu().numpy()
+        return self.net.pool(f, self.branch.start), species
+
+    def _side_by_side(self, x: torch.Tensor) -> tuple[torch.Tensor, np.ndarray | None]:
+        """:meth:`_pooled` of the images and of their mirrors, the mirrors' pass on a
+        second thread (torch lets go of the GIL inside its operations; a third thread for
+        the species branch measured no faster on two cores)."""
+
+        def mirrors() -> torch.Tensor:
+            with torch.no_grad():  # grad mode is per thread
+                return self._pooled(torch.flip(x, dims=[3]), 0)[0]
+
+        with ThreadPoolExecutor(max_workers=1) as pool:
+            later = pool.submit(mirrors)
+            pooled, species = self._pooled(x, len(x))
+            return torch.cat([pooled, later.result()]), species
 
     def pooled_features(self, images: Any) -> tuple[np.ndarray, np.ndarray]:
         """The pooled features ``(N, m)`` the heads read, of the images and of their
