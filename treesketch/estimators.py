@@ -102,7 +102,9 @@ class SeededEstimator:
 def _one_torch_thread() -> Iterator[None]:
     """Run the network on one thread: a sum split over threads is added in another order,
     which moves the last digits of a prediction, and an executor's workers (one CPU each)
-    must give the values this process gives.  One image is no slower on one thread."""
+    must give the values this process gives.  A second core is still used: the drawing
+    and its mirror run side by side on two threads of one torch thread each
+    (``tsn.predict.TSNModel``), which changes no digit."""
     import torch
 
     n = torch.get_num_threads()
