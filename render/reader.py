@@ -411,6 +411,10 @@ def _ink_of(flat: np.ndarray) -> np.ndarray:
     else:
         t = INK_CONTRAST
     ink = flat < max(t, 0.5)
+    if not ink.any():
+        # a page of two levels (a grey pen in a paint program, no smoothing): Otsu's
+        # split is the pen's own level, the dark class's brightest (skimage's convention)
+        ink = flat <= t
     # on grainy paper with few, light strokes Otsu splits the grain itself: a mark is ink
     # only where some of it is darker than the paper's grain reaches, and each of its
     # pixels clears the grain's usual spread (hysteresis: grain on its own goes, strokes

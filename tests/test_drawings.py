@@ -80,6 +80,18 @@ def test_pencil_on_grey_paper_reads_as_ink_and_the_same_species(sketches, pipeli
         assert on_grey.species == on_white.species == name
 
 
+@pytest.mark.parametrize("level", [140, 180, 210])
+def test_a_flat_grey_pen_reads_like_black_ink(level: int) -> None:
+    """A line drawing of two grey levels (a grey pen in a paint program, no smoothing) has
+    its Otsu split at the pen's own level: its lines are the ink, not a blank page."""
+    hand = Path(__file__).resolve().parents[1] / "examples" / "hand"
+    for name in ("oak", "poplar", "palm_lines"):
+        lines = np.asarray(Image.open(hand / f"{name}.png").convert("L")) < 128
+        grey = prepare_input(np.where(lines, level, 255).astype(np.uint8)) < 128
+        black = prepare_input(np.where(lines, 0, 255).astype(np.uint8)) < 128
+        assert (grey != black).sum() <= 0.01 * black.sum(), name
+
+
 def test_drawing_in_a_corner_gives_the_same_tree(sketches, pipeline) -> None:
     for name, img in sketches.items():
         page = in_corner(img)
