@@ -11,6 +11,8 @@
     .venv/bin/python benchmarks/bench_species.py detector
     # fit the species posterior and the warning on those runs; reliability diagram
     .venv/bin/python benchmarks/bench_species.py calibrate runs.jsonl --png docs/confidence.png
+    # the paper's own five drawings, as published and as light pencil on grey paper
+    .venv/bin/python benchmarks/bench_species.py paper [--strip PNG]
 
 ``network``: the checkpoint's species (its calibrated classifier when it has one) on
 every test sketch of ``--data``, prepared as the pipeline prepares a drawing, per style and
@@ -26,6 +28,12 @@ and style of ``--data`` (trees the network never saw), the hand-style tree doodl
 non-tree doodles of ``eval.doodles`` when that module is there; one JSON line per drawing
 with the truth ("nontree" for the others), the candidates (scores, distances), the
 warning's distances and the confidence.
+
+``paper``: the first estimate's species (``Pipeline.estimate``) on the five drawings of
+the paper's figure (``../shared/reference/style_reference.png``: maple, palm, pine, cherry,
+bonsai from left to right, cut apart at the blank columns between them), each as published
+and as light pencil on grey paper (strokes 40 % as dark, paper 150-205 of 255 lit from one
+side, grain of 4 levels; seeded).
 
 ``calibrate``: the posterior's ``NET_WEIGHT`` and ``DISTANCE_SCALE`` by maximum likelihood
 of the true species among the candidates (half the runs fit, the other half score: the
@@ -405,6 +413,48 @@ def doodles(args: argparse.Namespace) -> None:
             print(f"- {k}: {p} (a person: {people[k]['species']})")
 
 
+PAPER_STRIP = Path(__file__).resolve().parents[2] / "shared" / "reference" / "style_reference.png"
+PAPER_SPECIES = ("maple", "palm", "pine", "cherry", "bonsai")  # the figure, left to right
+
+
+def _cut_at_blank_columns(page: np.ndarray, n: int, gap: int = 3) -> list[np.ndarray]:
+    """The ``n`` drawings of a strip, cut in the middle of the ``n - 1`` widest runs of at
+    least ``gap`` blank columns."""
+    inked = np.flatnonzero((page < 128).any(axis=0))
+    steps = np.diff(inked)
+    wide = sorted(np.flatnonzero(steps > gap), key=lambda i: -steps[i])[: n - 1]
+    if len(wide) != n - 1:
+        raise SystemExit(f"expected {n} drawings side by side, found {len(wide) + 1}")
+    cuts = [0, *sorted(int(inked[i] + steps[i] // 2) for i in wide), page.shape[1]]
+    return [page[:, a:b] for a, b in zip(cuts, cuts[1:], strict=False)]
+
+
+def paper(args: argparse.Namespace) -> None:
+    from PIL import Image
+
+    from treesketch import Pipeline
+
+    page = np.asarray(Image.open(args.strip).convert("L"))
+    drawings = _cut_at_blank_columns(page, len(PAPER_SPECIES))
+    rng = np.random.default_rng(0)
+    pipe = Pipeline(args.checkpoint or "tsn")
+    print(f"## Species of the paper's drawings ({args.strip.name}), {_stamp()}\n")
+    print("| drawing | as published | light pencil on grey paper |")
+    print("|---|---|---|")
+    right = 0
+    for truth, img in zip(PAPER_SPECIES, drawings, strict=True):
+        h, w = img.shape
+        light = np.linspace(150.0, 205.0, w)[None, :] - 0.4 * (255.0 - img)
+        grey = np.clip(light + rng.normal(0.0, 4.0, (h, w)), 0, 255).astype(np.uint8)
+        cells = []
+        for version in (img, grey):
+            est = pipe.estimate(version)
+            right += est.species == truth
+            cells.append(f"{est.species} ({est.species_scores[est.species]:.0%})")
+        print(f"| {truth} | {cells[0]} | {cells[1]} |")
+    print(f"\nright: **{right} of {2 * len(PAPER_SPECIES)}**")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="part", required=True)
@@ -429,6 +479,9 @@ def main() -> None:
     d.add_argument("--checkpoint", default=None)
     d.add_argument("--per-species", type=int, default=20)
     d.add_argument("--per-kind", type=int, default=5)
+    q = sub.add_parser("paper")
+    q.add_argument("--strip", type=Path, default=PAPER_STRIP)
+    q.add_argument("--checkpoint", default=None)
     c = sub.add_parser("calibrate")
     c.add_argument("runs")
     c.add_argument("--png", default=None)
@@ -439,6 +492,7 @@ def main() -> None:
         "pipeline": pipeline,
         "detector": detector,
         "calibrate": calibrate,
+        "paper": paper,
     }
     parts[args.part](args)
 
