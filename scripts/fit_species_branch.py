@@ -269,7 +269,7 @@ def _features(loaded: Loaded, branch: SpeciesBranch, maps: np.ndarray) -> np.nda
     out = []
     for i in range(0, len(maps), 128):
         pairs = torch.from_numpy(maps[i : i + 128]).float()
-        heads = loaded.model.pooled_from(pairs.flatten(0, 1), branch.start)[1]
+        heads = loaded.model.pool(pairs.flatten(0, 1), branch.start)
         heads = heads.view(len(pairs), 2, -1).mean(dim=1)
         out.append(torch.cat([heads, branch(pairs[:, 0])], dim=1).numpy())
     return np.concatenate(out).astype(np.float64)

@@ -7,7 +7,8 @@ as they are (:func:`load_pretrained_lite0`).  Grey sketches are fed as three equ
 channels with ImageNet normalisation.
 
 Each backbone is a sequence of *stages* (``backbone.stages``); ``TSN.features(x, upto)``
-runs the first ``upto`` stages, ``TSN.forward_from(f, start)`` the rest and the heads.
+runs the first ``upto`` stages, ``TSN.forward_from(f, start)`` the rest and the heads
+(``TSN.pool`` the rest to the pooled features, ``TSN.head_outputs`` the heads).
 That split is what the trainer uses to cache the output of frozen early stages.
 
 Heads: one ``Dropout -> Linear`` per output group (``weberpenn.params.HEADS``), output
@@ -332,17 +333,6 @@ class TSN(nn.Module):
 
     def forward(self, x: torch.Tensor) -> dict[str, torch.Tensor]:
         return self.forward_from(self.features(x, 0), 0)
-
-    def forward_pooled(self, x: torch.Tensor) -> tuple[dict[str, torch.Tensor], torch.Tensor]:
-        """:meth:`forward` and the pooled features the heads read, ``(N, m)``."""
-        return self.pooled_from(self.features(x, 0), 0)
-
-    def pooled_from(
-        self, f: torch.Tensor, start: int
-    ) -> tuple[dict[str, torch.Tensor], torch.Tensor]:
-        """:meth:`forward_from` and the pooled features the heads read, ``(N, m)``."""
-        v = self.pool(f, start)
-        return self.head_outputs(v), v
 
     def frozen_modules(self, upto: int) -> list[nn.Module]:
         mods: list[nn.Module] = []
