@@ -413,7 +413,9 @@ def _ink_of(flat: np.ndarray) -> np.ndarray:
     ink = flat < max(t, 0.5)
     if not ink.any():
         # a page of two levels (a grey pen in a paint program, no smoothing): Otsu's
-        # split is the pen's own level, the dark class's brightest (skimage's convention)
+        # split is the pen's own level, the dark class's brightest (skimage's convention).
+        # Only then: on a smoothed page the split's level is the strokes' soft edge,
+        # which the strict rule leaves out (counting it moved examples/hand/corner.png)
         ink = flat <= t
     # on grainy paper with few, light strokes Otsu splits the grain itself: a mark is ink
     # only where some of it is darker than the paper's grain reaches, and each of its
