@@ -3,8 +3,7 @@
 A ground-truth tree is turned about its trunk axis in ``step``-degree increments; at each
 yaw its synthetic sketch is rendered (one ``render.SketchRenderer``, scenes built once), a
 parameter dictionary is predicted from that sketch (and optionally refined), the predicted
-tree is grown with the same seed, and its symmetric Hausdorff distance to the ground truth
-is measured (``eval.hausdorff``, combined branch+leaf mesh, normalised by the ground-truth
+tree is grown, and its symmetric Hausdorff distance to the ground truth is measured (``eval.hausdorff``, combined branch+leaf mesh, normalised by the ground-truth
 bounding-box diagonal).  ``turns`` adds other drawings of the tree at each yaw (e.g.
 ``(90,)``: a second sketch from 90 degrees further round), handed to the pipeline as the
 views of one tree (``treesketch.views``).
@@ -14,6 +13,12 @@ The predictions come from a pipeline handed in (``treesketch.Pipeline``, or anyt
 estimated and refined (``run``), otherwise estimated only (``estimate``).  With an
 executor the pipeline travels to its workers, so it must pickle (a ``treesketch.Pipeline``
 does: a TSN estimator reloads its checkpoint in the worker).
+
+Every tree is grown as the pipeline grows its own, ``grow(params)``: the random draws
+come from the dictionary's ``seed`` key.  ``seed`` (when given) is the key both trees
+carry, the paper's protocol (its predictions are grown with the ground truth's seed);
+hand in a pipeline whose estimates carry the same key (``treesketch.estimators.
+SeededEstimator``), so that a refinement searches the very trees it is measured as.
 """
 
 from __future__ import annotations
@@ -71,7 +76,7 @@ class SweepResult:
     gt_params: TreeParams
     predictions: list[TreeParams] = field(default_factory=list)
     sketches: list[np.ndarray] = field(default_factory=list)
-    seed: int = 0
+    seed: int | None = None  # the seed key both trees carry (None: each its own)
     size: int = 256
 
     def values(self, metric: str = "hd_max_norm") -> np.ndarray:
@@ -116,6 +121,12 @@ def yaw_angles(step: float) -> np.ndarray:
     return np.arange(int(round(n))) * step
 
 
+def _seeded(params: Mapping[str, Any], seed: int | None) -> TreeParams:
+    """The dictionary with the sweep's seed key (None: its own)."""
+    p = TreeParams(params)
+    return p if seed is None else p.replace(seed=int(seed))
+
+
 def _params_key(p: Mapping[str, Any]) -> str:
     return json.dumps(TreeParams(p).to_dict(), sort_keys=True, default=str)
 
@@ -134,7 +145,7 @@ def _angle_fn(
     pipeline: Any,
     size: int,
     samples: int,
-    seed: int,
+    seed: int | None,
     turns: tuple[float, ...] = (),
 ) -> Callable[[float], AngleResult]:
     """The function that does one angle: sketch at that yaw (and at each of ``turns``
@@ -165,7 +176,7 @@ def _angle_fn(
             pred, turn = TreeParams(pipeline.estimate(drawing).params), 0.0
         key = f"{_params_key(pred)}@{turn:.6f}"
         if key not in cache:
-            pm = build_mesh(grow(pred, seed=seed))
+            pm = build_mesh(grow(_seeded(pred, seed)))
             if turn:
                 pm = rotate_about_trunk(pm, turn)
             cache[key] = hausdorff(pm.combined(), gt_combined, samples)
@@ -196,14 +207,14 @@ class SweepWorker:
     pipeline: Any
     size: int
     samples: int
-    seed: int
+    seed: int | None
     turns: tuple[float, ...] = ()
 
     def __call__(self) -> Callable[[float], AngleResult]:
         from render.backend import init_mitsuba
 
         init_mitsuba(threads=1)
-        gt_mesh = build_mesh(grow(self.gt, seed=self.seed))
+        gt_mesh = build_mesh(grow(_seeded(self.gt, self.seed)))
         return _angle_fn(gt_mesh, self.pipeline, self.size, self.samples, self.seed, self.turns)
 
 
@@ -219,7 +230,7 @@ def rotation_sweep(
     step: float = 5.0,
     size: int = 256,
     samples: int = DEFAULT_SAMPLES,
-    seed: int = 0,
+    seed: int | None = None,
     progress: Progress | None = None,
     executor: Any = None,
     turns: tuple[float, ...] = (),
@@ -236,14 +247,14 @@ def rotation_sweep(
     """
     gt = TreeParams(gt_params)
     angles = yaw_angles(step)
-    gt_mesh = build_mesh(grow(gt, seed=seed))
+    gt_mesh = build_mesh(grow(_seeded(gt, seed)))
     if gt_mesh.is_empty:
         raise ValueError("the ground-truth parameters grow an empty tree; nothing to compare")
-    result = SweepResult([], gt, seed=int(seed), size=int(size))
+    result = SweepResult([], gt, seed=None if seed is None else int(seed), size=int(size))
     turns = tuple(float(t) % 360.0 for t in turns)
     if any(not math.isfinite(t) for t in turns) or len(turns) > 3:
         raise ValueError(f"turns must be at most 3 finite angles in degrees, got {turns}")
-    opts = (int(size), int(samples), int(seed), turns)
+    opts = (int(size), int(samples), None if seed is None else int(seed), turns)
     outs: list[AngleResult] = []
     if executor is None:
         one = _angle_fn(gt_mesh, pipeline, *opts)
@@ -336,11 +347,11 @@ def plot_cases(
     cases = result.cases(metric)
     if not cases:
         raise ValueError("no finite distances in the sweep; nothing to show")
-    gt_r = SketchRenderer(build_mesh(grow(result.gt_params, seed=result.seed)))
+    gt_r = SketchRenderer(build_mesh(grow(_seeded(result.gt_params, result.seed))))
     fig, axes = plt.subplots(3, 3, figsize=(7.5, 7.8))
     for col, (name, i) in enumerate(cases.items()):
         row = result.rows[i]
-        pm = build_mesh(grow(result.predictions[i], seed=result.seed))
+        pm = build_mesh(grow(_seeded(result.predictions[i], result.seed)))
         imgs = [
             (result.sketches[i], "input sketch"),
             (SketchRenderer(pm).colour(row.angle, size=size, supersample=1), "predicted"),

@@ -44,7 +44,13 @@ def rotation(
     checkpoint: Path | None = checkpoint_option(),
     size: int = typer.Option(256, "--size", help="Sketch size in pixels."),
     samples: int = typer.Option(10_000, "--samples", help="Hausdorff samples per direction."),
-    seed: int = typer.Option(0, "--seed", help="Growth seed for both trees."),
+    seed: int | None = typer.Option(
+        None,
+        "--seed",
+        min=0,
+        help="Seed key both trees are grown with, the estimates' too (default: the ground "
+        "truth's own, as the paper grows its predictions).",
+    ),
     turn: list[float] = typer.Option(
         [],
         "--turn",
@@ -70,12 +76,16 @@ def rotation(
             raise ValueError(f"--turn: at most 3 finite angles in degrees, got {turn}")
     except (ParamError, ValueError, OSError) as e:
         fail(str(e))
-    from .estimators import load_estimator
+    from .estimators import SeededEstimator, load_estimator
     from .pipeline import Pipeline, RefineSettings
 
+    seed = int(gt["seed"]) if seed is None else seed
     try:
         settings = RefineSettings(refine=refine, budget=budget, time_limit=None)
-        pipeline = Pipeline(load_estimator("tsn", checkpoint=checkpoint), settings)
+        # the estimates carry the sweep's seed key, so a refinement searches the trees
+        # the sweep measures
+        estimator = SeededEstimator(load_estimator("tsn", checkpoint=checkpoint), seed)
+        pipeline = Pipeline(estimator, settings)
     except ValueError as e:
         fail(str(e))
     with (
