@@ -3,7 +3,8 @@
 A ground-truth tree is turned about its trunk axis in ``step``-degree increments; at each
 yaw its synthetic sketch is rendered (one ``render.SketchRenderer``, scenes built once), a
 parameter dictionary is predicted from that sketch (and optionally refined), the predicted
-tree is grown, and its symmetric Hausdorff distance to the ground truth is measured (``eval.hausdorff``, combined branch+leaf mesh, normalised by the ground-truth
+tree is grown, and its symmetric Hausdorff distance to the ground truth is measured
+(``eval.hausdorff``, combined branch+leaf mesh, normalised by the ground-truth
 bounding-box diagonal).  ``turns`` adds other drawings of the tree at each yaw (e.g.
 ``(90,)``: a second sketch from 90 degrees further round), handed to the pipeline as the
 views of one tree (``treesketch.views``).
