@@ -28,7 +28,7 @@ from render.sketch import SketchRenderer
 from treesketch import Pipeline
 from tsn import encoding
 from tsn.predict import load_model
-from weberpenn import TreeParams, build_mesh, grow, species
+from weberpenn import build_mesh, grow, species
 
 SQUARE = (0.0, 90.0, 180.0, 270.0)
 BETWEEN = (30.0, 45.0, 60.0, 135.0, 210.0, 300.0)
@@ -57,8 +57,8 @@ def main(argv: list[str] | None = None) -> int:
             for yaw in SQUARE + BETWEEN:
                 est = pipe.estimate(r.sketch(yaw, size=256))
                 err = norm.normalise(encoding.encode(est.params)) - truth
-                # grown with the truth's own seed, as the rotation sweep grows its trees
-                same_seed = TreeParams({**est.params.to_dict(), "seed": gt["seed"]})
+                # grown with the truth's own seed key, as the rotation sweep grows its trees
+                same_seed = est.params.replace(seed=gt["seed"])
                 h = hausdorff(build_mesh(grow(same_seed)).combined(), mesh.combined(), args.samples)
                 rows.append(
                     {"species": name, "seed": seed, "yaw": yaw, "square": yaw in SQUARE,
