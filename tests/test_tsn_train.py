@@ -304,3 +304,67 @@ def test_training_sketches_are_normalised_like_predicts_input(
     r = CliRunner().invoke(app, [*base, "--raw"])
     assert r.exit_code == 0, r.output
     assert "input: dataset sketch" in r.output
+
+
+def test_a_fine_tune_carries_a_species_branch_that_reads_frozen_stages(
+    tiny: Path, tmp_path: Path
+) -> None:
+    """The branch reads stage 12's map, which a fine-tune with the stages before 12 frozen
+    does not change: the branch and a classifier that reads only the branch's features go
+    into the new checkpoint unchanged; a classifier that reads the heads' features (which
+    the fine-tune changes) is fitted again instead."""
+    from tsn_helpers import make_checkpoint
+
+    from tsn.checkpoint import load_checkpoint, save_loaded
+    from tsn.model import SpeciesBranch
+    from tsn.predict import load_model
+    from tsn.species_id import SpeciesClassifier
+
+    base = load_checkpoint(make_checkpoint(tmp_path / "base.pt", size=64))
+    branch = SpeciesBranch("lite0", 12)
+    state = branch.stage_state()
+    branch.load_stage_state({k: v for k, v in base.model.state_dict().items() if k in state})
+    nf = base.model.backbone.out_features
+    names = ("maple", "pine", "bonsai", "palm", "cherry")
+    rng = np.random.default_rng(3)
+
+    def classifier(heads_weight: float) -> SpeciesClassifier:
+        w = np.hstack([heads_weight * rng.normal(size=(5, nf)), rng.normal(size=(5, nf))])
+        return SpeciesClassifier(
+            names, np.zeros(2 * nf), np.ones(2 * nf), w, np.zeros(5), 1.0,
+            base.normaliser.scale, "features",
+        )  # fmt: skip
+
+    common = dict(size=64, batch=4, copies=0, epochs=1, threads=2, lr=1e-2)
+    clf = classifier(0.0)
+    init = save_loaded(base, tmp_path / "init.pt", {}, species_id=base.species_id.with_classifier(clf),
+                       species_branch=branch)  # fmt: skip
+    lines: list[str] = []
+    res = train(TrainConfig(str(tiny), str(tmp_path / "ft.pt"), init=str(init), **common),
+                log=lines.append)  # fmt: skip
+    assert any("carried from --init" in s for s in lines), lines
+    out = load_checkpoint(res["out"])
+    assert out.species_branch is not None and out.species_branch.start == 12
+    for k, v in branch.stage_state().items():
+        torch.testing.assert_close(out.species_branch.stage_state()[k].float(), v.half().float())
+    kept = out.species_id.classifier
+    assert kept is not None and kept.reads == "features"
+    np.testing.assert_array_equal(kept.weight, clf.weight)
+    # the fine-tune moved the heads' features, not the map the branch reads
+    img = np.full((64, 64), 255, np.uint8)
+    img[8:56, 30:34] = 0
+    img[8:30, 14:50] = 0
+    before, after = load_model(init, device="cpu"), load_model(res["out"], device="cpu")
+    fb, fa = before.raw_and_features([img])[1], after.raw_and_features([img])[1]
+    np.testing.assert_allclose(fa[:, nf:], fb[:, nf:], rtol=1e-3, atol=1e-3)
+    assert np.abs(fa[:, :nf] - fb[:, :nf]).max() > 1e-3
+    # a classifier that reads the heads' part is not carried: fitted again on the outputs
+    init2 = save_loaded(base, tmp_path / "init2.pt", {},
+                        species_id=base.species_id.with_classifier(classifier(1.0)),
+                        species_branch=branch)  # fmt: skip
+    lines.clear()
+    res2 = train(TrainConfig(str(tiny), str(tmp_path / "ft2.pt"), init=str(init2), **common),
+                 log=lines.append)  # fmt: skip
+    assert not any("carried" in s for s in lines)
+    out2 = load_checkpoint(res2["out"])
+    assert out2.species_branch is None and out2.species_id.classifier.reads == "outputs"

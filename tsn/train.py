@@ -43,7 +43,7 @@ from . import data as tdata
 from . import encoding
 from .checkpoint import atomic_torch_save, save_checkpoint
 from .metrics import one_minus_rmse
-from .model import BACKBONES, TSN, ModelError
+from .model import BACKBONES, TSN, ModelError, SpeciesBranch
 from .species_id import SpeciesClassifier, SpeciesIdentifier
 
 
@@ -488,6 +488,22 @@ def add_species_classifier(
     return acc
 
 
+def carried_species(start: Any, cut: int) -> tuple[SpeciesClassifier, SpeciesBranch] | None:
+    """The ``--init`` checkpoint's species classifier and species branch when a fine-tune
+    leaves them valid: the branch reads the map of a stage the fine-tune freezes (its
+    ``start`` is at or after ``cut``) and the classifier reads only the branch's part of
+    the features (no weight on the heads' pooled features, which the fine-tune changes).
+    None otherwise: the classifier is then fitted again on the new network's outputs."""
+    branch = None if start is None else start.species_branch
+    clf = None if start is None else start.species_id.classifier
+    if branch is None or clf is None or branch.start < cut or clf.reads != "features":
+        return None
+    heads = int(start.model.backbone.out_features)
+    if np.any(np.asarray(clf.weight)[:, :heads] != 0):
+        return None
+    return clf, branch
+
+
 def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any]:
     """Train (or resume) and return a summary; the best checkpoint is at ``cfg.out``."""
     cfg.check()
@@ -551,6 +567,13 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
     f_val = build_cache(model, val_all, cut, cfg, device, 0, "val", log)[0][
         torch.from_numpy(keep_val)
     ]
+    carried = carried_species(start, cut)
+    if carried is not None:
+        species_id = species_id.with_classifier(carried[0])
+        log(
+            f"[train] the species branch (stage {carried[1].start} on) and its classifier are"
+            f" carried from --init: the stages before {cut} stay frozen"
+        )
     params = set_trainable(model, cut)
     opt = torch.optim.Adam(params, lr=cfg.lr)
     sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, T_max=cfg.epochs, eta_min=cfg.lr / 100)
@@ -632,7 +655,10 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
                 "torch": str(torch.__version__),
                 "threads": torch.get_num_threads(),
             }
-            save_checkpoint(cfg.out, model, cfg.size, cut, normaliser, species_id, info)
+            save_checkpoint(
+                cfg.out, model, cfg.size, cut, normaliser, species_id, info,
+                species_branch=None if carried is None else carried[1],
+            )  # fmt: skip
         atomic_torch_save(
             {
                 "model": model.state_dict(),
@@ -654,7 +680,11 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
             f"val 1-RMSE {scores['overall']:.4f} species {sp_acc:.3f} "
             f"({row['seconds']:.0f} s){' *' if improved else ''}"
         )
-    classifier_acc = add_species_classifier(cfg, f_trn[0], f_val, cut, device, trn, val, log)
+    classifier_acc = (
+        add_species_classifier(cfg, f_trn[0], f_val, cut, device, trn, val, log)
+        if carried is None
+        else None
+    )
     return {
         "val_classifier_species_acc": classifier_acc,
         "best_val_overall": best,
