@@ -337,8 +337,9 @@ def test_a_fine_tune_carries_a_species_branch_that_reads_frozen_stages(
 
     common = dict(size=64, batch=4, copies=0, epochs=1, threads=2, lr=1e-2)
     clf = classifier(0.0)
-    init = save_loaded(base, tmp_path / "init.pt", {}, species_id=base.species_id.with_classifier(clf),
-                       species_branch=branch)  # fmt: skip
+    record = {"species_branch": {"start": 12, "trained": {"epochs": 4}}, "classifier": {"t": 1}}
+    init = save_loaded(base, tmp_path / "init.pt", record,
+                       species_id=base.species_id.with_classifier(clf), species_branch=branch)  # fmt: skip
     lines: list[str] = []
     res = train(TrainConfig(str(tiny), str(tmp_path / "ft.pt"), init=str(init), **common),
                 log=lines.append)  # fmt: skip
@@ -347,6 +348,7 @@ def test_a_fine_tune_carries_a_species_branch_that_reads_frozen_stages(
     assert out.species_branch is not None and out.species_branch.start == 12
     for k, v in branch.stage_state().items():
         torch.testing.assert_close(out.species_branch.stage_state()[k].float(), v.half().float())
+    assert {k: out.info[k] for k in record} == record
     kept = out.species_id.classifier
     assert kept is not None and kept.reads == "features"
     np.testing.assert_array_equal(kept.weight, clf.weight)

@@ -488,6 +488,10 @@ def add_species_classifier(
     return acc
 
 
+# the records of a species branch and its classifier in a checkpoint's ``info``
+CARRIED_INFO = ("classifier", "species_branch")
+
+
 def carried_species(start: Any, cut: int) -> tuple[SpeciesClassifier, SpeciesBranch] | None:
     """The ``--init`` checkpoint's species classifier and species branch when a fine-tune
     leaves them valid: the branch reads the map of a stage the fine-tune freezes (its
@@ -655,6 +659,8 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
                 "torch": str(torch.__version__),
                 "threads": torch.get_num_threads(),
             }
+            if carried is not None and start is not None:  # how the carried parts were made
+                info.update({k: start.info[k] for k in CARRIED_INFO if k in start.info})
             save_checkpoint(
                 cfg.out, model, cfg.size, cut, normaliser, species_id, info,
                 species_branch=None if carried is None else carried[1],
