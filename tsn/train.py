@@ -41,7 +41,7 @@ from weberpenn.params import HEADS, TreeParams
 
 from . import data as tdata
 from . import encoding
-from .checkpoint import atomic_torch_save, save_checkpoint
+from .checkpoint import Loaded, atomic_torch_save, save_checkpoint
 from .metrics import one_minus_rmse
 from .model import BACKBONES, TSN, ModelError, SpeciesBranch
 from .species_id import SpeciesClassifier, SpeciesIdentifier
@@ -492,7 +492,9 @@ def add_species_classifier(
 CARRIED_INFO = ("classifier", "species_branch")
 
 
-def carried_species(start: Any, cut: int) -> tuple[SpeciesClassifier, SpeciesBranch] | None:
+def carried_species(
+    start: Loaded | None, cut: int
+) -> tuple[SpeciesClassifier, SpeciesBranch] | None:
     """The ``--init`` checkpoint's species classifier and species branch when a fine-tune
     leaves them valid: the branch reads the map of a stage the fine-tune freezes (its
     ``start`` is at or after ``cut``) and the classifier reads only the branch's part of
