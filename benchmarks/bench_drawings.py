@@ -44,7 +44,7 @@ import os
 import platform
 import statistics
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -77,14 +77,19 @@ def machine() -> str:
 # ---------------------------------------------------------------- tree drawings
 
 
-def tree_drawings(first_seed: int, per_species: int, side: bool = False) -> list[dict]:
+def tree_drawings(
+    first_seed: int, per_species: int, side: bool = False, only: Sequence[str] | None = None
+) -> list[dict]:
     """Held-out-style drawings: per species ``per_species`` trees (seeds ``first_seed``+),
     each drawn in a style other than "sg" at a random yaw.  Dicts with the drawing, the
     ground-truth params, species, style and view yaw; ``side``: also ``"side"``, the same
     tree drawn in the same style from 90 degrees further round (drawn after the first, so
-    the first drawing is the same with or without it)."""
+    the first drawing is the same with or without it).  ``only``: those species' drawings
+    alone, each the same as in the whole set."""
     out = []
     for si, name in enumerate(species.SPECIES):
+        if only is not None and name not in only:
+            continue
         for k in range(per_species):
             seed = first_seed + k
             rng = np.random.default_rng([seed, si])
@@ -306,7 +311,7 @@ def part_refine(args: argparse.Namespace) -> dict:
     # one of each species at a time, and each case saved as it ends: a run stopped early
     # still has a balanced, readable record
     drawings = sorted(
-        tree_drawings(args.first_seed, args.per_species, side=args.views != "1"),
+        tree_drawings(args.first_seed, args.per_species, args.views != "1", args.species),
         key=lambda d: (d["seed"], species.SPECIES.index(d["species"])),
     )
     counts = {"1": (1,), "2": (2,), "both": (1, 2)}[args.views]
@@ -486,6 +491,17 @@ def markdown(doc: dict) -> str:
     return "\n".join(lines)
 
 
+def species_list(text: str) -> tuple[str, ...]:
+    """``--species``: names of ``weberpenn.species.SPECIES``, comma-separated."""
+    names = tuple(n.strip() for n in text.split(",") if n.strip())
+    unknown = [n for n in names if n not in species.SPECIES]
+    if unknown or not names:
+        raise argparse.ArgumentTypeError(
+            f"unknown species {', '.join(unknown) or text!r}; one of {', '.join(species.SPECIES)}"
+        )
+    return names
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--part", choices=("warning", "refine", "estimate"), default="warning")
@@ -501,6 +517,12 @@ def main(argv: list[str] | None = None) -> int:
         default="1",
         help="refine: each drawing alone (1), with the same tree drawn from 90 degrees "
         "further round (2), or both runs side by side in one run",
+    )
+    ap.add_argument(
+        "--species",
+        type=species_list,
+        default=None,
+        help="refine: comma list, only these species' drawings (each as in the whole set)",
     )
     ap.add_argument("--align-step", type=float, default=15.0)
     ap.add_argument("--json", type=Path, default=None)

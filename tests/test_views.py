@@ -15,7 +15,7 @@ from treesketch.views import (
     parse_view,
     parse_yaw,
 )
-from weberpenn import species
+from weberpenn import TreeParams, species
 
 
 @pytest.mark.parametrize(
@@ -74,6 +74,25 @@ def test_fuse_averages_scores_and_continuous_values() -> None:
     assert m.params["levels"] == a["levels"]
     assert fuse_estimates([ea]) is ea
     assert set(m.alternatives) == set(species.SPECIES) - {"maple"}
+
+
+def test_fuse_keeps_the_trunk_bend_of_the_view_that_shows_it_most() -> None:
+    # a palm's trunk bent 60 degrees, read from a view across its plane (60) and from one
+    # along it (-5, nearly straight, the sign the other side's): the mean would be a
+    # nearly straight trunk, 27.5
+    def palm(bend: float, split_draw: float) -> Estimate:
+        values = species.sample("palm", 3).to_dict()
+        values["curve"] = [bend, *values["curve"][1:]]
+        values["rSplits2"] = split_draw
+        return Estimate(species.project("palm", TreeParams(values)), "palm", {"palm": 1.0})
+
+    for order in ((60.0, -5.0), (-5.0, 60.0)):
+        fused = fuse_estimates([palm(order[0], 0.2), palm(order[1], 0.4)]).params
+        assert fused["curve"][0] == pytest.approx(60.0)
+        assert fused["curveBack"][0] == pytest.approx(-60.0)  # the species' mirror rule
+        assert fused["rSplits2"] == pytest.approx(0.3)  # the other values: the mean
+    bent_other_way = fuse_estimates([palm(-70.0, 0.3), palm(40.0, 0.3)]).params
+    assert bent_other_way["curve"][0] == pytest.approx(-70.0)
 
 
 def test_two_views_are_read_refined_and_kept() -> None:
