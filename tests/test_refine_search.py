@@ -9,7 +9,7 @@ import pytest
 
 from refine.objective import SearchSpace
 from refine.search import RefineSettings, guess_species, refine
-from weberpenn import build_mesh, grow, species
+from weberpenn import TreeParams, build_mesh, grow, species
 
 
 def _case(name: str = "palm", seed: int = 3, yaw: float = 0.0, shift: float = 0.3):
@@ -163,3 +163,42 @@ def test_settings_bound_every_integer(field: str, value: int) -> None:
         RefineSettings(**{field: value}).validate()
     assert type(info.value) is ValueError and len(str(info.value)) < 120
     assert RefineSettings(budget=10_000).validate().budget == 10_000
+
+
+def _bent_palm(bend: float):
+    values = species.sample("palm", 3).to_dict()
+    values["curve"] = [bend, *values["curve"][1:]]
+    return species.project("palm", TreeParams(values))
+
+
+def test_a_trunk_bent_the_other_way_is_found(monkeypatch: pytest.MonkeyPatch) -> None:
+    # the drawing's trunk bends one way, the start's the other (what the network reads
+    # from between the axes): a local search alone stays on the start's side; the start
+    # tried with the bend either way lets it end on the drawing's
+    from refine import search
+    from render.sketch import SketchRenderer
+
+    gt, start = _bent_palm(70.0), _bent_palm(-70.0)
+    img = SketchRenderer(build_mesh(grow(gt), species="palm")).sketch(90.0, 128)
+    cfg = RefineSettings(budget=16)
+    r = refine(img, start, cfg, species="palm", yaw=90.0)
+    assert r.params["curve"][0] > 30.0, r.params["curve"]
+    assert r.params["curveBack"][0] < -30.0, r.params["curveBack"]
+    assert r.loss_after < 0.5 * r.loss_before
+    monkeypatch.setattr(search, "BEND_FRACTIONS", ())
+    alone = refine(img, start, cfg, species="palm", yaw=90.0)
+    assert alone.params["curve"][0] < 0.0 and alone.loss_after > r.loss_after
+
+
+def test_only_a_free_bend_is_tried_either_way() -> None:
+    from refine.search import BEND_FRACTIONS, bend_starts
+
+    palm = SearchSpace.create("palm", _bent_palm(20.0))
+    x = palm.from_params(_bent_palm(20.0))
+    tried = [palm.to_params(y) for y in bend_starts(palm, x)]
+    assert [p["curve"][0] for p in tried] == pytest.approx([90.0 * f for f in BEND_FRACTIONS])
+    assert [p["curveBack"][0] for p in tried] == pytest.approx([-90.0 * f for f in BEND_FRACTIONS])
+    for p in tried:  # nothing else moves
+        assert p["rSplits2"] == pytest.approx(palm.to_params(x)["rSplits2"])
+    maple = SearchSpace.create("maple", species.sample("maple", 1))
+    assert bend_starts(maple, maple.from_params(species.sample("maple", 1))) == []
