@@ -59,14 +59,12 @@ START_YAWS = (
     + (15.0, 105.0, 195.0, 285.0, 60.0, 150.0, 240.0, 330.0)
     + (30.0, 120.0, 210.0, 300.0, 75.0, 165.0, 255.0, 345.0)
 )
-# the trunk's bend (``curve[0]``, with the ``curveBack[0]`` that bends it back): where the
-# species leaves it free it moves the tree more than any other value, and the network
-# reads it worst from between the axes (benchmarks/probes/bend_gap.py: the estimate with
-# the truth's bend set halves its error there), with a sign no drawing fixes (the same
-# trunk seen from the other side bends the other way).  A local search does not cross
-# from one sign to the other, so after the start view is chosen the start is also tried
-# with the bend at these fractions of its range either way (benchmarks/RESULTS.md, "Two
-# views: the trunk's bend ...")
+# the trunk's bend (``weberpenn.species.TRUNK_BEND``): the network reads it worst from
+# between the axes (benchmarks/probes/bend_gap.py: the estimate with the truth's bend set
+# halves its error there), and a local search does not cross from one sign to the other
+# (through a straight trunk, a worse fit), so after the start view is chosen the start is
+# also tried with the bend at these fractions of its range either way
+# (benchmarks/RESULTS.md, "The start tried with the trunk bent either way")
 BEND_FRACTIONS = (-1.0, -0.5, 0.5, 1.0)
 # objective penalty for a view turned from the front: 0.015 at 90 degrees, 0.06 at 180
 # (a view other than the front must fit clearly better; RESULTS.md, "Refinement")
@@ -488,10 +486,10 @@ def bend_starts(space: SearchSpace, x: np.ndarray) -> list[np.ndarray]:
     """``x`` with the trunk's bend at each of :data:`BEND_FRACTIONS` of its range and the
     bend back mirrored, when the space searches the bend (else none)."""
     where = {(u.key, u.index): i for i, u in enumerate(space.dims)}
-    bend = where.get(("curve", 0))
+    bend = where.get(species.TRUNK_BEND[0])
     if bend is None:
         return []
-    back = where.get(("curveBack", 0))
+    back = where.get(species.TRUNK_BEND[1])
     out = []
     for f in BEND_FRACTIONS:
         u = space.dims[bend]

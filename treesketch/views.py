@@ -135,18 +135,13 @@ def as_views(sketch: Any) -> list[SketchView]:
     return [_one(item, i == 0) for i, item in enumerate(items)]
 
 
-# the trunk's bend (``curve[0]`` and the ``curveBack[0]`` that bends it back): it shows
-# only in a view across the plane it bends in, and its sign names a side of the tree
-# that no single drawing fixes (the same trunk seen from the other side bends the other
-# way), so the views' readings are not noisy copies of one value: a view along the plane
-# reads a nearly straight trunk, and two views can read opposite signs
-TRUNK_BEND = (("curve", 0), ("curveBack", 0))
-
-
 def _mean_params(params: Sequence[TreeParams], name: str) -> TreeParams:
     """The continuous values averaged over the views' estimates (discrete ones: the first
     view's), fitted to species ``name``; the trunk's bend is the reading of the view that
-    sees the most of it (:data:`TRUNK_BEND`: an average would straighten a bent trunk)."""
+    sees the most of it (``weberpenn.species.TRUNK_BEND``): the views' readings of it are
+    not noisy copies of one value, a view along the plane it bends in reads a nearly
+    straight trunk and two views can read opposite signs, so their mean would straighten a
+    bent trunk."""
     if len(params) == 1:
         return params[0]
     values = params[0].to_dict()
@@ -156,9 +151,9 @@ def _mean_params(params: Sequence[TreeParams], name: str) -> TreeParams:
         stack = np.asarray([p[key] for p in params], dtype=np.float64)
         mean = stack.mean(axis=0)
         values[key] = [float(v) for v in mean] if spec.is_vector else float(mean)
-    bend_key, bend_index = TRUNK_BEND[0]
+    bend_key, bend_index = wp_species.TRUNK_BEND[0]
     bent = max(params, key=lambda p: abs(float(p[bend_key][bend_index])))
-    for key, index in TRUNK_BEND:
+    for key, index in wp_species.TRUNK_BEND:
         vector = list(values[key])
         vector[index] = float(bent[key][index])
         values[key] = vector
@@ -170,7 +165,7 @@ def fuse_estimates(estimates: Sequence[Estimate]) -> Estimate:
     averaged; the parameters, for the best species and for every other, are the views'
     continuous values averaged (a tree's values do not depend on the side it is drawn
     from, so each view is another noisy reading of them) but for the trunk's bend, which
-    is the reading of the view that shows it most (:data:`TRUNK_BEND`); the yaw is the
+    is the reading of the view that shows it most (``weberpenn.species.TRUNK_BEND``); the yaw is the
     first view's."""
     if not estimates:
         raise ValueError("no estimate to fuse")

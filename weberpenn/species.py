@@ -216,6 +216,14 @@ def sample(name: str, seed: int = 0) -> TreeParams:
     return TreeParams(values)
 
 
+#: The trunk's bend: ``curve[0]`` and the ``curveBack[0]`` that bends it back (minus it,
+#: the ``mirror`` rule).  Where a species leaves it free (the palm, the bonsai) it moves the
+#: tree more than any other value; it shows only in a view across the plane it bends in,
+#: and its sign names a side of the tree that no single drawing fixes (the same trunk seen
+#: from the other side bends the other way).
+TRUNK_BEND = (("curve", 0), ("curveBack", 0))
+
+
 #: Shapes people draw that the published variation cannot reach, opened to the
 #: refinement's search only (``sample`` never draws them, so datasets are unchanged, and
 #: every base value lies inside its range).  A trunk that leans or bends: the published

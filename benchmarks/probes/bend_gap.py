@@ -18,9 +18,9 @@ from eval.paper import PUBLISHED_DIR
 from render.sketch import SketchRenderer
 from treesketch import Pipeline
 from treesketch.estimators import SeededEstimator, TSNEstimator
-from treesketch.views import TRUNK_BEND
 from weberpenn import TreeParams, build_mesh, grow
 from weberpenn.params import load_params
+from weberpenn.species import TRUNK_BEND
 
 
 def main(argv: list[str] | None = None) -> int:
