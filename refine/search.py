@@ -490,9 +490,9 @@ def bend_starts(space: SearchSpace, x: np.ndarray) -> list[np.ndarray]:
     if bend is None:
         return []
     back = where.get(species.TRUNK_BEND[1])
+    u = space.dims[bend]
     out = []
     for f in BEND_FRACTIONS:
-        u = space.dims[bend]
         v = f * max(abs(u.lo), abs(u.hi))
         y = x.copy()
         y[bend] = np.clip((v - u.lo) / (u.hi - u.lo), 0.0, 1.0)

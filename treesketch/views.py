@@ -165,8 +165,8 @@ def fuse_estimates(estimates: Sequence[Estimate]) -> Estimate:
     averaged; the parameters, for the best species and for every other, are the views'
     continuous values averaged (a tree's values do not depend on the side it is drawn
     from, so each view is another noisy reading of them) but for the trunk's bend, which
-    is the reading of the view that shows it most (``weberpenn.species.TRUNK_BEND``); the yaw is the
-    first view's."""
+    is the reading of the view that shows it most (``weberpenn.species.TRUNK_BEND``);
+    the yaw is the first view's."""
     if not estimates:
         raise ValueError("no estimate to fuse")
     if len(estimates) == 1:
