@@ -492,13 +492,13 @@ def markdown(doc: dict) -> str:
 
 
 def species_list(text: str) -> tuple[str, ...]:
-    """``--species``: names of ``weberpenn.species.SPECIES``, comma-separated."""
-    names = tuple(n.strip() for n in text.split(",") if n.strip())
-    unknown = [n for n in names if n not in species.SPECIES]
-    if unknown or not names:
-        raise argparse.ArgumentTypeError(
-            f"unknown species {', '.join(unknown) or text!r}; one of {', '.join(species.SPECIES)}"
-        )
+    """``--species``: comma-separated species names (``weberpenn.species.canonical``)."""
+    try:
+        names = tuple(species.canonical(n) for n in text.split(",") if n.strip())
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    if not names:
+        raise argparse.ArgumentTypeError(f"no species named in {text!r}")
     return names
 
 
