@@ -4,8 +4,9 @@ tree's sketch matches the input sketch.
 ``refine(sketch, initial_params)`` evaluates the start point first (at 24 views
 15 degrees apart, ``START_YAWS``, as many as a third of the budget allows; keeping the best
 yaw), then, for a species whose trunk bends freely (palm, bonsai), the start with its bend
-at a few values either way (``BEND_FRACTIONS``), then runs an nlopt local search (COBYLA by
-default) from the best point seen, in the unit cube.  It stops on
+at a few values either way (``BEND_FRACTIONS``) from that view and from the opposite one,
+then runs an nlopt local search (COBYLA by default) from the best point seen, in the unit
+cube.  It stops on
 the evaluation budget, the time limit or nlopt's tolerances, and always returns the best
 point seen, so the loss after is never above the loss before.
 
@@ -407,7 +408,13 @@ def refine(
                 start_total, start_yaw = loss, y
                 loss_before = obj.sketch_loss(x)  # the sketch distance alone
         x0 = at_view(start_yaw)
-        for x in bend_starts(space, x0):  # the best point seen is the local search's start
+        bent = bend_starts(space, x0)
+        if bent and space.search_yaw:
+            # the start view was chosen with the estimate's bend, whose sign the network
+            # often reads wrongly; a trunk bent the other way fits best from the opposite
+            # side, so the bends are tried there too
+            bent += bend_starts(space, at_view(start_yaw + 180.0))
+        for x in bent:  # the best point seen is the local search's start
             if out_of_budget():
                 break
             evaluate(x)

@@ -190,6 +190,21 @@ def test_a_trunk_bent_the_other_way_is_found(monkeypatch: pytest.MonkeyPatch) ->
     assert alone.params["curve"][0] < 0.0 and alone.loss_after > r.loss_after
 
 
+def test_a_trunk_bent_the_other_way_is_found_from_the_opposite_side() -> None:
+    # with the view searched, a start bent the wrong way fits the drawing best from the
+    # opposite side (its bend then points the drawn way), so the start view alone turns
+    # the tree round; the bends tried from the opposite side bring it back
+    from render.sketch import SketchRenderer
+
+    gt, start = _bent_palm(70.0), _bent_palm(-70.0)
+    img = SketchRenderer(build_mesh(grow(gt), species="palm")).sketch(90.0, 128)
+    r = refine(img, start, RefineSettings(budget=40), species="palm")
+    assert abs(r.start_yaw - 270.0) <= 30.0  # the start, bent the wrong way, turned round
+    assert abs((r.yaw - 90.0 + 180.0) % 360.0 - 180.0) <= 20.0, (r.start_yaw, r.yaw)
+    assert r.params["curve"][0] > 30.0, r.params["curve"]
+    assert r.loss_after < 0.5 * r.loss_before
+
+
 def test_only_a_free_bend_is_tried_either_way() -> None:
     from refine.search import BEND_FRACTIONS, bend_starts
 
