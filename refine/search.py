@@ -4,11 +4,11 @@ tree's sketch matches the input sketch.
 ``refine(sketch, initial_params)`` evaluates the start point first (at 24 views
 15 degrees apart, ``START_YAWS``, as many as a third of the budget allows; keeping the best
 yaw), then, for a species whose trunk bends freely (palm, bonsai), the start with its bend
-at a few values either way (``BEND_FRACTIONS``) from that view and from the opposite one,
-then runs an nlopt local search (COBYLA by default) from the best point seen, in the unit
-cube.  It stops on
-the evaluation budget, the time limit or nlopt's tolerances, and always returns the best
-point seen, so the loss after is never above the loss before.
+at a few values either way (``BEND_FRACTIONS``) from that view and, when the budget leaves
+room (``MIRROR_RESERVE``), from the opposite one, then runs an nlopt local search (COBYLA
+by default) from the best point seen, in the unit cube.  It stops on the evaluation budget,
+the time limit or nlopt's tolerances, and always returns the best point seen, so the loss
+after is never above the loss before.
 
 Studies measured to give nothing and removed (their numbers stay in
 ``benchmarks/RESULTS.md``, "Options measured and removed"; the code last lived at commit
@@ -67,6 +67,11 @@ START_YAWS = (
 # also tried with the bend at these fractions of its range either way
 # (benchmarks/RESULTS.md, "The start tried with the trunk bent either way")
 BEND_FRACTIONS = (-1.0, -0.5, 0.5, 1.0)
+# the bends are also tried from the opposite view only when the local search keeps at
+# least this many times their number of evaluations after them: with less, the local
+# search gains more (a second species' half budget: RESULTS.md, "The trunk's bends tried
+# from the opposite side too")
+MIRROR_RESERVE = 2
 # objective penalty for a view turned from the front: 0.015 at 90 degrees, 0.06 at 180
 # (a view other than the front must fit clearly better; RESULTS.md, "Refinement")
 YAW_WEIGHT = 0.06
@@ -412,8 +417,12 @@ def refine(
         if bent and space.search_yaw:
             # the start view was chosen with the estimate's bend, whose sign the network
             # often reads wrongly; a trunk bent the other way fits best from the opposite
-            # side, so the bends are tried there too
-            bent += bend_starts(space, at_view(start_yaw + 180.0))
+            # side, so the bends are tried there too, when the local search keeps enough
+            # of the budget after them (a small budget does better spent on it)
+            mirrored = bend_starts(space, at_view(start_yaw + 180.0))
+            left = budget - obj.evaluations - len(bent) - len(mirrored)
+            if left >= MIRROR_RESERVE * len(mirrored):
+                bent += mirrored
         for x in bent:  # the best point seen is the local search's start
             if out_of_budget():
                 break
