@@ -15,13 +15,13 @@ import contextlib
 import dataclasses
 import math
 import os
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from weberpenn import TreeParams, build_mesh, grow, species
+from weberpenn import build_mesh, grow, species
 
 from .estimate import Estimate, Estimator
 
@@ -38,9 +38,6 @@ ESTIMATORS = ("tsn", "template", "nns")
 TEMPLATE_SIZE = 128  # the template match compares at the refinement's search size
 TEMPLATE_YAWS = (0.0, 90.0, 180.0, 270.0)
 SCORE_SCALE = 0.05  # sketch-distance difference that divides a species' score by e
-# TSNEstimator.reread's steps: on the paper's 15 trees the mesh error falls over two steps
-# and rises again with more (benchmarks/RESULTS.md, "The network reads its own tree back")
-REREAD_STEPS = 2
 
 
 class TSNEstimator:
@@ -79,48 +76,6 @@ class TSNEstimator:
             tree_probability=None if tree is None else float(tree[0]),
         )
 
-    def reread(
-        self,
-        drawings: Sequence[tuple[np.ndarray, float]],
-        params: TreeParams,
-        name: str,
-        steps: int = REREAD_STEPS,
-    ) -> list[TreeParams]:
-        """``params`` corrected by the network's reading of the tree's own sketches, once
-        per step (each step's dictionary, in order).
-
-        ``drawings``: the prepared drawings with their yaws relative to the first.  Each
-        step draws the tree as the training data was drawn, from each drawing's yaw, reads
-        those sketches, and moves the encoded values by the mean difference between what
-        the network reads in the drawings and in the tree's sketches: the network's own
-        bias is in both readings and cancels, so the tree moves towards one whose sketches
-        read as the drawings do (``benchmarks/RESULTS.md``, "The network reads its own
-        tree back").
-        """
-        from render.sketch import SketchRenderer
-        from tsn import encoding
-
-        from .pipeline import SKETCH_SIZE, prepare_input
-
-        norm, seed = self.model.normaliser, params.get("seed")
-        with _one_torch_thread():
-            wanted = self.model.raw_and_features([d for d, _ in drawings])[0].mean(axis=0)
-        out: list[TreeParams] = []
-        for _ in range(steps):
-            drawer = SketchRenderer(build_mesh(grow(params), species=name), species=name)
-            own = [
-                prepare_input(drawer.sketch(float(yaw) % 360.0, SKETCH_SIZE)) for _, yaw in drawings
-            ]
-            with _one_torch_thread():
-                read = self.model.raw_and_features(own)[0].mean(axis=0)
-            moved = norm.normalise(encoding.encode(params)) + (wanted - read)
-            decoded = encoding.decode(norm.denormalise(moved), norm)
-            params = species.project(name, decoded)
-            if seed is not None:  # the tree keeps its random draws
-                params = params.replace(seed=seed)
-            out.append(params)
-        return out
-
 
 class SeededEstimator:
     """An estimator whose every dictionary carries the given ``seed`` key.
@@ -131,16 +86,6 @@ class SeededEstimator:
 
     def __init__(self, inner: Estimator, seed: int) -> None:
         self.inner, self.seed, self.name = inner, int(seed), inner.name
-
-    def reread(
-        self,
-        drawings: Sequence[tuple[np.ndarray, float]],
-        params: TreeParams,
-        name: str,
-        steps: int = REREAD_STEPS,
-    ) -> list[TreeParams]:
-        """The inner estimator's :meth:`TSNEstimator.reread` (``params`` carry the seed)."""
-        return self.inner.reread(drawings, params.replace(seed=self.seed), name, steps)
 
     def estimate(self, sketch: np.ndarray) -> Estimate:
         e = self.inner.estimate(sketch)

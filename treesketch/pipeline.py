@@ -495,7 +495,6 @@ class Pipeline:
             for i, candidate in enumerate(names):
                 run_cfg = _share(cfg, i, len(names))
                 tell("refine", done)
-                starts = self._reread(imgs, views, est.params_for(candidate), candidate, i)
                 rr = refine_search(
                     drawing,
                     est.params_for(candidate),
@@ -507,7 +506,6 @@ class Pipeline:
                     embedder=self.embedder,
                     on_best=lambda p, y, loss, c=candidate: best.offer(p, y, loss, c),
                     views=others,
-                    starts=starts,
                 )
                 done += rr.evaluations
                 tried[candidate] = rr.loss_after
@@ -656,24 +654,6 @@ class Pipeline:
                 )
             )
         return out
-
-    def _reread(
-        self,
-        imgs: list[np.ndarray],
-        views: list[SketchView],
-        params: TreeParams,
-        name: str,
-        i: int,
-    ) -> list[TreeParams]:
-        """Extra starts for the search of the first species tried: the estimate corrected
-        by the network reading the tree's own sketches (``TSNEstimator.reread``; the
-        drawings whose yaw is known).  None for an estimator without it, or for the other
-        species tried (their share of the budget is small)."""
-        reread = getattr(self.estimator, "reread", None)
-        if reread is None or i > 0:
-            return []
-        known = [(im, float(v.yaw)) for im, v in zip(imgs, views, strict=True) if v.yaw is not None]
-        return list(reread(known, params, name))
 
     def candidates(self, est: Estimate) -> list[str]:
         """The species to refine: the estimator's, then up to ``species_tries - 1`` others
