@@ -205,6 +205,44 @@ def test_a_trunk_bent_the_other_way_is_found_from_the_opposite_side() -> None:
     assert r.loss_after < 0.5 * r.loss_before
 
 
+def test_the_opposite_side_is_tried_only_when_the_local_search_keeps_room(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # the opposite side's four bends cost four evaluations; at a small budget (a second
+    # species' half) the local search gains more from them, so they are skipped there
+    from refine.objective import SketchObjective
+    from refine.search import BEND_FRACTIONS
+    from render.sketch import SketchRenderer
+
+    seen: list[tuple[float, float]] = []
+    call = SketchObjective.__call__
+
+    def recording(self: SketchObjective, x: np.ndarray) -> float:
+        seen.append((float(x[-1]) * 360.0, float(self.space.to_params(x)["curve"][0])))
+        return call(self, x)
+
+    monkeypatch.setattr(SketchObjective, "__call__", recording)
+    img = SketchRenderer(build_mesh(grow(_bent_palm(70.0)), species="palm")).sketch(90.0, 128)
+    bends = [90.0 * f for f in BEND_FRACTIONS]
+
+    def opposite_bends(budget: int) -> int:
+        seen.clear()
+        r = refine(img, _bent_palm(-70.0), RefineSettings(budget=budget), species="palm")
+        far = (r.start_yaw + 180.0) % 360.0
+        # the starts sit exactly at the view and the bend; the local search moves both
+        return len(
+            {
+                (round(y, 6), round(c, 6))
+                for y, c in seen
+                if abs((y - far + 180.0) % 360.0 - 180.0) < 1e-6
+                and min(abs(c - b) for b in bends) < 1e-6
+            }
+        )
+
+    assert opposite_bends(40) == len(BEND_FRACTIONS)
+    assert opposite_bends(12) == 0
+
+
 def test_only_a_free_bend_is_tried_either_way() -> None:
     from refine.search import BEND_FRACTIONS, bend_starts
 
