@@ -290,7 +290,6 @@ def refine(
     embedder: Any = None,
     on_best: OnBest | None = None,
     views: Sequence[OtherView] = (),
-    starts: Sequence[TreeParams] = (),
 ) -> RefineResult:
     """Refine ``initial_params`` so its sketch matches ``sketch`` (see the module text and
     :class:`RefineSettings`).
@@ -314,9 +313,6 @@ def refine(
     like ``sketch``), each at its yaw relative to the first; the distance minimised is the
     mean over all views.  A view whose yaw is None gets the turn (every 15 degrees) at
     which the start tree fits it best, before the search starts.
-
-    ``starts``: other dictionaries of the species to try at the start view (after the
-    view is chosen with ``initial_params``); the best point seen starts the local search.
     """
     import nlopt
 
@@ -417,10 +413,6 @@ def refine(
                 start_total, start_yaw = loss, y
                 loss_before = obj.sketch_loss(x)  # the sketch distance alone
         x0 = at_view(start_yaw)
-        for other in starts:
-            if out_of_budget():
-                break
-            evaluate(space.from_params(other, start_yaw))
         bent = bend_starts(space, x0)
         if bent and space.search_yaw:
             # the start view was chosen with the estimate's bend, whose sign the network

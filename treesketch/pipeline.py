@@ -471,8 +471,7 @@ class Pipeline:
 
         t = time.perf_counter()
         tell("estimate")
-        readings = [self.estimator.estimate(im) for im in imgs]
-        est = fuse_estimates(readings)
+        est = fuse_estimates([self.estimator.estimate(im) for im in imgs])
         yaw0 = 0.0 if est.yaw is None else float(est.yaw)
         timings["estimate"] = time.perf_counter() - t
         best = _CurrentBest(est.species_scores or {est.species: 1.0})
@@ -496,9 +495,6 @@ class Pipeline:
             for i, candidate in enumerate(names):
                 run_cfg = _share(cfg, i, len(names))
                 tell("refine", done)
-                # with several views, each view's own reading is also tried as a start
-                # of the first species' search (the fused one averages them)
-                starts = [r.params_for(candidate) for r in readings] if len(readings) > 1 and i == 0 else []
                 rr = refine_search(
                     drawing,
                     est.params_for(candidate),
@@ -510,7 +506,6 @@ class Pipeline:
                     embedder=self.embedder,
                     on_best=lambda p, y, loss, c=candidate: best.offer(p, y, loss, c),
                     views=others,
-                    starts=starts,
                 )
                 done += rr.evaluations
                 tried[candidate] = rr.loss_after
