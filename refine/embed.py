@@ -51,14 +51,12 @@ from .shape import ShapeTarget
 __all__ = [
     "DEFAULT_EMBEDDER",
     "EMBED_SIZE",
-    "LABELS",
     "PAIR_STYLES",
     "PairData",
     "ShapeEmbedNet",
     "ShapeEmbedder",
     "build_pairs",
     "load_embedder",
-    "pair_targets",
     "shape_input",
     "train_embedder",
     "true_distances",
@@ -67,8 +65,6 @@ __all__ = [
 EMBED_SIZE = 128  # the masks' side the network reads
 DEFAULT_EMBEDDER = Path(__file__).resolve().parents[1] / "checkpoints" / "shape_embed.pt"
 PAIR_STYLES = ("sg", "pen", "cloud", "scribble", "pencil", "felt")
-LABELS = ("sg", "mesh")  # what a pair's distance is trained to: train_embedder's ``label``
-_PAIR_SAMPLES = 5000  # Hausdorff face samples per side for a pair's mesh error
 _FORMAT = "treesketch-shape-embed-2"
 
 
@@ -176,14 +172,11 @@ def save_embedder(net: ShapeEmbedNet, path: str | os.PathLike[str], info: dict[s
 @dataclass(frozen=True)
 class PairData:
     """Training masks: ``x`` (N, 2, 128, 128) bool; ``meta`` (N, 4) int: pair, tree of the
-    pair (0 or 1), style index into ``styles``, species index; ``mesh`` (pairs,) float: the
-    two trees' 3D difference (symmetric max Hausdorff over the first tree's diagonal, the
-    benchmarks' mesh error), or None for a set drawn without it."""
+    pair (0 or 1), style index into ``styles``, species index."""
 
     x: np.ndarray
     meta: np.ndarray
     styles: tuple[str, ...]
-    mesh: np.ndarray | None = None
 
     def save(self, path: str | os.PathLike[str]) -> None:
         from weberpenn.fileio import atomic_target
@@ -194,7 +187,6 @@ class PairData:
                 x=np.packbits(self.x, axis=-1),
                 meta=self.meta,
                 styles=np.array(self.styles),
-                **({} if self.mesh is None else {"mesh": self.mesh}),
             )
 
     @property
@@ -204,30 +196,19 @@ class PairData:
     def extend(self, more: PairData) -> PairData:
         if more.styles != self.styles:
             raise ValueError(f"styles differ: {self.styles} vs {more.styles}")
-        mesh = None
-        if self.mesh is not None and more.mesh is not None:
-            mesh = np.concatenate([self.mesh, more.mesh])
         return PairData(
-            np.concatenate([self.x, more.x]),
-            np.concatenate([self.meta, more.meta]),
-            self.styles,
-            mesh,
+            np.concatenate([self.x, more.x]), np.concatenate([self.meta, more.meta]), self.styles
         )
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> PairData:
         with np.load(path) as d:
             x = np.unpackbits(d["x"], axis=-1)[..., :EMBED_SIZE].astype(bool)
-            mesh = d["mesh"].astype(np.float32) if "mesh" in d.files else None
-            return cls(x, d["meta"].astype(np.int64), tuple(str(s) for s in d["styles"]), mesh)
+            return cls(x, d["meta"].astype(np.int64), tuple(str(s) for s in d["styles"]))
 
 
-def _pair_masks(
-    args: tuple[int, int, tuple[str, ...]],
-) -> tuple[np.ndarray, np.ndarray, float]:
-    """Both trees of pair ``t`` (one species, one random view) in every style, and the two
-    trees' mesh error."""
-    from eval.hausdorff import hausdorff
+def _pair_masks(args: tuple[int, int, tuple[str, ...]]) -> tuple[np.ndarray, np.ndarray]:
+    """Both trees of pair ``t`` (one species, one random view) in every style."""
     from render.reader import normalise_drawing
     from render.sketch import SketchRenderer
     from render.styles import Silhouettes, draw
@@ -236,18 +217,16 @@ def _pair_masks(
     t, first_seed, styles = args
     name = species.SPECIES[t % len(species.SPECIES)]
     yaw = float(np.random.default_rng([first_seed, t]).uniform(0, 360))
-    xs, meta, meshes = [], [], []
+    xs, meta = [], []
     for which in (0, 1):
         seed = first_seed + 2 * t + which
-        meshes.append(build_mesh(grow(species.sample(name, seed)), species=name))
-        r = SketchRenderer(meshes[-1])
+        r = SketchRenderer(build_mesh(grow(species.sample(name, seed)), species=name))
         sil = Silhouettes.from_parts(r.parts(yaw, 256))
         for i, s in enumerate(styles):
             img = normalise_drawing(draw(s, sil, np.random.default_rng([seed, i]), 256), 256)
             xs.append(shape_input(ShapeTarget.from_image(img, EMBED_SIZE)) > 0.5)
             meta.append((t, which, i, species.SPECIES.index(name)))
-    err = hausdorff(meshes[1].combined(), meshes[0].combined(), _PAIR_SAMPLES).max_norm
-    return np.stack(xs), np.array(meta, np.int64), float(err)
+    return np.stack(xs), np.array(meta, np.int64)
 
 
 def build_pairs(
@@ -267,15 +246,14 @@ def build_pairs(
     jobs = [(t, int(first_seed), styles) for t in range(int(start), int(pairs))]
     if not jobs:
         raise ValueError(f"no pairs to draw: start {start}, pairs {pairs}")
-    xs, metas, errs = [], [], []
+    xs, metas = [], []
     with ProcessPoolExecutor(max_workers=max(1, workers)) as pool:
-        for k, (x, m, e) in enumerate(pool.map(_pair_masks, jobs, chunksize=4)):
+        for k, (x, m) in enumerate(pool.map(_pair_masks, jobs, chunksize=4)):
             xs.append(x)
             metas.append(m)
-            errs.append(e)
             if log is not None and (k + 1) % 25 == 0:
                 log(f"{k + 1}/{len(jobs)} pairs drawn")
-    return PairData(np.concatenate(xs), np.concatenate(metas), styles, np.array(errs, np.float32))
+    return PairData(np.concatenate(xs), np.concatenate(metas), styles)
 
 
 # --------------------------------------------------------------------------- training
@@ -300,21 +278,6 @@ def true_distances(data: PairData) -> np.ndarray:
     return out
 
 
-def pair_targets(data: PairData, label: str = "sg") -> np.ndarray:
-    """Per pair, the distance the embedding learns for its two trees: ``"sg"`` the shape
-    distance of their drawings in the renderer's style (:func:`true_distances`);
-    ``"mesh"`` their 3D mesh error, scaled to the ``"sg"`` distances' mean so that the
-    shape distance's ``EMBED_WEIGHT`` keeps its meaning."""
-    if label not in LABELS:
-        raise ValueError(f"label must be one of {LABELS}, got {label!r}")
-    sg = true_distances(data)
-    if label == "sg":
-        return sg
-    if data.mesh is None or len(data.mesh) != len(sg):
-        raise ValueError("these training pairs carry no mesh errors: draw them again")
-    return (data.mesh * (sg.mean() / max(float(data.mesh.mean()), 1e-9))).astype(np.float32)
-
-
 def train_embedder(
     data: PairData,
     epochs: int = 12,
@@ -324,14 +287,12 @@ def train_embedder(
     margin: float = 0.3,
     seed: int = 0,
     log: Callable[[str], None] | None = None,
-    label: str = "sg",
 ) -> ShapeEmbedNet:
     """Distil a style-free shape distance into the embedding's Euclidean distance:
 
     - the same tree in two styles: distance 0 (squared error);
-    - the pair's other tree (same species and view) in any style: the two trees' distance
-      (:func:`pair_targets`: by default their shape distance in the renderer's style),
-      squared error, so the
+    - the pair's other tree (same species and view) in any style: the two trees' shape
+      distance in the renderer's style (:func:`true_distances`), squared error, so the
       embedding's distance means "how different are the trees", not "is it the very
       same tree" (a search cannot reach a tree's random details, only its shape);
     - trees of other species in the batch: at least ``margin`` apart (squared hinge).
@@ -343,7 +304,7 @@ def train_embedder(
         raise ValueError("training needs at least two styles that are not held out")
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
-    target = torch.from_numpy(pair_targets(data, label))
+    target = torch.from_numpy(true_distances(data))
     index = {(int(t), int(w), int(s)): r for r, (t, w, s, _) in enumerate(data.meta)}
     kind = {int(t): int(k) for t, _, _, k in data.meta}
     pairs = sorted(kind)

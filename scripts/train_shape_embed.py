@@ -16,14 +16,7 @@ from pathlib import Path
 
 import torch
 
-from refine.embed import (
-    LABELS,
-    PAIR_STYLES,
-    PairData,
-    build_pairs,
-    save_embedder,
-    train_embedder,
-)
+from refine.embed import PAIR_STYLES, PairData, build_pairs, save_embedder, train_embedder
 
 
 def log(msg: str) -> None:
@@ -42,9 +35,6 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--hold-out", default="", help="a style never shown in training")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument(
-        "--label", choices=LABELS, default="sg", help="a pair's distance: shape (sg) or mesh"
-    )
     ap.add_argument("--out", type=Path, required=True)
     args = ap.parse_args(argv)
     if args.hold_out and args.hold_out not in PAIR_STYLES:
@@ -60,11 +50,10 @@ def main(argv: list[str] | None = None) -> int:
         data.save(args.data)
     elif have > args.pairs:
         keep = data.meta[:, 0] < args.pairs
-        mesh = None if data.mesh is None else data.mesh[: args.pairs]
-        data = PairData(data.x[keep], data.meta[keep], data.styles, mesh)
+        data = PairData(data.x[keep], data.meta[keep], data.styles)
     t0 = time.perf_counter()
     hold = (args.hold_out,) if args.hold_out else ()
-    net = train_embedder(data, args.epochs, hold, seed=args.seed, log=log, label=args.label)
+    net = train_embedder(data, args.epochs, hold, seed=args.seed, log=log)
     info = {
         "pairs": data.pairs,
         "first_seed": args.first_seed,
@@ -72,7 +61,6 @@ def main(argv: list[str] | None = None) -> int:
         "held_out": list(hold),
         "epochs": args.epochs,
         "seed": args.seed,
-        "label": args.label,
         "train_seconds": round(time.perf_counter() - t0, 1),
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
