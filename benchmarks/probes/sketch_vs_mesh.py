@@ -36,14 +36,15 @@ _SAMPLES = 5000
 def _pair(args: tuple[int, int]) -> tuple[int, float, np.ndarray, np.ndarray]:
     """Pair ``t``: its species index, its trees' mesh error and their two SG sketches."""
     t, first_seed = args
-    name = species.SPECIES[t % len(species.SPECIES)]
+    kind = t % len(species.SPECIES)
+    name = species.SPECIES[kind]
     yaw = float(np.random.default_rng([first_seed, t]).uniform(0, 360))
     meshes = [
         build_mesh(grow(species.sample(name, first_seed + 2 * t + k)), species=name) for k in (0, 1)
     ]
     sketches = [SketchRenderer(m).sketch(yaw, 256) for m in meshes]
     err = hausdorff(meshes[1].combined(), meshes[0].combined(), _SAMPLES).max_norm
-    return species.SPECIES.index(name), float(err), sketches[0], sketches[1]
+    return kind, float(err), sketches[0], sketches[1]
 
 
 def _mask_distances(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
