@@ -3,8 +3,9 @@
 ``Pipeline(estimator, settings).run(sketch)`` reads the sketch (the one reader,
 ``render.reader``), prepares it as the renderer frames a tree, asks the estimator for a
 first estimate (parameters, species scores, maybe a view), refines the species' free values
-and the view yaw with ``refine.search`` until the tree's sketch matches the input, and
-returns a :class:`Result`.  The CLI, the HTTP service, the evaluation report, the rotation
+and the view yaw with ``refine.search`` until the tree's sketch matches the input, judges
+whether the drawing is a tree, and returns a :class:`Result`; the steps are
+:mod:`treesketch.steps`.  The CLI, the HTTP service, the evaluation report, the rotation
 sweep, the benchmarks and the notebooks all run a ``Pipeline``;
 :func:`predict_then_refine` is the one-line convenience over it.
 
@@ -15,28 +16,43 @@ raises :class:`SketchError`; anything else (a circle, noise) gives a result whos
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from refine.objective import OtherView, PreparedDrawing, framed
+from refine.objective import framed
 from refine.search import Cancelled, RefineResult, RefineSettings
-from refine.search import refine as refine_search
 from refine.shape import ShapeTarget, line_distance
-from render.reader import DRAWING_SIDE, SketchError, normalise_drawing, read_sketch
-from weberpenn import TreeParams, build_mesh, grow
+from render.reader import SketchError
+from weberpenn import TreeMesh, TreeParams, build_mesh, grow
 from weberpenn import species as wp_species
 
 from .estimate import Estimate, Estimator
 from .estimators import load_estimator
-from .species_choice import Candidate, describe, posterior
-from .trees import sketch_renderer, tree_sketch
+from .species_choice import Candidate, describe
+from .steps import (
+    DrawnViews,
+    FirstEstimate,
+    Progress,
+    ReadDrawings,
+    Reporter,
+    SpeciesSearch,
+    draw_views,
+    first_estimate,
+    list_candidates,
+    load_sketch,
+    planned_evaluations,
+    prepare_input,
+    read_drawings,
+    read_views,
+    refine_species,
+    species_to_try,
+    timed,
+)
 from .views import SketchView, ViewResult, as_views, fuse_estimates
 
 __all__ = [
@@ -45,6 +61,7 @@ __all__ = [
     "LOW_CONFIDENCE_LOSS_SHAPE",
     "MAX_HEIGHT",
     "Cancelled",
+    "Judgement",
     "Pipeline",
     "Progress",
     "RefineSettings",
@@ -54,6 +71,9 @@ __all__ = [
     "TREE_PROBABILITY_LIMIT",
     "ViewResult",
     "check_height",
+    "fit_height",
+    "has_height",
+    "judge_views",
     "load_sketch",
     "planned_evaluations",
     "predict_then_refine",
@@ -65,9 +85,6 @@ __all__ = [
     "tree_line_distance",
 ]
 
-CANDIDATES = 3  # species a result lists (the page shows them to switch to)
-THUMB_SIZE = 128  # pixels of a candidate's sketch
-SKETCH_SIZE = DRAWING_SIDE  # the size sketches are prepared at (TSN crops and resizes from it)
 # the result is flagged when the best tree's sketch is this far from the input, by the
 # style-blind shape distance the refinement minimises (with the learned embedding's term
 # when it is on; a circle can pass for a crown) or by the line distance
@@ -87,62 +104,6 @@ LOW_CONFIDENCE_INK = 0.06
 # doodle of a tree from a house (RESULTS.md, "Is it a tree?")
 TREE_PROBABILITY_LIMIT = 0.5
 MAX_HEIGHT = 200.0  # metres: taller than any tree that grows
-
-
-@dataclass(frozen=True)
-class Progress:
-    """Where a run is: ``stage`` is "read", "estimate", "refine" or "render".
-
-    ``evaluations`` counts the trees of every species tried and never passes ``budget``,
-    the run's whole plan (the estimator's species' budget plus the other candidates');
-    ``best_loss`` (the best tree's sketch distance, NaN before the refinement's first
-    tree) only falls.  ``params`` is the current best tree (the first estimate from the
-    "estimate" stage's end, then the refinement's best), of ``species`` seen from ``yaw``;
-    ``version`` grows by one each time it changes (0: no tree yet)."""
-
-    stage: str
-    evaluations: int
-    budget: int
-    best_loss: float
-    elapsed: float
-    params: TreeParams | None = None
-    species: str | None = None
-    yaw: float = 0.0
-    version: int = 0
-
-
-class _CurrentBest:
-    """The tree a run would return if it stopped now, by the rule the run picks its result
-    with (the species of highest posterior, ``species_choice.posterior``, from the
-    estimator's scores and each species' best distance so far; only the species the user
-    means when there is one); the shown distance only falls."""
-
-    def __init__(self, scores: dict[str, float]) -> None:
-        self.scores = scores
-        self.best: dict[str, tuple[TreeParams, float, float]] = {}  # species -> tree
-        self.params: TreeParams | None = None
-        self.species: str | None = None
-        self.yaw = 0.0
-        self.shown = math.nan
-        self.version = 0
-
-    def estimate(self, params: TreeParams, species: str, yaw: float) -> None:
-        self.params, self.species, self.yaw = params, species, yaw
-        self.version += 1
-
-    def offer(self, params: TreeParams, yaw: float, loss: float, species: str) -> None:
-        """A candidate's new best tree."""
-        if species in self.best and not loss < self.best[species][2]:
-            return
-        self.best[species] = (params, yaw, loss)
-        post = posterior(self.scores, {s: v[2] for s, v in self.best.items()})
-        pick = max(self.best, key=lambda s: post.get(s, 0.0))
-        p, y, d = self.best[pick]
-        if p is self.params and pick == self.species:
-            return
-        self.params, self.species, self.yaw = p, pick, y
-        self.shown = d if math.isnan(self.shown) else min(self.shown, d)
-        self.version += 1
 
 
 @dataclass(frozen=True)
@@ -201,19 +162,6 @@ class Result:
         }
 
 
-def load_sketch(source: Any) -> np.ndarray:
-    """A sketch from a path, bytes, a PIL image or an array -> (H, W) uint8, 255 = white
-    (``render.reader.read_sketch``: size and bomb checks first, alpha on white)."""
-    return read_sketch(source)
-
-
-def prepare_input(img: np.ndarray) -> np.ndarray:
-    """The sketch every stage sees (the estimator and the refinement alike):
-    ``render.reader.normalise_drawing`` at :data:`SKETCH_SIZE` (paper flattened, ink
-    found, re-framed as the renderer frames a tree); blank and dark pages are refused."""
-    return normalise_drawing(img, SKETCH_SIZE)
-
-
 def check_height(height: float | None) -> float | None:
     """None, or a finite height in (0, MAX_HEIGHT] metres (ValueError otherwise)."""
     if height is None:
@@ -260,10 +208,10 @@ def rescale_height(params: TreeParams, height: float, current: float | None = No
 def tree_line_distance(drawing: Any, tree_sketch: Any, size: int) -> float:
     """``refine.shape.line_distance`` of a drawing and a tree's sketch, both framed as the
     refinement frames them (a tree too small to draw anything is as far as can be)."""
-    return _line_distance(ShapeTarget.from_image(framed(drawing, size), size), tree_sketch)
+    return drawing_line_distance(ShapeTarget.from_image(framed(drawing, size), size), tree_sketch)
 
 
-def _line_distance(drawing: ShapeTarget, tree_sketch: Any) -> float:
+def drawing_line_distance(drawing: ShapeTarget, tree_sketch: Any) -> float:
     """:func:`tree_line_distance` from the drawing's shape features, already prepared."""
     size = drawing.size
     try:
@@ -306,11 +254,6 @@ def tree_judgement(
     )
 
 
-def planned_evaluations(cfg: RefineSettings, n: int) -> int:
-    """The most trees a run refining ``n`` species evaluates (see :func:`_share`)."""
-    return sum(_share(cfg, i, n).budget for i in range(n)) if cfg.refine else 0
-
-
 def result_confidence(
     species_probability: float,
     tree_like: float,
@@ -326,55 +269,49 @@ def result_confidence(
     return species_probability if warning is None else min(species_probability, tree_like)
 
 
-def _share(cfg: RefineSettings, i: int, n: int) -> RefineSettings:
-    """Candidate ``i`` of ``n`` species' settings: the estimator's species (``i`` 0) the
-    whole budget and, when others are tried, 60% of the time; the others half the budget
-    and an equal part of the remaining 40%, so the whole run keeps to ``time_limit``."""
-    if n == 1:
-        return cfg
-    share = 0.6 if i == 0 else 0.4 / (n - 1)
-    limit = None if cfg.time_limit is None else cfg.time_limit * share
-    return cfg.replace(budget=cfg.budget if i == 0 else max(8, cfg.budget // 2), time_limit=limit)
+def has_height(mesh: TreeMesh, height: float | None) -> bool:
+    """Whether the tree is ``height`` metres tall (to a millionth; any height when None)."""
+    return height is None or abs(mesh_height(mesh) - height) <= 1e-6 * height
 
 
-def _read_views(views: list[SketchView]) -> list[np.ndarray]:
-    """Every view read and prepared (all before any estimate: a bad second drawing is
-    refused before the first is worked on); an error names the view when there are
-    several."""
-    imgs = []
-    for i, v in enumerate(views):
-        try:
-            imgs.append(prepare_input(load_sketch(v.source)))
-        except SketchError as exc:
-            if len(views) == 1:
-                raise
-            raise SketchError(f"view {i + 1} of {len(views)}: {exc}") from None
-    return imgs
+def fit_height(
+    params: TreeParams, mesh: TreeMesh, species: str, height: float
+) -> tuple[TreeParams, TreeMesh]:
+    """The tree (``params``, grown as ``mesh``) rescaled to ``height`` metres and grown
+    again."""
+    params = rescale_height(params, height, current=mesh_height(mesh))
+    return params, build_mesh(grow(params), species=species)
 
 
-def _view_turns(
-    views: list[SketchView],
-    refined: RefineResult | None,
-    drawings: list[PreparedDrawing],
-    r: Any,
-    yaw: float,
-) -> list[float]:
-    """The other views' yaws relative to the first: as the refinement used them, else as
-    given; a view of unknown yaw and no refinement: the turn of the first estimate's
-    tree (drawn by the renderer ``r``) whose sketch is nearest that drawing (every 15
-    degrees)."""
-    if refined is not None and refined.view_yaws:
-        return list(refined.view_yaws)
-    from refine.search import START_YAWS
+@dataclass(frozen=True)
+class Judgement:
+    """Whether the drawing looks like a tree: the line distance over the views
+    (``ink_after``), how much it looks like one (0..1) and the warning when it may not."""
 
-    out = []
-    for v, d in zip(views[1:], drawings[1:], strict=True):
-        if v.yaw is not None:
-            out.append(float(v.yaw))
-            continue
-        dist = [d.distance(r.sketch((yaw + t) % 360.0, d.size)) for t in START_YAWS]
-        out.append(START_YAWS[int(np.argmin(dist))])
-    return out
+    ink_after: float
+    tree_like: float
+    warning: str | None
+    tree_probability: float | None = None
+
+    def confidence(self, candidates: list[Candidate]) -> float:
+        """How sure the result is (:func:`result_confidence`), its species' probability
+        being the first candidate's."""
+        p = candidates[0].probability if candidates else self.tree_like
+        return result_confidence(p, self.tree_like, self.warning, self.tree_probability)
+
+
+def judge_views(
+    read: ReadDrawings, drawn: DrawnViews, first: FirstEstimate, embedded: bool
+) -> Judgement:
+    """:func:`tree_judgement` of the result: every view's unexplained ink, averaged as the
+    shape distance is; ``embedded``: the shape distance has the learned embedding's term
+    (its own calibrated limit)."""
+    pairs = zip(read.drawings, drawn.views, strict=True)
+    ink = float(np.mean([drawing_line_distance(d.shape, v.sketch_after) for d, v in pairs]))
+    limit = LOW_CONFIDENCE_LOSS if embedded else LOW_CONFIDENCE_LOSS_SHAPE
+    p = first.estimate.tree_probability
+    tree_like, warning = tree_judgement(p, drawn.loss_after, ink, limit)
+    return Judgement(ink, tree_like, warning, p)
 
 
 class Pipeline:
@@ -400,7 +337,7 @@ class Pipeline:
     def estimate(self, sketch: Any) -> Estimate:
         """The first estimate alone (read, prepared, estimated; nothing refined); several
         views (as :meth:`run` takes them) give the estimate fused over all."""
-        imgs = _read_views(as_views(sketch))
+        imgs = read_views(as_views(sketch))
         return fuse_estimates([self.estimator.estimate(img) for img in imgs])
 
     def run(
@@ -430,240 +367,75 @@ class Pipeline:
         height = check_height(height)
         chosen = None if species is None else wp_species.canonical(species)
         cfg = self.settings
-        t_start = time.perf_counter()
-        plan = cfg.budget if cfg.refine else 0  # until the candidates are known
-        best: _CurrentBest | None = None
-
-        def tell(stage: str, evaluations: int = 0) -> None:
-            if cancel is not None and cancel():
-                raise Cancelled(f"cancelled during {stage}")
-            if progress is not None:
-                elapsed = time.perf_counter() - t_start
-                if best is None:
-                    progress(Progress(stage, 0, plan, math.nan, elapsed))
-                    return
-                progress(
-                    Progress(
-                        stage,
-                        min(evaluations, plan),
-                        plan,
-                        best.shown,
-                        elapsed,
-                        best.params,
-                        best.species,
-                        best.yaw,
-                        best.version,
-                    )
-                )
-
+        report = Reporter(cfg.budget if cfg.refine else 0, progress, cancel)
         timings: dict[str, float] = {}
-        t = time.perf_counter()
-        tell("read")
-        views = as_views(sketch)
-        imgs = _read_views(views)
-        img = imgs[0]
-        # each drawing as every comparison of this run sees it (each species' search, the
-        # first estimate's distance, the line distance): framed and prepared once
-        drawings = [PreparedDrawing.create(im, cfg.size, cfg.metric, self.embedder) for im in imgs]
-        drawing = drawings[0]
-        others = [OtherView(d, v.yaw) for d, v in zip(drawings[1:], views[1:], strict=True)]
-        timings["prepare"] = time.perf_counter() - t
-
-        t = time.perf_counter()
-        tell("estimate")
-        est = fuse_estimates([self.estimator.estimate(im) for im in imgs])
-        yaw0 = 0.0 if est.yaw is None else float(est.yaw)
-        timings["estimate"] = time.perf_counter() - t
-        best = _CurrentBest(est.species_scores or {est.species: 1.0})
-        if chosen is None:
-            best.estimate(est.params, est.species, yaw0)
-        else:
-            best.estimate(est.params_for(chosen), chosen, yaw0)
-        names = ([chosen] if chosen is not None else self.candidates(est)) if cfg.refine else []
-        plan = planned_evaluations(cfg, len(names))
-        tell("estimate")  # the first tree, at once
-
-        t = time.perf_counter()
-        result_refine: RefineResult | None = None
-        tried: dict[str, float] = {}
-        name = est.species
-        done = 0  # evaluations of all candidates so far, so progress only grows
-        refined: dict[str, RefineResult] = {}
-        if chosen is not None:
-            name = chosen
-        if cfg.refine:
-            for i, candidate in enumerate(names):
-                run_cfg = _share(cfg, i, len(names))
-                tell("refine", done)
-                rr = refine_search(
-                    drawing,
-                    est.params_for(candidate),
-                    run_cfg,
-                    species=candidate,
-                    yaw=None if cfg.search_yaw else yaw0,
-                    progress=lambda n, _loss, done=done: tell("refine", done + n),
-                    cancel=cancel,
-                    embedder=self.embedder,
-                    on_best=lambda p, y, loss, c=candidate: best.offer(p, y, loss, c),
-                    views=others,
-                )
-                done += rr.evaluations
-                tried[candidate] = rr.loss_after
-                refined[candidate] = rr
-                if i == 0:
-                    yaw0, loss0 = rr.start_yaw, rr.loss_before
-                    views0 = rr.view_losses_before or (loss0,)
-            # the network's scores and the synthesis distances decide together
-            post = posterior(est.species_scores or {est.species: 1.0}, tried)
-            if chosen is None:
-                name = max(tried, key=lambda s: post.get(s, 0.0))
-            result_refine = refined[name]
-            params1, yaw1 = result_refine.params, result_refine.yaw
-        else:
-            post = posterior(est.species_scores or {est.species: 1.0}, {})
-            params1 = est.params if chosen is None else est.params_for(chosen)
-            yaw1 = yaw0
-        timings["refine"] = time.perf_counter() - t
-
-        t = time.perf_counter()
-        tell("render", done)
-        from render.sketch import SketchRenderer
-
-        start = est.params if chosen is None else est.params_for(chosen)
-        start_species = est.species if chosen is None else chosen
-        mesh1 = build_mesh(grow(params1), species=name)
-        draw1 = SketchRenderer(mesh1)  # the result's scene built once for all its views
-        after = draw1.sketch(yaw1, SKETCH_SIZE)
-        if result_refine is None:  # nothing refined: the estimate is the result
-            draw0, before = draw1, after
-        else:
-            # the estimate's tree is only shown: drawn the cheap way, as the search drew it
-            draw0 = sketch_renderer(start, start_species, SKETCH_SIZE)
-            before = draw0.sketch(yaw0, SKETCH_SIZE)
-        turns = _view_turns(views, result_refine, drawings, draw0, yaw0)
-        view_results = [ViewResult(0.0, img, before, after, math.nan, math.nan)]
-        for i, turn in enumerate(turns, start=1):
-            b = draw0.sketch((yaw0 + turn) % 360.0, SKETCH_SIZE)
-            a = b if draw1 is draw0 else draw1.sketch((yaw1 + turn) % 360.0, SKETCH_SIZE)
-            view_results.append(
-                ViewResult(turn, imgs[i], b, a, math.nan, math.nan, views[i].yaw is None)
-            )
-        if result_refine is not None:
-            loss_before, loss_after = loss0, result_refine.loss_after
-            per_before = views0
-            per_after = result_refine.view_losses_after or (loss_after,)
-        else:
-            per_before = tuple(
-                d.distance(v.sketch_before) for d, v in zip(drawings, view_results, strict=True)
-            )
-            per_after = per_before
-            loss_before = loss_after = float(np.mean(per_before))
-        view_results = [
-            dataclasses.replace(v, loss_before=float(lb), loss_after=float(la))
-            for v, lb, la in zip(view_results, per_before, per_after, strict=True)
-        ]
-        timings["render"] = time.perf_counter() - t
-
-        current = mesh_height(mesh1)
-        if height is not None and abs(current - height) > 1e-6 * height:
-            t = time.perf_counter()
-            params1 = rescale_height(params1, height, current=current)
-            mesh1 = build_mesh(grow(params1), species=name)
-            timings["height"] = time.perf_counter() - t
-
-        # every view's unexplained ink, averaged as the shape distance is
-        ink_after = float(
-            np.mean(
-                [
-                    _line_distance(d.shape, v.sketch_after)
-                    for d, v in zip(drawings, view_results, strict=True)
-                ]
-            )
-        )
-        limit = LOW_CONFIDENCE_LOSS if self.embedder is not None else LOW_CONFIDENCE_LOSS_SHAPE
-        tree_like, warning = tree_judgement(est.tree_probability, loss_after, ink_after, limit)
-        t = time.perf_counter()
-        candidates = self._candidates(est, name, params1, after, refined, post, chosen)
-        timings["candidates"] = time.perf_counter() - t
-        confidence = result_confidence(
-            candidates[0].probability if candidates else tree_like,
-            tree_like,
-            warning,
-            est.tree_probability,
-        )
+        with timed(timings, "prepare"):
+            report.tell("read")
+            read = read_drawings(sketch, cfg, self.embedder)
+        with timed(timings, "estimate"):
+            report.tell("estimate")
+            first = first_estimate(self.estimator, read.images, chosen)
+        names = species_to_try(first, cfg)
+        report.first_tree(first, planned_evaluations(cfg, len(names)))
+        with timed(timings, "refine"):
+            search = refine_species(read, first, names, cfg, report, self.embedder)
+        with timed(timings, "render"):
+            report.tell("render", search.evaluations)
+            drawn = draw_views(read, first, search)
+        params, mesh = search.params, drawn.mesh
+        if not has_height(mesh, height):
+            with timed(timings, "height"):
+                params, mesh = fit_height(params, mesh, search.species, height)
+        judged = judge_views(read, drawn, first, self.embedder is not None)
+        with timed(timings, "candidates"):
+            candidates = list_candidates(first, search, params, drawn.after)
         timings["total"] = sum(timings.values())
-        return Result(
-            params=params1,
-            species=name,
-            tree_mesh=mesh1,
-            sketch_before=before,
-            sketch_after=after,
-            losses={
-                "before": float(loss_before),
-                "after": float(loss_after),
-                "ink_after": float(ink_after),
-            },
-            timings=timings,
-            yaw=float(yaw1),
-            input_sketch=img,
-            estimator=self.estimator.name,
-            estimate=est,
-            refinement=result_refine,
-            confidence=confidence,
-            warning=warning,
-            extras={"tried": tried} if tried else {},
-            candidates=tuple(candidates),
-            views=tuple(view_results),
+        return build_result(
+            first, search, drawn, params, mesh, judged, candidates, timings, self.estimator.name
         )
-
-    def _candidates(
-        self,
-        est: Estimate,
-        name: str,
-        params: TreeParams,
-        sketch: np.ndarray,
-        refined: dict[str, RefineResult],
-        post: dict[str, float],
-        chosen: str | None,
-    ) -> list[Candidate]:
-        """The result's species and the next most probable, at least ``CANDIDATES`` in
-        all: each with its tree (refined, else the estimate for it), its distance (refined
-        ones), its probability and a small sketch to pick it by."""
-        # by probability, then (an estimator that scores few species) the species' order
-        ranked = sorted(wp_species.SPECIES, key=lambda s: -post.get(s, 0.0))
-        names = [name, *[s for s in ranked if s != name]][: max(CANDIDATES, len(refined))]
-        scores = est.species_scores or {est.species: 1.0}
-        out = []
-        for s in names:
-            if s == name:
-                p, img = params, sketch
-            else:
-                rr = refined.get(s)
-                p = rr.params if rr is not None else est.params_for(s)
-                img = tree_sketch(p, s, rr.yaw if rr is not None else 0.0, THUMB_SIZE)
-            rr = refined.get(s)
-            prob = 1.0 if chosen is not None and s == chosen else post.get(s, 0.0)
-            out.append(
-                Candidate(
-                    s,
-                    p,
-                    float(scores.get(s, 0.0)),
-                    None if rr is None else float(rr.loss_after),
-                    0.0 if chosen is not None and s != chosen else float(prob),
-                    img,
-                )
-            )
-        return out
 
     def candidates(self, est: Estimate) -> list[str]:
         """The species to refine: the estimator's, then up to ``species_tries - 1`` others
         scoring at least ``species_ratio`` times the best score."""
-        ranked = est.ranked()
-        top = max(ranked[0][1], 1e-12)
-        others = [
-            s for s, sc in ranked if s != est.species and sc >= self.settings.species_ratio * top
-        ]
-        return [est.species, *others[: self.settings.species_tries - 1]]
+        return species_to_try(FirstEstimate(est), self.settings.replace(refine=True))
+
+
+def build_result(
+    first: FirstEstimate,
+    search: SpeciesSearch,
+    drawn: DrawnViews,
+    params: TreeParams,
+    mesh: TreeMesh,
+    judged: Judgement,
+    candidates: list[Candidate],
+    timings: dict[str, float],
+    estimator: str,
+) -> Result:
+    """The :class:`Result` of a run from its steps' outcomes (``params`` and ``mesh``: the
+    result's tree at the height asked for)."""
+    return Result(
+        params=params,
+        species=search.species,
+        tree_mesh=mesh,
+        sketch_before=drawn.before,
+        sketch_after=drawn.after,
+        losses={
+            "before": drawn.loss_before,
+            "after": drawn.loss_after,
+            "ink_after": judged.ink_after,
+        },
+        timings=timings,
+        yaw=float(search.yaw),
+        input_sketch=drawn.views[0].input_sketch,
+        estimator=estimator,
+        estimate=first.estimate,
+        refinement=search.result,
+        confidence=judged.confidence(candidates),
+        warning=judged.warning,
+        extras={"tried": search.tried} if search.refined else {},
+        candidates=tuple(candidates),
+        views=drawn.views,
+    )
 
 
 def predict_then_refine(
