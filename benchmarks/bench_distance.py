@@ -8,7 +8,7 @@ style is closer than another tree of the same species in the same style,
 learned embedding's term (``refine.shape`` + ``refine.embed``, what the refinement uses;
 ``--embedder`` names another checkpoint, e.g. one trained without a style), the embedding
 alone, the hand-made shape distance alone, the shape distance before issue 12's
-recalibration (``benchmarks/shape_v1.py``, kept as the reference) and the ink distance made
+recalibration (``benchmarks/lib/shape_v1.py``, kept as the reference) and the ink distance made
 for SG-vs-SG comparison (``refine.objective.sketch_distance``); each style's share; and the
 CPU milliseconds of one refinement evaluation's comparison (the target prepared once, one
 candidate prepared and compared), median over the drawings, and of framing one candidate
@@ -26,8 +26,8 @@ import time
 
 import numpy as np
 
-from benchmarks.shape_v1 import ShapeTarget as ShapeTargetV1
-from benchmarks.shape_v1 import shape_distance as shape_distance_v1
+from benchmarks.lib.shape_v1 import ShapeTarget as ShapeTargetV1
+from benchmarks.lib.shape_v1 import shape_distance as shape_distance_v1
 from refine.embed import load_embedder
 from refine.objective import SketchTarget, framed, sketch_distance
 from refine.shape import ShapeTarget, embedding_distance, shape_distance

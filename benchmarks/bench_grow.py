@@ -15,7 +15,7 @@ replaces this benchmark's section of ``benchmarks/RESULTS.md``.
 ``--blender BIN`` also times Blender's own Sapling in the same run, on this machine: the
 species' three reference dictionaries (the species people draw: its base dictionary) are
 exported as Sapling presets (``weberpenn.export.save_sapling_preset``),
-``benchmarks/sapling_run.py`` runs ``tree_add`` on each ``--repeats`` times inside
+``benchmarks/lib/sapling_run.py`` runs ``tree_add`` on each ``--repeats`` times inside
 Blender, and our grow + mesh is timed on the very same dictionaries; the same-run ratio is
 reported beside the recorded one.  ``--species a,b`` limits the run to those species.
 """
@@ -34,8 +34,8 @@ import tempfile  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from benchmarks.results_md import cpu_name, write_section  # noqa: E402
-from benchmarks.sapling_run import (  # noqa: E402
+from benchmarks.lib.results_md import cpu_name, write_section  # noqa: E402
+from benchmarks.lib.sapling_run import (  # noqa: E402
     REFERENCE_STATS,
     SaplingError,
     recorded,

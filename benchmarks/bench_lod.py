@@ -29,7 +29,7 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from benchmarks.results_md import cpu_name, write_section  # noqa: E402
+from benchmarks.lib.results_md import cpu_name, write_section  # noqa: E402
 from eval.hausdorff import bbox_diagonal, hausdorff  # noqa: E402
 from render.sketch import SketchRenderer  # noqa: E402
 from weberpenn import build_mesh, grow, species  # noqa: E402

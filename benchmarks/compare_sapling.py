@@ -8,7 +8,7 @@ per level (ours vs Sapling's) and leaf count, then per-species summaries.
 
 ``--species``: every species' base dictionary (``species.base(name)``, seed 0), our
 ``build_mesh(grow(...))`` against Sapling's tree from the same dictionary as recorded in
-``benchmarks/sapling_species_stats.json`` (``benchmarks/sapling_run.py``): whole-tree
+``benchmarks/lib/sapling_species_stats.json`` (``benchmarks/lib/sapling_run.py``): whole-tree
 bounding-box width, depth and height (must agree within 10 %), branch and leaf triangles
 (Sapling's quads count as two), and, for the species people draw, the untouched Sapling
 preset they start from (seeds 0, 1, 2) with the values the species sets (its source).
@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.sapling_run import (
+from benchmarks.lib.sapling_run import (
     SPECIES_STATS,
     SaplingError,
     record,
@@ -146,7 +146,7 @@ def compare_species(
     data: dict, ours_of=ours, names: tuple[str, ...] = species.SPECIES
 ) -> list[dict]:
     """One row per species: our sizes and triangles against Sapling's record (``data`` as
-    :func:`benchmarks.sapling_run.recorded` returns it), the worst size ratio's distance
+    :func:`benchmarks.lib.sapling_run.recorded` returns it), the worst size ratio's distance
     from 1, and the untouched preset's mean size where the species starts from one."""
     rows = []
     for name in names:

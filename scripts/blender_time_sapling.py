@@ -9,7 +9,7 @@ every run's seconds; of the last run it records the branch spline count, the bra
 (the bevelled curve as Blender evaluates it into a mesh, quads), the leaf faces, and the
 world-space bounding boxes (``[[x, y, z] lo, [x, y, z] hi]``, Z up) of the branches and of
 the leaves.  Writes a JSON list to OUT.json.  Runs only inside Blender
-(``benchmarks/sapling_run.py`` calls it for ``bench_grow.py --blender`` and
+(``benchmarks/lib/sapling_run.py`` calls it for ``bench_grow.py --blender`` and
 ``compare_sapling.py --blender``); not part of the test suite.
 """
 

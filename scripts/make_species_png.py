@@ -11,7 +11,7 @@ comes third.  ``scripts/blender_species.py`` renders them inside Blender from th
 one scale per tile (flat bark and leaf colours of ``weberpenn.textures.colours``).  Each
 tile is labelled with the species' display name and every tree's width x depth x height,
 as ``benchmarks/compare_sapling.py
---species`` compares them (Sapling's from ``benchmarks/sapling_species_stats.json``, which
+--species`` compares them (Sapling's from ``benchmarks/lib/sapling_species_stats.json``, which
 ``compare_sapling.py --species --blender blender`` records; a record of other dictionaries
 is refused as stale).
 """
@@ -30,7 +30,7 @@ from docs_png import write_palette_png
 from PIL import Image, ImageDraw, ImageFont
 
 from benchmarks.compare_sapling import TOLERANCE, compare_species, dims
-from benchmarks.sapling_run import SaplingError, recorded, sizes, write_untouched
+from benchmarks.lib.sapling_run import SaplingError, recorded, sizes, write_untouched
 from weberpenn import build_mesh, grow, species
 from weberpenn.export import save_sapling_preset
 from weberpenn.textures import colours

@@ -1,8 +1,8 @@
-"""benchmarks/results_md.py: a benchmark's --write replaces its own section of RESULTS.md."""
+"""benchmarks/lib/results_md.py: a benchmark's --write replaces its own section of RESULTS.md."""
 
 from __future__ import annotations
 
-from benchmarks.results_md import write_section
+from benchmarks.lib.results_md import write_section
 
 RESULTS = """# Benchmark results
 

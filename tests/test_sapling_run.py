@@ -1,4 +1,4 @@
-"""Tests of benchmarks/sapling_run.py and the species comparison of
+"""Tests of benchmarks/lib/sapling_run.py and the species comparison of
 benchmarks/compare_sapling.py: the committed Sapling record matches today's species, every
 species people draw grows within 10 % of Sapling's size from the same dictionary, and a
 stale or missing record or an over-size tree is reported plainly.  (Blender itself is not
@@ -12,7 +12,7 @@ import json
 import pytest
 
 from benchmarks.compare_sapling import TOLERANCE, compare_species, species_markdown
-from benchmarks.sapling_run import SPECIES_STATS, SaplingError, base_key, recorded, sizes
+from benchmarks.lib.sapling_run import SPECIES_STATS, SaplingError, base_key, recorded, sizes
 from weberpenn import species
 
 

@@ -32,7 +32,7 @@ import tempfile
 from pathlib import Path
 
 from benchmarks.compare_sapling import replay_trunk_splines
-from benchmarks.sapling_run import PRESETS, preset_line, run_sapling, sizes
+from benchmarks.lib.sapling_run import PRESETS, preset_line, run_sapling, sizes
 from weberpenn import build_mesh, grow, species
 from weberpenn.export import save_sapling_preset
 

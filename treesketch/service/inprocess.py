@@ -1,6 +1,6 @@
 """The service's app under uvicorn in a thread of this process, on a free localhost port:
 a real server (streamed bodies, disconnects, sockets, unlike a TestClient) for the tests,
-``benchmarks/bench_interactive.py`` and ``scripts/make_web_png.py``.  ``treesketch serve``
+``benchmarks/service/bench_interactive.py`` and ``scripts/make_web_png.py``.  ``treesketch serve``
 is the server people run."""
 
 from __future__ import annotations

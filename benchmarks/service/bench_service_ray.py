@@ -16,7 +16,7 @@ its overhead is that minus the worker's own time (``timings.job``).  For 3: ``--
 jobs submitted at once (the node of each is in its result: ``worker.node``), then two
 longer jobs, and the second node killed (``remove_node``, no goodbye) while its job runs.
 
-    PYTHONPATH=$PWD .venv/bin/python benchmarks/bench_service_ray.py --jobs 6 --budget 3
+    PYTHONPATH=$PWD .venv/bin/python benchmarks/service/bench_service_ray.py --jobs 6 --budget 3
 """
 
 from __future__ import annotations
@@ -34,9 +34,9 @@ from typing import Any
 
 import httpx
 
-from benchmarks.serve_process import FINISHED, ServeProcess
+from benchmarks.lib.serve_process import FINISHED, ServeProcess
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SKETCH = ROOT / "examples" / "hand" / "palm.png"
 
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from weberpenn.fileio import atomic_write
 
-RESULTS = Path(__file__).resolve().parent / "RESULTS.md"
+RESULTS = Path(__file__).resolve().parents[1] / "RESULTS.md"
 
 
 def write_section(text: str, results: Path = RESULTS) -> None:

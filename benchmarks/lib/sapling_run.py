@@ -30,9 +30,9 @@ from weberpenn import species
 from weberpenn.export import save_sapling_preset
 from weberpenn.params import TreeParams
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 REFERENCE_STATS = ROOT.parent / "shared" / "reference" / "sapling_reference_stats.json"
-SPECIES_STATS = ROOT / "benchmarks" / "sapling_species_stats.json"
+SPECIES_STATS = ROOT / "benchmarks" / "lib" / "sapling_species_stats.json"
 SCRIPT = ROOT / "scripts" / "blender_time_sapling.py"
 PRESETS = Path("/usr/share/blender/scripts/addons/add_curve_sapling/presets")
 #: Sapling seeds the untouched presets are grown with (their spread is part of the story).
@@ -149,7 +149,7 @@ def record(blender: str, out: Path = SPECIES_STATS, *, command: str = "", commit
         "showLeaves set on; Sapling seeds 0, 1, 2). Bounding boxes [[lo], [hi]] in Blender "
         "units, Z up, branches as the bevelled curve evaluated to a mesh; faces are "
         "Sapling's quads (branches) and leaf polygons; seconds: tree_add alone. base_key: "
-        "fingerprint of the base dictionary recorded (benchmarks/sapling_run.py base_key).",
+        "fingerprint of the base dictionary recorded (benchmarks/lib/sapling_run.py base_key).",
         "command": command,
         "commit": commit,
         "date": dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC"),

@@ -1,7 +1,7 @@
 """Benchmark the interactive loop over HTTP: the first tree viewable, an edit's round
 trip, the viewer's GLB.
 
-    PYTHONPATH=$PWD .venv/bin/python benchmarks/bench_interactive.py [--trees 4]
+    PYTHONPATH=$PWD .venv/bin/python benchmarks/service/bench_interactive.py [--trees 4]
         [--edits 10] [--estimator tsn] [--drawings 4] [--json FILE]
 
 A real server (uvicorn on a local port, one worker process, ``--estimator``) is started.
@@ -42,7 +42,7 @@ from treesketch.trees import VIEW_FACES
 from weberpenn import species
 from weberpenn.controls import CONTROLS
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def wait_ready(client: httpx.Client) -> None:

@@ -10,7 +10,7 @@ times ``GET /health`` every 20 ms and another reads the server process's residen
 100 ms and the server under 250 MB throughout.  A second round does the same with one
 10 MB file part (random bytes: parsed in full, then refused as no image).
 
-    PYTHONPATH=$PWD .venv/bin/python benchmarks/bench_hostile.py --seconds 30
+    PYTHONPATH=$PWD .venv/bin/python benchmarks/service/bench_hostile.py --seconds 30
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ from pathlib import Path
 import httpx
 import psutil
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 BOUNDARY = "hostilebench"
 
 

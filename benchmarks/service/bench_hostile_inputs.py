@@ -6,7 +6,7 @@
 2. ``treesketch predict`` with an output in a folder that takes no file: seconds to the
    exit-2 message (it used to come after the refinement).
 
-    PYTHONPATH=$PWD nice -n 10 .venv/bin/python benchmarks/bench_hostile_inputs.py \\
+    PYTHONPATH=$PWD nice -n 10 .venv/bin/python benchmarks/service/bench_hostile_inputs.py \\
         [--sizes 8000,32000,120000,999000] [--skip-cli]
 
 Prints one line per measurement.  Run it against another checkout by putting that
@@ -23,7 +23,7 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def preset_scan(sizes: list[int], folder: Path) -> None:

@@ -6,7 +6,7 @@ given; per kind of ``NONTREE_KINDS``, ``nontree_doodle(kind, seed)`` for seeds 0
 ``--others``-1: how often the warning is given (it should be, every time).  No refinement
 (``RefineSettings(refine=False)``): the estimate, its species and its warning.
 
-    PYTHONPATH=$PWD nice -n 10 .venv/bin/python benchmarks/doodle_first_estimate.py \\
+    PYTHONPATH=$PWD nice -n 10 .venv/bin/python benchmarks/probes/doodle_first_estimate.py \\
         [--trees 20] [--others 6] [--json FILE] [--checkpoint CK]
 """
 

@@ -9,7 +9,7 @@ and, with the 2-worker server, after 100 (the jobs past the timed ones run at
 ``--memory-budget`` to keep the run short).  The reference, measured first in the same
 run: the same pipeline in a bare loop in one process (no service).
 
-    PYTHONPATH=$PWD .venv/bin/python benchmarks/bench_service.py --jobs 40 --clients 8 \\
+    PYTHONPATH=$PWD .venv/bin/python benchmarks/service/bench_service.py --jobs 40 --clients 8 \\
         --budget 20 --workers 1,2 --memory-jobs 100 --reference 6
 """
 
@@ -28,9 +28,9 @@ from pathlib import Path
 import httpx
 import psutil
 
-from benchmarks.serve_process import FINISHED, ServeProcess
+from benchmarks.lib.serve_process import FINISHED, ServeProcess
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SKETCH = ROOT / "examples" / "sketch_maple.png"
 
 
