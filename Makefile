@@ -18,13 +18,15 @@ demo: $(STAMP)
 		--out $(OUT)/demo_tree.glb --params $(OUT)/demo_tree.json \
 		--preset $(OUT)/demo_tree_sapling.py --compare $(OUT)/demo_compare.png
 
-## Run the whole test suite (slow end-to-end tests included).
+## Run the whole test suite (slow end-to-end tests included) on two workers, each test
+## module on one of them (tests/conftest.py says why).
+XDIST := -n 2 --dist loadfile
 test: $(STAMP)
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q $(XDIST)
 
 ## Only the fast tests.
 test-fast: $(STAMP)
-	$(PY) -m pytest -q -m "not slow"
+	$(PY) -m pytest -q $(XDIST) -m "not slow"
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .

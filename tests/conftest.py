@@ -1,13 +1,37 @@
 """Fixtures shared by test modules: the service tests' drawing (``sketch``), and the page
 tests' (``tests/test_web*.py``) server, browser and page, whose helpers are in
-``web_helpers.py``.  A module may define its own fixture of the same name."""
+``web_helpers.py``.  A module may define its own fixture of the same name.
+
+``make test`` runs the suite on two workers (pytest-xdist, ``-n 2 --dist loadfile``: each
+module on one worker, so its module-scoped fixtures are made once and its tests run in
+order); the modules that start a Ray take turns (:func:`one_ray_at_a_time`)."""
 
 from __future__ import annotations
 
+import fcntl
 from collections.abc import Iterator
 from typing import Any
 
 import pytest
+
+# the modules that start a Ray of their own (a local cluster, then killed): one at a time,
+# whichever worker runs them (``make test`` runs two)
+RAY_MODULES = {"test_executor_cluster.py", "test_executor_ray.py", "test_service_ray.py"}
+
+
+@pytest.fixture(autouse=True, scope="module")
+def one_ray_at_a_time(
+    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+) -> Iterator[None]:
+    """A Ray module holds, while it runs, a lock every worker sees (beside the worker's
+    temporary folder: under xdist, in the run's own); the other modules take none."""
+    if request.path.name not in RAY_MODULES:
+        yield
+        return
+    lock = tmp_path_factory.getbasetemp().parent / "ray-tests.lock"
+    with lock.open("w") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)  # released when the file closes
+        yield
 
 
 @pytest.fixture(scope="session")

@@ -27,6 +27,11 @@ SMALL = {
 }
 
 
+# the test tools' own caches: another worker's tests (``make test`` runs two) write them
+# while a notebook runs
+CACHES = (".pytest_cache", ".hypothesis")
+
+
 def _runner():
     spec = importlib.util.spec_from_file_location(
         "run_notebooks", ROOT / "scripts" / "run_notebooks.py"
@@ -47,7 +52,7 @@ def _checkout_files() -> set[str]:
         capture_output=True, text=True, check=True,
     )  # fmt: skip
     names = set(out.stdout.splitlines()) | set(ignored.stdout.splitlines())
-    return {n for n in names if "__pycache__" not in n and not n.startswith(".pytest_cache")}
+    return {n for n in names if "__pycache__" not in n and not n.startswith(CACHES)}
 
 
 @pytest.mark.slow
