@@ -5,7 +5,9 @@ together or not at all (``treesketch.outputs.write_outputs``)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import typer
 
@@ -18,6 +20,9 @@ from .cli_common import (
     preset_option,
     textures_option,
 )
+
+if TYPE_CHECKING:
+    from .pipeline import Progress, Result
 
 __all__ = ["predict_command", "register"]
 
@@ -112,84 +117,113 @@ def predict_command(
     Example: `treesketch predict examples/sketch_maple.png --out tree.glb --compare cmp.png`.
     """
     from weberpenn import species as wp_species
+
+    from .estimators import load_estimator
+    from .outputs import ExportOptions, write_outputs
+    from .pipeline import Pipeline, SketchError, check_height
+
+    # every option first: nothing is read, estimated or refined before they all pass
+    files = (out, params_path, preset_path, compare_path, summary_path)
+    outputs = dict(zip(OUTPUT_OPTIONS, files, strict=True))
+    _check_outputs(outputs, textures, preview_dir)
+    _check_estimator(estimator, checkpoint)
+    try:
+        settings = _settings(no_refine, algorithm, embedding, budget, time_limit)
+        check_height(height)
+        name = None if species_name is None else wp_species.canonical(species_name)
+        export = ExportOptions(face_view, max_faces, textures).validate()
+        drawing = _read_drawings(sketch, view)
+        pipeline = Pipeline(load_estimator(estimator, checkpoint=checkpoint, data=data), settings)
+    except (SketchError, ValueError) as exc:
+        fail(_option_message(str(exc)))
+    bar, on_progress = _progress_bar(settings.budget, quiet or no_refine, preview_dir)
+    try:
+        with bar:
+            result = pipeline.run(drawing, height=height, progress=on_progress, species=name)
+        written = write_outputs(result, outputs, export)
+    except (SketchError, ValueError) as exc:
+        fail(str(exc))
+    except OSError as exc:
+        fail(f"cannot write the outputs: {exc.strerror or exc} ({exc.filename or ''})")
+    _report(result, written)
+
+
+# what each output option takes: its kind in ``write_outputs`` and its file endings
+OUTPUT_OPTIONS = {
+    "mesh": ("--out", (".glb", ".obj")),
+    "json": ("--params", (".json",)),
+    "preset": ("--preset", (".py",)),
+    "compare": ("--compare", (".png",)),
+    "summary": ("--summary", (".json",)),
+}
+
+
+def _check_outputs(outputs: dict[str, Path | None], textures: bool, preview: Path | None) -> None:
+    """Each output's file ending, and a folder, two outputs on one file or a folder that
+    takes no file refused now, not after minutes of refinement."""
     from weberpenn.export import mesh_paths
     from weberpenn.fileio import OutputError, check_targets
 
-    from .estimators import ESTIMATORS, load_estimator
-    from .outputs import ExportOptions, write_outputs
-    from .pipeline import (
-        Pipeline,
-        Progress,
-        RefineSettings,
-        SketchError,
-        check_height,
-        load_sketch,
-    )
-    from .views import SketchView, as_views, parse_view
-
-    # every option first: nothing is read, estimated or refined before they all pass
-    outputs = {
-        "mesh": out,
-        "json": params_path,
-        "preset": preset_path,
-        "compare": compare_path,
-        "summary": summary_path,
-    }
-    named = [
-        ("--out", out, (".glb", ".obj")),
-        ("--params", params_path, (".json",)),
-        ("--preset", preset_path, (".py",)),
-        ("--compare", compare_path, (".png",)),
-        ("--summary", summary_path, (".json",)),
-    ]
-    for opt, p, exts in named:
-        if p is None:
-            continue
-        if p.suffix.lower() not in exts:
+    for kind, (opt, exts) in OUTPUT_OPTIONS.items():
+        p = outputs[kind]
+        if p is not None and p.suffix.lower() not in exts:
             fail(f"{opt} {p}: expected a {' or '.join(exts)} file")
-    # a folder, two outputs on one file, a folder that takes no file: now, not after
-    # minutes of refinement
+    targets = {"--out": mesh_paths(outputs["mesh"], textures=textures)}
+    for kind, (opt, _) in OUTPUT_OPTIONS.items():
+        if kind != "mesh" and outputs[kind] is not None:
+            targets[opt] = [outputs[kind]]
+    if preview is not None:
+        targets["--preview"] = [preview / "tree.glb", preview / "sketch.png"]
     try:
-        check_targets(
-            {
-                "--out": mesh_paths(out, textures=textures),
-                **{opt: [p] for opt, p, _ in named[1:] if p is not None},
-                **(
-                    {}
-                    if preview_dir is None
-                    else {"--preview": [preview_dir / "tree.glb", preview_dir / "sketch.png"]}
-                ),
-            }
-        )
+        check_targets(targets)
     except OutputError as exc:
         fail(str(exc))
+
+
+def _settings(
+    no_refine: bool,
+    algorithm: str,
+    embedding: str,
+    budget: int | None,
+    time_limit: float | None,
+) -> RefineSettings:
+    """The refinement settings the options ask for, checked (ValueError names the one)."""
+    settings = RefineSettings(refine=not no_refine, algorithm=algorithm, embedding=embedding)
+    if budget is not None:
+        settings = settings.replace(budget=budget)
+    if time_limit is not None:
+        settings = settings.replace(time_limit=time_limit)
+    return settings.validate()
+
+
+def _check_estimator(estimator: str, checkpoint: Path | None) -> None:
+    """A known estimator, and a checkpoint only for TSN."""
+    from .estimators import ESTIMATORS
+
     if estimator not in ESTIMATORS:
         fail(f"--estimator {estimator!r}: choose one of {', '.join(ESTIMATORS)}")
     if checkpoint is not None and estimator != "tsn":
         fail("--checkpoint is for --estimator tsn")
-    try:
-        settings = RefineSettings(
-            refine=not no_refine,
-            algorithm=algorithm,
-            embedding=embedding,
-        )
-        if budget is not None:
-            settings = settings.replace(budget=budget)
-        if time_limit is not None:
-            settings = settings.replace(time_limit=time_limit)
-        settings.validate()
-        check_height(height)
-        if species_name is not None:
-            species_name = wp_species.canonical(species_name)
-        export = ExportOptions(face_view, max_faces, textures).validate()
-        image = load_sketch(sketch)
-        others = [parse_view(v) for v in view]
-        drawing = [image, *[SketchView(load_sketch(v.source), v.yaw) for v in others]]
-        as_views(drawing)  # the number of views, now
-        pipeline = Pipeline(load_estimator(estimator, checkpoint=checkpoint, data=data), settings)
-    except (SketchError, ValueError) as exc:
-        fail(_option_message(str(exc)))
 
+
+def _read_drawings(sketch: Path, view: list[str]) -> Any:
+    """The drawing, or the drawing and its ``--view`` drawings (read now, and their
+    number checked): what ``Pipeline.run`` takes."""
+    from .pipeline import load_sketch
+    from .views import SketchView, as_views, parse_view
+
+    image = load_sketch(sketch)
+    others = [parse_view(v) for v in view]
+    drawing = [image, *[SketchView(load_sketch(v.source), v.yaw) for v in others]]
+    as_views(drawing)  # the number of views, now
+    return drawing if others else image
+
+
+def _progress_bar(
+    budget: int, hidden: bool, preview_dir: Path | None
+) -> tuple[Any, Callable[[Progress], None]]:
+    """The refinement's progress bar and the callback that moves it (and keeps the
+    ``--preview`` folder's tree the current best)."""
     from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
     from rich.progress import Progress as Bar
 
@@ -199,10 +233,10 @@ def predict_command(
         TextColumn("{task.completed}/{task.total} trees"),
         TextColumn("loss {task.fields[loss]}"),
         TimeElapsedColumn(),
-        disable=quiet or no_refine,
+        disable=hidden,
         transient=False,
     )
-    task = bar.add_task("refine", total=settings.budget, loss="-")
+    task = bar.add_task("refine", total=budget, loss="-")
     preview = None
     if preview_dir is not None:
         # the service's writer: the page's preview and the add-on's are one tree
@@ -217,20 +251,12 @@ def predict_command(
         if preview is not None:
             preview.offer(p)
 
-    try:
-        with bar:
-            result = pipeline.run(
-                drawing if others else image,
-                height=height,
-                progress=on_progress,
-                species=species_name,
-            )
-        written = write_outputs(result, outputs, export)
-    except (SketchError, ValueError) as exc:
-        fail(str(exc))
-    except OSError as exc:
-        fail(f"cannot write the outputs: {exc.strerror or exc} ({exc.filename or ''})")
+    return bar, on_progress
 
+
+def _report(result: Result, written: list[Path]) -> None:
+    """What the run found, on the terminal: species, distances, views, candidates, the
+    tree's size, the warning and the files written."""
     r = result.refinement
     typer.echo(
         f"species: {result.species} (first estimate: {result.estimator}); view yaw {result.yaw:.0f}"
