@@ -271,7 +271,40 @@ def build_report(
     else:
         sweeping = pipeline.with_settings(refine=False)
 
-    sweeps = {}
+    sweeps = _rotation_sweeps(
+        data, out, by_species, sweeping, rotation_species, split, rotation_step,
+        rotation_size, samples, bar, executor,
+    )  # fmt: skip
+
+    md = _markdown(
+        backend, scores, trees, floors, acc, sweeps, rows, per_species, refine_budget,
+        rotation_step, rotation_refine_budget, samples, split, command,
+        time.perf_counter() - t_start,
+    )  # fmt: skip
+    from weberpenn.fileio import atomic_write
+
+    path = out / "README.md"
+    atomic_write(path, md)
+    atomic_write(out / "results.json", _results_json(scores, trees, floors, acc, sweeps))
+    return path
+
+
+def _rotation_sweeps(
+    data: Path,
+    out: Path,
+    by_species: Mapping[str, list[dict]],
+    sweeping: Any,
+    rotation_species: Sequence[str] | None,
+    split: str,
+    rotation_step: float,
+    rotation_size: int,
+    samples: int,
+    bar: bool,
+    executor: Any,
+) -> dict[str, tuple[str, dict]]:
+    """Each species' first test tree turned about its trunk (``eval.rotation``): its CSV
+    and pictures into ``out``; per species the tree's id and the sweep's summary."""
+    sweeps: dict[str, tuple[str, dict]] = {}
     for sp in rotation_species if rotation_species is not None else list(by_species):
         if sp not in by_species:
             raise ValueError(f"no {split} tree of species {sp!r} for the rotation sweep")
@@ -298,46 +331,41 @@ def build_report(
         plot_sweep(res, out / f"rotation_{sp}.png", title=f"{sp} ({r['tree_id']})")
         plot_cases(res, out / f"rotation_cases_{sp}.png")
         sweeps[sp] = (r["tree_id"], res.summary())
+    return sweeps
 
-    md = _markdown(
-        backend, scores, trees, floors, acc, sweeps, rows, per_species, refine_budget,
-        rotation_step, rotation_refine_budget, samples, split, command,
-        time.perf_counter() - t_start,
-    )  # fmt: skip
-    from weberpenn.fileio import atomic_write
 
-    path = out / "README.md"
-    atomic_write(path, md)
-    atomic_write(
-        out / "results.json",
-        json.dumps(
-            {
-                "one_minus_rmse": {
-                    k: {**s.heads, "overall": s.overall, "n": s.n} for k, s in scores.items()
-                },
-                "hausdorff": [
-                    {
-                        "species": t.species,
-                        "tree_id": t.tree_id,
-                        "tsn": {p: t.tsn[p].to_dict() for p in PARTS},
-                        "refined": {p: t.refined[p].to_dict() for p in PARTS}
-                        if t.refined
-                        else None,
-                        "loss_before": t.loss_before,
-                        "loss_after": t.loss_after,
-                        "aligned_max_norm": {"tsn": t.tsn_aligned, "refined": t.refined_aligned},
-                    }
-                    for t in trees
-                ],
-                "seed_floor": {sp: {p: f[p].to_dict() for p in PARTS} for sp, f in floors.items()},
-                "species_accuracy": acc,
-                "rotation": {sp: {"tree_id": tid, **s} for sp, (tid, s) in sweeps.items()},
+def _results_json(
+    scores: Mapping[str, Scores],
+    trees: Sequence[Any],
+    floors: Mapping[str, Any],
+    acc: Any,
+    sweeps: Mapping[str, tuple[str, dict]],
+) -> str:
+    """The report's numbers as JSON (``results.json``)."""
+    return json.dumps(
+        {
+            "one_minus_rmse": {
+                k: {**s.heads, "overall": s.overall, "n": s.n} for k, s in scores.items()
             },
-            indent=1,
-            default=float,
-        ),
+            "hausdorff": [
+                {
+                    "species": t.species,
+                    "tree_id": t.tree_id,
+                    "tsn": {p: t.tsn[p].to_dict() for p in PARTS},
+                    "refined": {p: t.refined[p].to_dict() for p in PARTS} if t.refined else None,
+                    "loss_before": t.loss_before,
+                    "loss_after": t.loss_after,
+                    "aligned_max_norm": {"tsn": t.tsn_aligned, "refined": t.refined_aligned},
+                }
+                for t in trees
+            ],
+            "seed_floor": {sp: {p: f[p].to_dict() for p in PARTS} for sp, f in floors.items()},
+            "species_accuracy": acc,
+            "rotation": {sp: {"tree_id": tid, **s} for sp, (tid, s) in sweeps.items()},
+        },
+        indent=1,
+        default=float,
     )
-    return path
 
 
 def _comparison_note(backend: Scorer, scores: Mapping[str, Scores]) -> str:
