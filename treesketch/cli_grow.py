@@ -5,10 +5,14 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import typer
 
 from .cli_common import fail, max_faces_option, preset_option, textures_option
+
+if TYPE_CHECKING:
+    from weberpenn import TreeParams
 
 
 def grow_command(
@@ -73,11 +77,11 @@ def grow_command(
     `treesketch grow --params tree.json --out tree.obj --max-faces 20000`,
     `treesketch grow --params tree.json --set crown_width=1.3 --set seed=7 --out tree.glb`.
     """
-    from weberpenn import build_mesh, grow, load_params, species
-    from weberpenn.controls import check_controls, grow_with_controls
-    from weberpenn.export import mesh_files, mesh_paths, preset_text
-    from weberpenn.fileio import OutputError, check_targets, write_together
-    from weberpenn.lod import check_budget, lod
+    from weberpenn import build_mesh, grow
+    from weberpenn.controls import grow_with_controls
+    from weberpenn.export import mesh_files, preset_text
+    from weberpenn.fileio import write_together
+    from weberpenn.lod import lod
     from weberpenn.params import ParamError, params_text
 
     if (species_name is None) == (params_path is None):
@@ -85,58 +89,11 @@ def grow_command(
     suffix = out.suffix.lower()
     if suffix not in (".glb", ".obj"):
         fail(f"--out {out}: unknown mesh format {suffix or '(none)'!r}; use .glb or .obj")
-    budgets: list[int] = []
-    if lods is not None:
-        try:
-            budgets = [int(x) for x in lods.split(",") if x.strip()]
-        except ValueError:
-            fail(f"--lods {lods!r}: give triangle counts separated by commas, e.g. 50000,10000")
-        if not budgets:
-            fail(f"--lods {lods!r}: give at least one triangle count")
-    # every triangle budget in range before the tree is grown (the exporters' own check)
-    asked = [] if max_faces is None else [("--max-faces", max_faces)]
-    for opt, budget in [*asked, *((f"--lods {lods!r}", b) for b in budgets)]:
-        try:
-            check_budget(budget)
-        except ValueError as exc:
-            fail(f"{opt}: {exc}")
-    # every output before any work: a folder, a clash or a folder that takes no file
-    # fails now, not after the tree is grown and half the files are written
-    lod_outs = [out.with_name(f"{out.stem}_lod{i}{out.suffix}") for i in range(1, len(budgets) + 1)]
+    budgets = _lod_budgets(lods, max_faces)
+    lod_outs = _check_outputs(out, budgets, textures, save_params_path, preset_path)
+    checked = _controls(settings)
     try:
-        check_targets(
-            {
-                "--out": mesh_paths(out, textures=textures),
-                **{
-                    f"--lods ({b})": mesh_paths(p, textures=textures)
-                    for b, p in zip(budgets, lod_outs, strict=True)
-                },
-                "--save-params": [] if save_params_path is None else [save_params_path],
-                "--preset": [] if preset_path is None else [preset_path],
-            }
-        )
-    except OutputError as exc:
-        fail(str(exc))
-    controls: dict[str, str] = {}
-    for item in settings:
-        key, eq, value = item.partition("=")
-        if not eq or not key.strip():
-            fail(f"--set {item!r}: give NAME=VALUE, e.g. --set crown_width=1.3")
-        controls[key.strip()] = value.strip()
-    try:
-        checked = check_controls(controls)
-    except ValueError as exc:
-        fail(f"--set: {exc}")
-    name: str | None = None
-    try:
-        if species_name is not None:
-            name = species.canonical(species_name)
-            params = species.sample(name, 0 if seed is None else seed)
-        else:
-            assert params_path is not None
-            params = load_params(params_path)
-            if seed is not None:
-                params = params.replace(seed=seed)
+        params, name = _start(species_name, params_path, seed)
         t0 = time.perf_counter()
         if checked:
             params, full = grow_with_controls(params, checked, name)
@@ -163,6 +120,90 @@ def grow_command(
         f"{out}: {len(tree.branches.faces)} branch faces, {len(tree.leaves.faces)} leaf faces "
         f"(grow+mesh {dt:.2f} s)"
     )
+
+
+def _lod_budgets(lods: str | None, max_faces: int | None) -> list[int]:
+    """The ``--lods`` triangle counts, each (and ``--max-faces``) in range before the
+    tree is grown (the exporters' own check)."""
+    from weberpenn.lod import check_budget
+
+    budgets: list[int] = []
+    if lods is not None:
+        try:
+            budgets = [int(x) for x in lods.split(",") if x.strip()]
+        except ValueError:
+            fail(f"--lods {lods!r}: give triangle counts separated by commas, e.g. 50000,10000")
+        if not budgets:
+            fail(f"--lods {lods!r}: give at least one triangle count")
+    asked = [] if max_faces is None else [("--max-faces", max_faces)]
+    for opt, budget in [*asked, *((f"--lods {lods!r}", b) for b in budgets)]:
+        try:
+            check_budget(budget)
+        except ValueError as exc:
+            fail(f"{opt}: {exc}")
+    return budgets
+
+
+def _check_outputs(
+    out: Path,
+    budgets: list[int],
+    textures: bool,
+    save_params_path: Path | None,
+    preset_path: Path | None,
+) -> list[Path]:
+    """Every output before any work (a folder, a clash or a folder that takes no file
+    fails now, not after the tree is grown and half the files are written); the level of
+    detail files' paths, one per budget."""
+    from weberpenn.export import mesh_paths
+    from weberpenn.fileio import OutputError, check_targets
+
+    lod_outs = [out.with_name(f"{out.stem}_lod{i}{out.suffix}") for i in range(1, len(budgets) + 1)]
+    try:
+        check_targets(
+            {
+                "--out": mesh_paths(out, textures=textures),
+                **{
+                    f"--lods ({b})": mesh_paths(p, textures=textures)
+                    for b, p in zip(budgets, lod_outs, strict=True)
+                },
+                "--save-params": [] if save_params_path is None else [save_params_path],
+                "--preset": [] if preset_path is None else [preset_path],
+            }
+        )
+    except OutputError as exc:
+        fail(str(exc))
+    return lod_outs
+
+
+def _controls(settings: list[str]) -> dict[str, Any]:
+    """The ``--set NAME=VALUE`` controls, checked (``weberpenn.controls``)."""
+    from weberpenn.controls import check_controls
+
+    controls: dict[str, str] = {}
+    for item in settings:
+        key, eq, value = item.partition("=")
+        if not eq or not key.strip():
+            fail(f"--set {item!r}: give NAME=VALUE, e.g. --set crown_width=1.3")
+        controls[key.strip()] = value.strip()
+    try:
+        return check_controls(controls)
+    except ValueError as exc:
+        fail(f"--set: {exc}")
+
+
+def _start(
+    species_name: str | None, params_path: Path | None, seed: int | None
+) -> tuple[TreeParams, str | None]:
+    """The tree to grow: the species' sample of ``seed`` (0 when none), or the parameter
+    file (its seed replaced when one is given); and the species when named."""
+    from weberpenn import load_params, species
+
+    if species_name is not None:
+        name = species.canonical(species_name)
+        return species.sample(name, 0 if seed is None else seed), name
+    assert params_path is not None
+    params = load_params(params_path)
+    return (params if seed is None else params.replace(seed=seed)), None
 
 
 def controls_command() -> None:
