@@ -314,32 +314,15 @@ def refine(
     mean over all views.  A view whose yaw is None gets the turn (every 15 degrees) at
     which the start tree fits it best, before the search starts.
     """
-    import nlopt
-
     t0 = time.perf_counter()
     cfg = (settings or RefineSettings()).validate()
     budget = int(cfg.budget)
-    alg_name = str(cfg.algorithm).lower()
     if not isinstance(initial_params, TreeParams):
         initial_params = TreeParams(initial_params)
     from weberpenn import species as _species
 
     name = _species.canonical(species) if species else guess_species(initial_params)
-    if isinstance(sketch, PreparedDrawing):  # prepared once by the caller (the pipeline)
-        drawing = sketch.check(cfg.size, cfg.metric)
-        if embedder is not None and embedder is not drawing.embedder:
-            raise ValueError("the drawing was prepared with another embedder")
-    else:
-        if embedder is None:
-            embedder = cfg.load_embedder()
-        drawing = PreparedDrawing.create(sketch, cfg.size, cfg.metric, embedder)
-    embedder, target = drawing.embedder, drawing.target
-    for v in views:
-        v.drawing.check(cfg.size, cfg.metric)
-        if v.drawing.embedder is not embedder:
-            raise ValueError("every view must be prepared with the same embedder")
-        if v.yaw is not None and not _finite(v.yaw):
-            raise ValueError(f"a view's yaw must be a finite number of degrees, got {v.yaw!r}")
+    drawing = _checked_drawing(sketch, cfg, embedder, views)
     deadline = None if cfg.time_limit is None else t0 + float(cfg.time_limit)
     if yaw is None and not cfg.search_yaw:
         yaw = 0.0
@@ -352,121 +335,200 @@ def refine(
     # costs the local search evaluations of its first model and drifts without a signal
     space = space.live()
     obj = SketchObjective(
-        target,
+        drawing.target,
         space,
         metric=cfg.metric,
         yaw_prior=0.0,
         yaw_weight=YAW_WEIGHT,
         fast=cfg.fast_sketch,
-        embedder=embedder,
+        embedder=drawing.embedder,
     )
     if views:
         turns = _view_turns(obj, space.from_params(initial_params, yaw or 0.0), views)
         obj.others = tuple((v.drawing.target, t) for v, t in zip(views, turns, strict=True))
-    stopped = ["tolerance"]
+    run = _Run(obj, budget, deadline, cancel, progress, on_best)
+    start = _Start(space.from_params(initial_params, yaw or 0.0), float(yaw or 0.0))
+    try:
+        _find_start(run, space, start, yaw)  # 1. the start point, at several views
+        _local_search(run, space, str(cfg.algorithm).lower(), start.x)  # 2. from the best
+    except _Stop:
+        pass
+    if cancel is not None and run.stopped.startswith("nlopt") and cancel():
+        raise Cancelled("refinement cancelled")  # nlopt swallowed the exception
+    return _result(run, space, start, views, name, t0)
 
-    def out_of_budget() -> str | None:
-        if obj.evaluations >= budget:
+
+def _checked_drawing(
+    sketch: Any, cfg: RefineSettings, embedder: Any, views: Sequence[OtherView]
+) -> PreparedDrawing:
+    """The drawing as the search compares with it (prepared here unless the caller did,
+    for these settings), and every other view checked against it."""
+    if isinstance(sketch, PreparedDrawing):  # prepared once by the caller (the pipeline)
+        drawing = sketch.check(cfg.size, cfg.metric)
+        if embedder is not None and embedder is not drawing.embedder:
+            raise ValueError("the drawing was prepared with another embedder")
+    else:
+        if embedder is None:
+            embedder = cfg.load_embedder()
+        drawing = PreparedDrawing.create(sketch, cfg.size, cfg.metric, embedder)
+    for v in views:
+        v.drawing.check(cfg.size, cfg.metric)
+        if v.drawing.embedder is not drawing.embedder:
+            raise ValueError("every view must be prepared with the same embedder")
+        if v.yaw is not None and not _finite(v.yaw):
+            raise ValueError(f"a view's yaw must be a finite number of degrees, got {v.yaw!r}")
+    return drawing
+
+
+class _Run:
+    """One search's evaluations within its budget and time: each new tree asks
+    ``cancel`` first, and tells ``on_best`` (a better tree) and ``progress`` after;
+    ``stopped`` says what ended the search."""
+
+    def __init__(
+        self,
+        obj: SketchObjective,
+        budget: int,
+        deadline: float | None,
+        cancel: Callable[[], bool] | None,
+        progress: Progress | None,
+        on_best: OnBest | None,
+    ) -> None:
+        self.obj, self.budget, self.deadline = obj, budget, deadline
+        self.cancel, self.progress, self.on_best = cancel, progress, on_best
+        self.stopped = "tolerance"
+
+    def out_of_budget(self) -> str | None:
+        if self.obj.evaluations >= self.budget:
             return "budget"
-        if deadline is not None and time.perf_counter() >= deadline:
+        if self.deadline is not None and time.perf_counter() >= self.deadline:
             return "time"
         return None
 
-    def evaluate(x: Sequence[float]) -> float:
+    def evaluate(self, x: Sequence[float]) -> float:
+        obj = self.obj
         hit = obj.cached(x)
         if hit is not None:  # free: no new tree
             return hit
-        if cancel is not None and cancel():
+        if self.cancel is not None and self.cancel():
             raise Cancelled("refinement cancelled")
-        why = out_of_budget() if obj.evaluations > 0 else None  # the start is always seen
+        why = self.out_of_budget() if obj.evaluations > 0 else None  # the start is always seen
         if why is not None:
-            stopped[0] = why
+            self.stopped = why
             raise _Stop(why)
         n_before, best_before = obj.evaluations, obj.best_loss
         loss = obj(x)
-        if on_best is not None and obj.best_loss < best_before and obj.best_params is not None:
-            on_best(obj.best_params, obj.best_yaw, obj.best_sketch_loss)
-        if progress is not None and obj.evaluations != n_before:
-            progress(obj.evaluations, obj.best_loss)
+        if self.on_best is not None and obj.best_loss < best_before and obj.best_params is not None:
+            self.on_best(obj.best_params, obj.best_yaw, obj.best_sketch_loss)
+        if self.progress is not None and obj.evaluations != n_before:
+            self.progress(obj.evaluations, obj.best_loss)
         return loss
 
-    # 1. the start point, at several views
-    x0 = space.from_params(initial_params, yaw or 0.0)
-    loss_before = start_total = math.inf
-    start_yaw = float(yaw or 0.0)
+
+@dataclass
+class _Start:
+    """The search's start point (search coordinates), seen from ``yaw``, and its sketch
+    distance (inf until evaluated); filled in as the start is found."""
+
+    x: np.ndarray
+    yaw: float
+    loss: float = math.inf
+
+
+def _find_start(run: _Run, space: SearchSpace, start: _Start, yaw: float | None) -> None:
+    """The start tree at several views (the given one alone when ``yaw`` is), the best
+    kept in ``start``; then the trunk's bends tried from there (and from the opposite
+    side when the budget keeps enough after them)."""
+    obj, budget = run.obj, run.budget
+    start_total = math.inf
     yaws = START_YAWS if yaw is None else (float(yaw),)
     start_cap = max(1, budget // 3)
 
     def at_view(y: float) -> np.ndarray:
-        x = x0.copy()
+        x = start.x.copy()
         if space.search_yaw:
             x[-1] = (y % 360.0) / 360.0
         return x
 
+    for i, y in enumerate(yaws):
+        if i > 0 and (obj.evaluations >= start_cap or run.out_of_budget()):
+            break
+        x = at_view(y)
+        loss = run.evaluate(x)  # sketch distance + the view's penalty
+        if loss < start_total:
+            start_total, start.yaw = loss, y
+            start.loss = obj.sketch_loss(x)  # the sketch distance alone
+    start.x = at_view(start.yaw)
+    bent = bend_starts(space, start.x)
+    if bent and space.search_yaw:
+        # the start view was chosen with the estimate's bend, whose sign the network
+        # often reads wrongly; a trunk bent the other way fits best from the opposite
+        # side, so the bends are tried there too, when the local search keeps enough
+        # of the budget after them (a small budget does better spent on it)
+        mirrored = bend_starts(space, at_view(start.yaw + 180.0))
+        left = budget - obj.evaluations - len(bent) - len(mirrored)
+        if left >= MIRROR_RESERVE * len(mirrored):
+            bent += mirrored
+    for x in bent:  # the best point seen is the local search's start
+        if run.out_of_budget():
+            break
+        run.evaluate(x)
+
+
+def _local_search(run: _Run, space: SearchSpace, alg_name: str, x0: np.ndarray) -> None:
+    """nlopt's local search from the best point seen (``x0`` when none), within what is
+    left of the budget and the time."""
+    import nlopt
+
+    obj = run.obj
+    local = getattr(nlopt, ALGORITHMS[alg_name])
+    if local == nlopt.LN_BOBYQA and space.n < 2:
+        local = nlopt.LN_COBYLA
+    if space.n == 0:  # nothing to search: the start point is the answer
+        return
+    if run.out_of_budget() is not None:
+        run.stopped = run.out_of_budget() or run.stopped
+        return
+    nlopt.srand(0)  # the local algorithms draw nothing at random; kept reproducible
+    opt = nlopt.opt(local, space.n)
+    opt.set_lower_bounds(np.zeros(space.n))
+    opt.set_upper_bounds(np.ones(space.n))
+    opt.set_min_objective(lambda x, grad: run.evaluate(x))
+    opt.set_maxeval(int(run.budget - obj.evaluations + obj.cache_size + 5))
+    if run.deadline is not None:
+        opt.set_maxtime(max(1e-3, run.deadline - time.perf_counter()))
+    opt.set_initial_step(np.full(space.n, INITIAL_STEP))
+    opt.set_xtol_abs(np.full(space.n, XTOL))
+    opt.set_ftol_abs(1e-6)
+    start = obj.best_x if obj.best_x is not None else x0
     try:
-        for i, y in enumerate(yaws):
-            if i > 0 and (obj.evaluations >= start_cap or out_of_budget()):
-                break
-            x = at_view(y)
-            loss = evaluate(x)  # sketch distance + the view's penalty
-            if loss < start_total:
-                start_total, start_yaw = loss, y
-                loss_before = obj.sketch_loss(x)  # the sketch distance alone
-        x0 = at_view(start_yaw)
-        bent = bend_starts(space, x0)
-        if bent and space.search_yaw:
-            # the start view was chosen with the estimate's bend, whose sign the network
-            # often reads wrongly; a trunk bent the other way fits best from the opposite
-            # side, so the bends are tried there too, when the local search keeps enough
-            # of the budget after them (a small budget does better spent on it)
-            mirrored = bend_starts(space, at_view(start_yaw + 180.0))
-            left = budget - obj.evaluations - len(bent) - len(mirrored)
-            if left >= MIRROR_RESERVE * len(mirrored):
-                bent += mirrored
-        for x in bent:  # the best point seen is the local search's start
-            if out_of_budget():
-                break
-            evaluate(x)
-        # 2. the local search from the best point seen
-        local = getattr(nlopt, ALGORITHMS[alg_name])
-        if local == nlopt.LN_BOBYQA and space.n < 2:
-            local = nlopt.LN_COBYLA
-        if space.n == 0:  # nothing to search: the start point is the answer
-            pass
-        elif out_of_budget() is not None:
-            stopped[0] = out_of_budget() or stopped[0]
-        else:
-            nlopt.srand(0)  # the local algorithms draw nothing at random; kept reproducible
-            opt = nlopt.opt(local, space.n)
-            opt.set_lower_bounds(np.zeros(space.n))
-            opt.set_upper_bounds(np.ones(space.n))
-            opt.set_min_objective(lambda x, grad: evaluate(x))
-            opt.set_maxeval(int(budget - obj.evaluations + obj.cache_size + 5))
-            if deadline is not None:
-                opt.set_maxtime(max(1e-3, deadline - time.perf_counter()))
-            opt.set_initial_step(np.full(space.n, INITIAL_STEP))
-            opt.set_xtol_abs(np.full(space.n, XTOL))
-            opt.set_ftol_abs(1e-6)
-            start = obj.best_x if obj.best_x is not None else x0
-            try:
-                opt.optimize(np.clip(np.asarray(start, dtype=np.float64), 0.0, 1.0))
-                stopped[0] = _nlopt_reason(opt.last_optimize_result())
-            except Cancelled:
-                raise
-            except _Stop:
-                pass
-            except (nlopt.ForcedStop, nlopt.RoundoffLimited):
-                stopped[0] = "nlopt stopped"
-            except RuntimeError as exc:  # nlopt's generic failure: keep the best seen
-                stopped[0] = f"nlopt: {exc}"
-            except ValueError as exc:
-                if "_Stop" not in repr(exc) and not isinstance(exc.__cause__, _Stop):
-                    stopped[0] = f"nlopt: {exc}"
+        opt.optimize(np.clip(np.asarray(start, dtype=np.float64), 0.0, 1.0))
+        run.stopped = _nlopt_reason(opt.last_optimize_result())
+    except Cancelled:
+        raise
     except _Stop:
         pass
-    if cancel is not None and stopped[0].startswith("nlopt") and cancel():
-        raise Cancelled("refinement cancelled")  # nlopt swallowed the exception
+    except (nlopt.ForcedStop, nlopt.RoundoffLimited):
+        run.stopped = "nlopt stopped"
+    except RuntimeError as exc:  # nlopt's generic failure: keep the best seen
+        run.stopped = f"nlopt: {exc}"
+    except ValueError as exc:
+        if "_Stop" not in repr(exc) and not isinstance(exc.__cause__, _Stop):
+            run.stopped = f"nlopt: {exc}"
 
+
+def _result(
+    run: _Run,
+    space: SearchSpace,
+    start: _Start,
+    views: Sequence[OtherView],
+    name: str,
+    t0: float,
+) -> RefineResult:
+    """The best tree seen (the start's when the view penalty made the best a worse
+    sketch match, or nothing fitted the budget) and its distances."""
+    obj, x0 = run.obj, start.x
+    loss_before, start_yaw = start.loss, start.yaw
     if obj.best_params is None:  # not even the start point fitted the budget/time
         loss_after = loss_before
         best_params, best_yaw = space.to_params(x0), start_yaw
@@ -491,7 +553,7 @@ def refine(
         trace=tuple(obj.trace),
         species=name,
         start_yaw=float(start_yaw),
-        stopped_by=stopped[0],
+        stopped_by=run.stopped,
         view_yaws=tuple(float(t) for _, t in obj.others),
         view_losses_before=view_before,
         view_losses_after=view_after,
