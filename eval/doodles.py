@@ -28,7 +28,15 @@ from PIL import Image, ImageDraw
 
 from .strokes import Stroke, arc, bumpy, curve, jag, line, wobble
 
-__all__ = ["NONTREE_KINDS", "SIZE", "TREE_SPECIES", "nontree_doodle", "tree_doodle"]
+__all__ = [
+    "NONTREE_KINDS",
+    "PALM_FORMS",
+    "SIZE",
+    "TREE_SPECIES",
+    "nontree_doodle",
+    "palm_doodle",
+    "tree_doodle",
+]
 
 #: The side of every doodle, in pixels.
 SIZE = 256
@@ -780,6 +788,148 @@ def _palm(rng: np.random.Generator) -> Strokes:
     return s
 
 
+# --------------------------------------------------------------------- palms as people draw them
+# a trunk (curved or straight, one line or two, often ringed) and 3-8 fronds from its top;
+# each form draws every frond the same way.  Strokes as above: the base near (0, 0), up -y.
+
+
+def _palm_trunk(rng: np.random.Generator) -> tuple[Strokes, tuple[float, float]]:
+    """A palm's trunk and its top: curved (most) or straight, one line or two, tapering, and
+    often ringed (short strokes across it, the mark people use to say "palm")."""
+    h = _u(rng, 170, 250)
+    bend = _u(rng, -70, 70) if _chance(rng, 0.7) else _u(rng, -8, 8)
+    t = np.linspace(0, 1, 16)
+    xs, ys = bend * t**2, -h * t
+    half = _u(rng, 5, 11) * (1 - 0.45 * t)
+    if _chance(rng, 0.25):  # one line, a quick doodle; rings as ticks across it
+        s = [np.stack([xs, ys], 1)]
+        if _chance(rng, 0.35):
+            ticks = zip(xs[2:-1:2], ys[2:-1:2], strict=True)
+            s += [line((x - 5, y + 1), (x + 5, y - 1)) for x, y in ticks]
+        return s, (bend, -h)
+    s = [np.stack([xs - half, ys], 1), np.stack([xs + half, ys], 1)]
+    if _chance(rng, 0.6):  # rings: short arcs or chevrons from side to side
+        every = int(rng.integers(1, 3))
+        sag = _u(rng, -4, 4)
+        for x, y, w in zip(xs[1:-1:every], ys[1:-1:every], half[1:-1:every], strict=True):
+            s.append(line((x - w, y), (x, y + sag), (x + w, y)))
+    return s, (bend, -h)
+
+
+def _frond_axis(
+    rng: np.random.Generator, top: tuple[float, float], k: int, n: int, burst: bool
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """The ``k``-th of ``n`` fronds: where it ends, the point its midline bows through, and
+    its length.  Fronds fan out sideways from the top, the outer ones drooping below it and
+    none quite upright (people draw a palm's fronds hanging); a burst's spikes go all round
+    but straight down."""
+    spread = _u(rng, 280, 320) if burst else _u(rng, 200, 250)
+    off = (k + 0.5) / n * 2 - 1  # -1 .. 1 across the fan
+    if not burst:  # keep clear of upright: at least a third of the half fan off vertical
+        off = math.copysign(0.35 + 0.65 * abs(off), off) if n > 1 else _u(rng, -1, 1)
+    a = math.radians(90 + off * spread / 2 + _u(rng, -6, 6))
+    reach = _u(rng, 55, 95) * (1.0 - 0.25 * math.sin(a))  # the upright ones a bit shorter
+    if burst:
+        reach *= _u(rng, 0.6, 0.85)
+    tip = np.array(top) + reach * np.array([math.cos(a), -math.sin(a)])
+    droop = 0.0 if burst else reach * _u(rng, 0.2, 0.45) * abs(math.cos(a))
+    tip[1] += droop
+    mid = (np.array(top) + tip) / 2 + np.array([0.0, -droop * 0.9 - _u(rng, 4, 12)])
+    return tip, mid, reach
+
+
+def _normals(pts: Stroke) -> np.ndarray:
+    """Unit normals to one side of a stroke's direction, one per point."""
+    d = np.gradient(pts, axis=0)
+    d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-9)
+    return np.stack([d[:, 1], -d[:, 0]], 1)
+
+
+def _leaf(top: tuple[float, float], mid: np.ndarray, tip: np.ndarray, width: float) -> Stroke:
+    """A closed pointed leaf: out along one side of the midline to the tip and back along
+    the other, widest a third of the way."""
+    axis = curve(top, tuple(mid), tuple(tip), 24)
+    s = np.linspace(0, 1, 24)
+    w = width * np.sin(np.pi * s**0.7)[:, None] * _normals(axis)
+    return np.concatenate([axis + w, (axis - w)[::-1]])
+
+
+def _jagged_leaf(
+    rng: np.random.Generator,
+    top: tuple[float, float],
+    mid: np.ndarray,
+    tip: np.ndarray,
+    width: float,
+) -> Stroke:
+    """A leaf whose edges are zigzags (the leaflets drawn as teeth), closed at the tip."""
+    teeth = int(rng.integers(3, 6))
+    axis = curve(top, tuple(mid), tuple(tip), 2 * teeth + 1)
+    s = np.linspace(0, 1, 2 * teeth + 1)
+    saw = np.where(np.arange(2 * teeth + 1) % 2 == 1, 1.0, 0.2)
+    w = (width * np.sin(np.pi * s**0.8) * saw)[:, None] * _normals(axis)
+    return np.concatenate([axis + w, (axis - w)[::-1]])
+
+
+def _palm_fronds(rng: np.random.Generator, form: str, top: tuple[float, float]) -> Strokes:
+    # a burst of fewer than six spikes reads as a cross or a windmill, not a palm
+    n = int(rng.integers(6, 9)) if form == "burst" else int(rng.integers(3, 9))
+    width = _u(rng, 8, 16)
+    rib = _chance(rng, 0.4)
+    s: Strokes = []
+    for k in range(n):
+        tip, mid, reach = _frond_axis(rng, top, k, n, form == "burst")
+        if form == "leaf":
+            s.append(_leaf(top, mid, tip, width * reach / 80))
+            if rib:  # the midrib drawn in
+                s.append(curve(top, tuple(mid), tuple(tip), 16))
+        elif form == "arc":
+            s.append(curve(top, tuple(mid + (0, -reach * 0.1)), tuple(tip), 24))
+        elif form == "jagged":
+            s.append(_jagged_leaf(rng, top, mid, tip, width * 1.3 * reach / 80))
+        else:  # burst: straight spikes, as narrow triangles or single lines
+            if rib:
+                s.append(line(top, tuple(tip)))
+            else:
+                d = tip - np.array(top)
+                nrm = np.array([d[1], -d[0]]) / max(float(np.hypot(*d)), 1e-9) * width * 0.45
+                s.append(line(tuple(np.array(top) + nrm), tuple(tip), tuple(np.array(top) - nrm)))
+    return s
+
+
+def _coconuts(rng: np.random.Generator, top: tuple[float, float]) -> Strokes:
+    """Two to four small circles hanging just under the fronds."""
+    r = _u(rng, 4, 7)
+    n = int(rng.integers(2, 5))
+    return [
+        _circle(top[0] + (k - (n - 1) / 2) * r * 1.9, top[1] + r * _u(rng, 0.9, 1.6), r, 14)
+        for k in range(n)
+    ]
+
+
+def _palm_ground(rng: np.random.Generator) -> Strokes:
+    """Where the palm stands, when drawn: a ground line, or an island's mound over the sea."""
+    w = _u(rng, 60, 110)
+    if _chance(rng, 0.5):
+        return [line((-w, _u(rng, 0, 3)), (w * _u(rng, 0.6, 1.1), _u(rng, -2, 4)))]
+    mound = arc(0, 8, w, _u(rng, 12, 22), 180, 360, 30)
+    s = [mound]
+    if _chance(rng, 0.6):  # the sea it rises from
+        xs = np.linspace(-w * 1.4, w * 1.4, 40)
+        s.append(np.stack([xs, 10 + 3 * np.sin(xs / 7)], 1))
+    return s
+
+
+def _people_palm(rng: np.random.Generator, form: str) -> Strokes:
+    """A palm the way people draw one, its fronds of one ``form`` of :data:`PALM_FORMS`."""
+    s, top = _palm_trunk(rng)
+    s += _palm_fronds(rng, form, top)
+    if _chance(rng, 0.35):
+        s += _coconuts(rng, top)
+    if _chance(rng, 0.35):
+        s += _palm_ground(rng)
+    return s
+
+
 def _bonsai(rng: np.random.Generator) -> Strokes:
     pw, ph = _u(rng, 80, 120), _u(rng, 22, 35)
     s = []
@@ -817,6 +967,10 @@ _TREES = _by_name(
 
 #: The species :func:`tree_doodle` draws: the project's eleven (``weberpenn.species.SPECIES``).
 TREE_SPECIES: tuple[str, ...] = tuple(_TREES)
+
+#: How :func:`palm_doodle` draws a palm's fronds: each a closed pointed leaf, a single
+#: drooping arc, a leaf with zigzag edges, or a straight spike of a star burst.
+PALM_FORMS: tuple[str, ...] = ("leaf", "arc", "jagged", "burst")
 
 
 # --------------------------------------------------------------------- the hand and the page
@@ -902,12 +1056,34 @@ def nontree_doodle(kind: str, seed: int) -> np.ndarray:
     return _page(_NONTREES[kind](rng), rng, (0.4, 0.9))
 
 
+def palm_doodle(form: str, seed: int) -> np.ndarray:
+    """A palm as people draw one, its fronds of ``form`` (one of :data:`PALM_FORMS`): a
+    ``(256, 256)`` uint8 image, 255 paper."""
+    if not isinstance(form, str) or form not in PALM_FORMS:
+        raise ValueError(f"unknown palm form {form!r}; one of {', '.join(PALM_FORMS)}")
+    rng = _rng("palm:" + form, seed)
+    return _page(_people_palm(rng, form), rng, (0.5, 0.92))
+
+
+def _variety(species: str, seed: int) -> str | None:
+    """Which drawing of ``species`` a seed gets besides the species' own: a palm form, or
+    None for the species' own drawer.  Drawn from a generator of its own, so a seed that
+    keeps the species' own drawer keeps its bytes from before the varieties came."""
+    rng = _rng("variety:" + species, seed)
+    if species == "palm" and _chance(rng, 0.5):
+        return PALM_FORMS[int(rng.integers(len(PALM_FORMS)))]
+    return None
+
+
 def tree_doodle(species: str, seed: int) -> np.ndarray:
     """A doodle of a tree of ``species`` as a person would draw one and name it: a
     ``(256, 256)`` uint8 image, 255 paper."""
     if not isinstance(species, str) or species not in _TREES:
         raise ValueError(f"unknown tree species {species!r}; one of {', '.join(TREE_SPECIES)}")
     rng = _rng("tree:" + species, seed)
+    variety = _variety(species, seed)
+    if variety in PALM_FORMS:
+        return _page(_people_palm(rng, variety), rng, (0.5, 0.92))
     strokes = _TREES[species](rng)
     if species != "bonsai" and _chance(rng, 0.1):  # a line for the ground
         w = _u(rng, 30, 80)

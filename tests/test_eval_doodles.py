@@ -8,7 +8,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from eval.doodles import NONTREE_KINDS, SIZE, TREE_SPECIES, nontree_doodle, tree_doodle
+from eval.doodles import (
+    NONTREE_KINDS,
+    PALM_FORMS,
+    SIZE,
+    TREE_SPECIES,
+    nontree_doodle,
+    palm_doodle,
+    tree_doodle,
+)
 from weberpenn.species import SPECIES
 
 SEEDS = range(24)
@@ -132,3 +140,78 @@ def test_tree_shapes_differ_by_species(shapes: dict[str, list[dict[str, float]]]
 def test_bad_input_is_refused_by_name(call, message: str) -> None:
     with pytest.raises(ValueError, match=message):
         call()
+
+
+# --------------------------------------------------------------------- palms as people draw them
+
+
+def _ink_rows(img: np.ndarray) -> np.ndarray:
+    return np.flatnonzero((img < 128).any(axis=1))
+
+
+def test_palm_forms_are_seeded_distinct_and_on_the_page() -> None:
+    assert PALM_FORMS == ("leaf", "arc", "jagged", "burst")
+    firsts = []
+    for form in PALM_FORMS:
+        a = palm_doodle(form, 7)
+        assert np.array_equal(a, palm_doodle(form, 7)), form
+        assert not np.array_equal(a, palm_doodle(form, 8)), form
+        firsts.append(a)
+        for seed in range(6):
+            _check_page(palm_doodle(form, seed), f"palm {form} {seed}")
+    # the same seed gives a different drawing in each form
+    for i in range(len(firsts)):
+        for j in range(i):
+            assert not np.array_equal(firsts[i], firsts[j])
+    assert np.array_equal(palm_doodle("arc", np.int64(2)), palm_doodle("arc", 2))
+
+
+def test_palm_crowns_sit_on_a_thin_trunk() -> None:
+    # the fronds spread wide at the top; the trunk below is narrow (unless a ground line or
+    # an island is drawn under it, which some seeds do)
+    for form in PALM_FORMS:
+        shapes = [_shape(palm_doodle(form, seed)) for seed in range(16)]
+        assert _median(shapes, "low") < 0.45, form
+        assert _median(shapes, "top") > 0.3, form
+        assert _median(shapes, "aspect") > 1.1, form
+
+
+def _palm_strokes(form: str, seed: int) -> list[np.ndarray]:
+    from eval.doodles import _people_palm, _rng  # the module's own test may look inside it
+
+    return _people_palm(_rng("palm:" + form, seed), form)
+
+
+def _is_coconut(st: np.ndarray) -> bool:
+    """A small closed round stroke (a coconut): ends together, a few units across."""
+    span = np.ptp(st, axis=0)
+    return bool(np.allclose(st[0], st[-1]) and 6 < span.min() <= span.max() < 16)
+
+
+def _is_ring(st: np.ndarray) -> bool:
+    """A short stroke across the trunk: a ring (three points, side to side, nearly level)."""
+    dx, dy = np.ptp(st, axis=0)
+    return len(st) <= 3 and 4 < dx < 25 and dy < 6
+
+
+def test_some_palms_have_coconuts_and_some_ringed_trunks() -> None:
+    with_nuts = with_rings = 0
+    for form in PALM_FORMS:
+        for seed in range(10):
+            strokes = _palm_strokes(form, seed)
+            with_nuts += any(_is_coconut(st) for st in strokes)
+            with_rings += sum(_is_ring(st) for st in strokes) >= 3
+    # sometimes, not always: about a third have coconuts, about half a ringed trunk
+    assert 5 <= with_nuts <= 30, with_nuts
+    assert 8 <= with_rings <= 32, with_rings
+
+
+def test_tree_doodle_palms_include_the_people_forms() -> None:
+    from eval.doodles import _variety  # the module's own test may look inside it
+
+    varieties = [_variety("palm", seed) for seed in range(40)]
+    assert None in varieties and set(PALM_FORMS) <= set(varieties)
+    assert all(_variety("oak", seed) not in PALM_FORMS for seed in range(40))
+    # a palm seed drawn with a people form is that form's drawing on the palm's own stream
+    seed = varieties.index("leaf")
+    _check_page(tree_doodle("palm", seed), "palm leaf")
