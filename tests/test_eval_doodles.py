@@ -215,3 +215,69 @@ def test_tree_doodle_palms_include_the_people_forms() -> None:
     # a palm seed drawn with a people form is that form's drawing on the palm's own stream
     seed = varieties.index("leaf")
     _check_page(tree_doodle("palm", seed), "palm leaf")
+
+
+# --------------------------------------------------------------------- broadleaves as people draw them
+
+
+def _people_seeds(species: str, n: int) -> list[int]:
+    from eval.doodles import _variety  # the module's own test may look inside it
+
+    return [k for k in range(400) if _variety(species, k) == "people"][:n]
+
+
+def test_people_trees_are_a_share_of_the_broadleaves_only() -> None:
+    from eval.doodles import _variety
+
+    for species in ("oak", "maple", "cherry"):
+        share = np.mean([_variety(species, k) == "people" for k in range(400)])
+        assert 0.25 < share < 0.6, (species, share)
+    for species in ("pine", "fir", "poplar", "willow", "birch", "winter", "bonsai"):
+        assert all(_variety(species, k) is None for k in range(100)), species
+
+
+def test_people_trees_are_seeded_on_the_page_and_mostly_centred() -> None:
+    for species in ("oak", "maple", "cherry"):
+        seeds = _people_seeds(species, 12)
+        a = tree_doodle(species, seeds[0])
+        assert np.array_equal(a, tree_doodle(species, seeds[0]))
+        for seed in seeds:
+            _check_page(tree_doodle(species, seed), f"people {species} {seed}")
+    # near the middle, as people draw; a few small in a corner
+    centres, sizes = [], []
+    for species, seed in [(s, k) for s in ("oak", "maple", "cherry") for k in _people_seeds(s, 30)]:
+        rows, cols = np.nonzero(tree_doodle(species, seed) < 128)
+        centres.append(np.hypot(rows.mean() - SIZE / 2, cols.mean() - SIZE / 2))
+        sizes.append(max(np.ptp(rows), np.ptp(cols)) / SIZE)
+    assert np.median(centres) < 25, np.median(centres)
+    assert any(c > 60 and s < 0.55 for c, s in zip(centres, sizes, strict=True))
+
+
+def test_people_trees_are_taller_than_their_trunks_are_wide() -> None:
+    # the thick trunk people draw: a quarter of the crown's width, against a tenth for the
+    # species' own drawers (eval.drawing_stats: the trunk is the narrow bottom of the ink)
+    from eval.drawing_stats import image_stats
+
+    people = [
+        image_stats(tree_doodle("maple", k))["trunk_width"] for k in _people_seeds("maple", 16)
+    ]
+    assert 0.17 < np.median(people) < 0.35, np.median(people)
+
+
+def test_people_trees_have_things_beside_them_for_some_seeds() -> None:
+    from eval.doodles import _beside, _rng  # the module's own test may look inside it
+
+    seen = {"ground": 0, "hill": 0, "grass": 0, "sun": 0, "cloud": 0, "nothing": 0}
+    for seed in range(300):
+        strokes = _beside(_rng("beside", seed), 50.0, 150.0)
+        closed = [st for st in strokes if len(st) > 3 and np.allclose(st[0], st[-1])]
+        seen["ground"] += any(len(st) == 2 and np.ptp(st[:, 0]) > 40 for st in strokes)
+        seen["hill"] += any(len(st) == 30 for st in strokes)
+        seen["grass"] += any(len(st) == 5 for st in strokes)
+        rays = sum(len(st) == 2 and np.ptp(st[:, 0]) < 20 for st in strokes)
+        seen["sun"] += bool(closed) and rays >= 6
+        seen["cloud"] += bool(closed) and rays == 0
+        seen["nothing"] += not strokes
+    # each sometimes, none always; most trees stand alone
+    assert all(v >= 5 for v in seen.values()), seen
+    assert seen["nothing"] > 150, seen
