@@ -72,9 +72,7 @@ class TreeRequest:
         max_faces = body.get("max_faces", VIEW_FACES)
         if max_faces is not None:
             check_budget(max_faces)
-        yaw = body.get("yaw", 0.0)
-        if isinstance(yaw, bool) or not isinstance(yaw, int | float) or not math.isfinite(yaw):
-            raise ValueError(f"'yaw' must be a finite number of degrees, got {yaw!r:.40}")
+        yaw = _degrees(body.get("yaw", 0.0))
         fit = body.get("fit", False)
         if isinstance(fit, list) and all(isinstance(k, str) for k in fit):
             unknown = sorted(set(fit) - {c.name for c in CONTROLS})
@@ -85,7 +83,26 @@ class TreeRequest:
             raise ValueError(
                 f"'fit' must be true, false or a list of control names, got {fit!r:.40}"
             )
-        return cls(params, controls, controls.get("seed"), name, max_faces, float(yaw) % 360.0, fit)
+        return cls(params, controls, controls.get("seed"), name, max_faces, yaw % 360.0, fit)
+
+
+def _degrees(yaw: Any) -> float:
+    """``yaw`` as finite float degrees; ValueError otherwise (an int of 309 digits or more
+    overflows a float: that is a bad value too, not an OverflowError)."""
+    if isinstance(yaw, int) and not isinstance(yaw, bool) and yaw.bit_length() > 100:
+        shown = f"a number of about {int(yaw.bit_length() * 0.30103) + 1} digits"
+    else:
+        shown = f"{yaw!r:.40}"
+    bad = ValueError(f"'yaw' must be a finite number of degrees, got {shown}")
+    if isinstance(yaw, bool) or not isinstance(yaw, int | float):
+        raise bad
+    try:
+        degrees = float(yaw)
+    except OverflowError:
+        raise bad from None
+    if not math.isfinite(degrees):
+        raise bad
+    return degrees
 
 
 @dataclass(frozen=True)

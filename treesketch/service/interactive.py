@@ -111,8 +111,11 @@ async def _json_body(request: Request) -> Any:
             raise HTTPException(413, f"the body must be at most {MAX_TREE_BODY} bytes")
     try:
         return json.loads(bytes(data))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise HTTPException(422, f"the body is not JSON: {exc}") from exc
+    except (ValueError, RecursionError) as exc:
+        # ValueError: not JSON (JSONDecodeError, UnicodeDecodeError) or an integer past
+        # Python's 4,300 digits; RecursionError: arrays or objects nested too deep
+        what = "nested too deep" if isinstance(exc, RecursionError) else str(exc)[:200]
+        raise HTTPException(422, f"the body is not JSON this server reads: {what}") from None
 
 
 def parse_outline_query(turn: str, size: str) -> tuple[float, int]:
