@@ -34,7 +34,7 @@ def _post_raw(client: TestClient, body: bytes) -> tuple[int, str]:
 # -- 3. JSON the parser refuses in other ways is a 422, not a 500 ----------------------------
 @pytest.mark.parametrize("field", ["max_faces", "seed"])
 def test_an_integer_of_too_many_digits_is_422(client: TestClient, field: str) -> None:
-    head = '{"params": {"levels": 1}, "%s": ' % field
+    head = '{"params": {"levels": 1}, "' + field + '": '
     status, text = _post_raw(client, (head + "9" * 5000 + "}").encode())
     assert status == 422, text
     assert "not JSON this server reads" in text and "Traceback" not in text
@@ -59,7 +59,7 @@ def test_numbers_past_a_float_are_422_in_the_service(client: TestClient) -> None
     params = species.base("palm").to_dict()
     big = str(HUGE)
     for extra in (f'"yaw": {big}', f'"controls": {{"height": {big}}}'):
-        body = '{"params": %s, %s}' % (json.dumps(params), extra)
+        body = '{"params": ' + json.dumps(params) + ", " + extra + "}"
         status, text = _post_raw(client, body.encode())
         assert status == 422, (extra[:20], text[:300])
         assert "yaw" in text or "height" in text
