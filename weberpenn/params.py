@@ -290,8 +290,10 @@ def _coerce(key: str, value: Any) -> Any:
     return _coerce_scalar(spec, value, key)
 
 
-def _estimate_load(v: Mapping[str, Any]) -> tuple[float, float, float]:
-    """Upper-bound-ish estimate of (stems, leaves, tube vertices) a dictionary grows."""
+def estimate_load(v: Mapping[str, Any]) -> tuple[float, float, float]:
+    """Upper-bound-ish estimate of (stems, leaves, tube vertices) a dictionary grows, from
+    the dictionary alone (no growing): validation bounds it, and a caller can tell a
+    cheap tree from an expensive one before paying for it."""
     levels = int(v["levels"])
     stems_at = [1.0 + float(v["baseSplits"])]
     for n in range(1, levels):
@@ -388,7 +390,7 @@ def _validate_dict(values: Mapping[str, Any]) -> dict[str, Any]:
             f"scale={out['scale']!r}, scaleV={out['scaleV']!r}",
             "scaleV",
         )
-    stems, leaves, verts = _estimate_load(out)
+    stems, leaves, verts = estimate_load(out)
     if stems > MAX_STEMS:
         raise ParamError(
             f"parameter 'branches': the tree would have about {stems:.3g} stems "
