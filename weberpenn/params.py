@@ -482,6 +482,18 @@ def _embedded_params(text: str) -> dict | None:
     return None
 
 
+# what Python's parser raises for a literal: SyntaxError and ValueError for a bad one;
+# MemoryError ("parser stack overflow") and RecursionError for one nested or chained too
+# deep (200,000 unary minus signs: a preset is one dict literal, nothing like that)
+_LITERAL_ERRORS = (ValueError, SyntaxError, MemoryError, RecursionError)
+
+
+def _why(exc: BaseException) -> str:
+    if isinstance(exc, MemoryError | RecursionError):
+        return "its expression is nested too deep for a dict literal"
+    return str(exc)
+
+
 def _read_preset_literal(text: str, path: Path) -> Any:
     for line in text.splitlines():
         stripped = line.strip()
@@ -489,17 +501,21 @@ def _read_preset_literal(text: str, path: Path) -> Any:
             continue
         try:
             return ast.literal_eval(stripped)
-        except (ValueError, SyntaxError) as exc:
+        except _LITERAL_ERRORS as exc:
             break_exc = exc
             break
     else:
         raise ParamError(f"{path}: no dictionary found (expected a Python dict literal)")
+    if isinstance(break_exc, MemoryError | RecursionError):
+        # the whole file holds the same line: parsing it again fails the same way
+        raise ParamError(f"{path}: not a valid Sapling preset: {_why(break_exc)}")
     # Not a one-line dict: try the whole file (a multi-line dict literal).
     try:
         return ast.literal_eval(text.strip())
-    except (ValueError, SyntaxError):
+    except _LITERAL_ERRORS as exc:
+        why = _why(exc) if isinstance(exc, MemoryError | RecursionError) else _why(break_exc)
         raise ParamError(
-            f"{path}: not a valid Sapling preset (a Python dict literal): {break_exc}"
+            f"{path}: not a valid Sapling preset (a Python dict literal): {why}"
         ) from None
 
 
