@@ -205,3 +205,62 @@ def test_an_edit_does_not_wait_behind_expensive_trees(
             t.join()
     assert sorted(times)[1] < 2.0, times  # before: 10-26 s behind the big ones
     assert 503 in statuses and set(statuses) <= {503}, statuses  # a full line, or cut
+
+
+# -- 7. CORS open to every page needs a token ------------------------------------------------
+def test_cors_for_any_page_without_a_token_is_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import uvicorn
+    from typer.testing import CliRunner
+
+    from treesketch.cli import app
+
+    def started(*args: object, **kwargs: object) -> None:
+        raise AssertionError("the server started")
+
+    monkeypatch.setattr(uvicorn, "run", started)
+    for origin in ("*", "null"):
+        r = CliRunner().invoke(app, ["serve", "--data", str(tmp_path), "--cors", origin])
+        assert r.exit_code == 2, r.output
+        assert "any web page" in r.output and "--token" in r.output, r.output
+        assert "Traceback" not in r.output
+        with pytest.raises(ValueError, match="needs a token"):
+            create_app(ServiceConfig(data=tmp_path, workers=1, cors=(origin,)))
+    # with a token it is the operator's choice
+    monkeypatch.setattr(uvicorn, "run", lambda a, **kw: None)
+    r = CliRunner().invoke(
+        app, ["serve", "--data", str(tmp_path), "--cors", "*", "--token", "t", "--workers", "1"]
+    )
+    assert r.exit_code == 0, r.output
+
+
+# -- 8. no framing, no sniffing; a session per login, ended by log out -----------------------
+def test_every_answer_forbids_framing_and_sniffing(client: TestClient) -> None:
+    for path in ("/", "/health", "/controls", "/jobs/nope"):
+        r = client.get(path)
+        assert r.headers["x-frame-options"] == "DENY", path
+        assert r.headers["content-security-policy"] == "frame-ancestors 'none'", path
+        assert r.headers["x-content-type-options"] == "nosniff", path
+
+
+def test_the_session_cookie_is_new_per_login_and_ends_with_log_out(tmp_path: Path) -> None:
+    secret = "s3cret-t0ken"
+    config = ServiceConfig(data=tmp_path, workers=1, estimator=ESTIMATOR, token=secret)
+    with TestClient(create_app(config), base_url="http://127.0.0.1") as c:
+        login = {"Authorization": f"Bearer {secret}"}
+
+        def log_in() -> str:
+            r = c.post("/session", headers=login)
+            assert r.status_code == 204
+            return r.cookies["treesketch_session"]
+
+        first, second = log_in(), log_in()
+        assert first != second and secret not in first
+        c.cookies.clear()
+        for cookie in (first, second):  # both logins hold
+            assert c.get("/status", cookies={"treesketch_session": cookie}).status_code == 200
+        # log out of the first: its copy is refused, the other session goes on
+        assert c.delete("/session", cookies={"treesketch_session": first}).status_code == 204
+        assert c.get("/status", cookies={"treesketch_session": first}).status_code == 401
+        assert c.get("/status", cookies={"treesketch_session": second}).status_code == 200
