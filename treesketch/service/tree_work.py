@@ -198,6 +198,7 @@ def grow_in_child(
     path = _reply_path(folder)
     receive, send = ctx.Pipe(duplex=False)
     proc = ctx.Process(target=_child, args=(grow, body, want_glb, str(path), send), daemon=True)
+    answered = False
     try:
         proc.start()
         send.close()  # the child's end: an EOF when it dies
@@ -207,14 +208,15 @@ def grow_in_child(
             kind, answer, facts = receive.recv()
         except EOFError:
             raise RuntimeError("the tree's process ended without an answer") from None
-    except BaseException:
-        path.unlink(missing_ok=True)
-        raise
+        answered = True
     finally:
+        send.close()  # (again, if the start failed: closing twice is harmless)
         receive.close()
         if proc.is_alive():
             proc.kill()
         proc.join()
+        if not answered:  # after the kill: the child writes nothing more
+            path.unlink(missing_ok=True)
     if kind == "ok":
         return (path if answer is None else answer), facts
     path.unlink(missing_ok=True)
