@@ -203,7 +203,10 @@ def add_interactive_routes(app: FastAPI, store: JobStore) -> None:
             answer, facts = await run_in_threadpool(grow_request, body, want_glb)
         if isinstance(answer, bytes) and len(answer) > MEMORY_REPLY_BYTES:
             # a reply a slow client may hold for long: from disk, not from memory
-            answer = await run_in_threadpool(write_reply, answer, replies)
+            try:
+                answer = await run_in_threadpool(write_reply, answer, replies)
+            except OSError as exc:  # a full disk: nothing half-written is left
+                raise HTTPException(507, f"cannot write the tree's reply: {exc}") from None
         return answer, facts
 
     async def grow_big(body: Any, want_glb: bool) -> tuple[Any, dict[str, str]]:
@@ -235,8 +238,6 @@ def add_interactive_routes(app: FastAPI, store: JobStore) -> None:
             raise HTTPException(413, str(exc)) from None
         except ValueError as exc:  # ParamError and bad controls: the request's fault
             raise HTTPException(422, str(exc)) from None
-        except OSError as exc:  # the reply could not be written: the disk is full
-            raise HTTPException(507, f"cannot write the tree's reply: {exc}") from None
         headers = {**facts, "Cache-Control": "no-store"}
         if isinstance(answer, Path):
             return stream_file(answer, GLB, headers)
