@@ -396,6 +396,12 @@ def main() -> None:
         default="uploads,big-trees,slow-readers",
         help="comma-separated: uploads (issue 30), big-trees, slow-readers (issue 49)",
     )
+    ap.add_argument(
+        "--tree-clients",
+        type=int,
+        default=4,
+        help="big-trees: clients asking for expensive trees (0: the edits' own time)",
+    )
     args = ap.parse_args()
     cases = {c.strip() for c in args.cases.split(",") if c.strip()}
     unknown = cases - {"uploads", "big-trees", "slow-readers"}
@@ -435,7 +441,7 @@ def main() -> None:
                 for name, body in bodies.items():
                     results[name] = hammer(port, body, args.clients, args.seconds, server)
             if "big-trees" in cases:
-                trees["big trees"] = big_trees(port, args.seconds, server)
+                trees["big trees"] = big_trees(port, args.seconds, server, args.tree_clients)
             if "slow-readers" in cases:
                 trees["slow readers"] = slow_readers(port, args.seconds, server)
         finally:

@@ -65,7 +65,8 @@ FULL_DETAIL_FACTOR = 4.0
 MEMORY_REPLY_BYTES = 4 * 2**20  # a GLB bigger than this is streamed from disk
 RETRY_AFTER = 5  # seconds, with a 503 of a full line
 CHUNK = 2**20
-STALE_SECONDS = 600.0  # a reply file left behind (a crash) is removed after this
+STALE_SECONDS = 600.0
+CHILD_NICENESS = 10  # added to the tree process's niceness  # a reply file left behind (a crash) is removed after this
 
 
 class TreeTimeout(Exception):
@@ -166,6 +167,9 @@ def _child(
     """In the child: grow, write a GLB to ``path``, send ``(kind, answer, facts)``."""
     from treesketch.trees import TreeTooBig
 
+    # below the server and its edits: a big tree takes the CPU an edit leaves over
+    with contextlib.suppress(OSError):
+        os.nice(CHILD_NICENESS)
     try:
         answer, facts = grow(body, want_glb)
         if isinstance(answer, bytes):
