@@ -34,7 +34,7 @@ __all__ = [
 # the viewer's default triangle budget (and the live preview's): the heaviest species
 # stays under 5 MB of GLB with its textures (benchmarks/RESULTS.md, "The interactive loop")
 VIEW_FACES = 80_000
-# the most triangles one reply's GLB holds (about 26 bytes each: some 40 MB): every
+# the most triangles one reply's GLB holds (26-31 bytes each: at most 47 MB): every
 # species' tree at full detail fits (the largest, willow, about 0.85 M); a bigger export
 # is `treesketch grow`'s (issue 49: a 4.3 M-triangle reply was 110 MB, held per client)
 REPLY_FACES = 1_500_000
