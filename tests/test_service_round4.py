@@ -103,6 +103,7 @@ def test_numbers_past_a_float_are_422_in_the_service(client: TestClient) -> None
 
 
 # -- 1. a full-detail reply is capped, and a big one comes from disk -------------------------
+@pytest.mark.slow  # a child process, or a real server
 def test_a_full_detail_reply_past_the_cap_is_413_before_exporting(client: TestClient) -> None:
     t0 = time.monotonic()
     r = client.post("/trees", json={"params": wide_palm(), "max_faces": None}, headers=GLB)
@@ -110,6 +111,7 @@ def test_a_full_detail_reply_past_the_cap_is_413_before_exporting(client: TestCl
     detail = r.json()["detail"]
     assert f"at most {REPLY_FACES:,}" in detail and "max_faces" in detail, detail
     assert "treesketch grow" in detail
+    assert client.get("/status").json()["limits"]["tree_reply_faces"] == REPLY_FACES
     assert time.monotonic() - t0 < 30
     # the same tree as the viewer's light GLB is answered
     r = client.post("/trees", json={"params": wide_palm(), "max_faces": 80_000}, headers=GLB)
@@ -167,6 +169,7 @@ def test_a_gate_holds_a_bounded_line() -> None:
     assert status == 503 and retry is not None and int(retry) > 0
 
 
+@pytest.mark.slow  # a child process, or a real server
 def test_an_expensive_tree_is_cut_at_its_time_limit(
     client: TestClient, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -178,6 +181,7 @@ def test_an_expensive_tree_is_cut_at_its_time_limit(
     assert time.monotonic() - t0 < 15
 
 
+@pytest.mark.slow  # a child process, or a real server
 def test_an_edit_does_not_wait_behind_expensive_trees(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

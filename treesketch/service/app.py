@@ -23,6 +23,7 @@ from fastapi.responses import FileResponse, JSONResponse, Response, StreamingRes
 from starlette.concurrency import run_in_threadpool
 
 from refine.search import DEFAULT_BUDGET
+from treesketch.trees import REPLY_FACES
 
 from .guards import LOOPBACK_HOSTS, AccessGuard, RedactTokens
 from .interactive import add_interactive_routes
@@ -33,6 +34,7 @@ from .preview import PREVIEW_FILES
 from .ray_pool import RayWorkerPool
 from .runner import ARTEFACTS, VIEW_ARTEFACTS, view_artefacts
 from .store import Job, JobStore, StorageFull
+from .tree_work import BIG_SECONDS
 
 __all__ = ["ServiceConfig", "check_cors", "create_app"]
 
@@ -355,6 +357,9 @@ def create_app(config: ServiceConfig) -> FastAPI:
                 "max_pixels": config.limits.max_pixels,
                 "max_budget": config.limits.max_budget,
                 "default_budget": config.default_budget,
+                # POST /trees (interactive.py, tree_work.py)
+                "tree_reply_faces": REPLY_FACES,
+                "tree_seconds": BIG_SECONDS,
             },
         }
 
