@@ -23,14 +23,14 @@ job's current best tree.
   (the repository's ``examples/hand/``, when the service runs from a checkout);
   ``GET /help/controls.png``: pictures of what each control does (``docs/controls.png``).
 
-A tree is grown here in the front's thread pool, not in a worker: an edit must not wait
-behind a refinement, and one tree takes a fraction of a second; :data:`EDITS_AT_ONCE`
-bounds how many grow (or are drawn as an outline) together.
+A tree is grown here, not in a worker: an edit must not wait behind a refinement.  A
+cheap one (an edit: a fraction of a second) grows in the front's thread pool, an
+expensive one in a child process with a time limit, each behind its own bounded gate,
+and a big GLB is streamed from disk (``tree_work``, issue 49).
 """
 
 from __future__ import annotations
 
-import asyncio
 import json
 import math
 from pathlib import Path
@@ -40,8 +40,23 @@ from fastapi import FastAPI, HTTPException, Request
 from fastapi.responses import FileResponse, JSONResponse, Response
 from starlette.concurrency import run_in_threadpool
 
+from ..trees import TreeTooBig
 from .preview import PREVIEW_FILES
 from .store import JobStore
+from .tree_work import (
+    BIG_AT_ONCE,
+    BIG_SECONDS,
+    BIG_WAITING,
+    EDITS_AT_ONCE,
+    EDITS_WAITING,
+    MEMORY_REPLY_BYTES,
+    Gate,
+    TreeTimeout,
+    grow_in_child,
+    is_expensive,
+    stream_file,
+    write_reply,
+)
 
 __all__ = [
     "EDITS_AT_ONCE",
@@ -55,7 +70,6 @@ __all__ = [
 REPO = Path(__file__).resolve().parents[2]
 EXAMPLES = REPO / "examples" / "hand"
 CONTROLS_PICTURE = REPO / "docs" / "controls.png"
-EDITS_AT_ONCE = 2
 MAX_TREE_BODY = 256 * 1024  # bytes: a parameter dictionary is about 3 KB
 GLB = "model/gltf-binary"
 OUTLINE_SIZES = (64, 512)  # px: the page's pad is 512 px
@@ -79,7 +93,7 @@ def controls_table() -> dict[str, Any]:
 def grow_request(body: Any, want_glb: bool) -> tuple[bytes | dict[str, Any], dict[str, str]]:
     """(GLB bytes or the JSON answer, headers) of one ``POST /trees`` body; ValueError
     for a bad one."""
-    from treesketch.trees import TreeRequest, edit_tree, light_glb
+    from treesketch.trees import TreeRequest, edit_tree, reply_glb
 
     request = TreeRequest.from_json(body)
     tree = edit_tree(request)
@@ -90,7 +104,8 @@ def grow_request(body: Any, want_glb: bool) -> tuple[bytes | dict[str, Any], dic
         "X-Tree-Adjusted": json.dumps(tree.adjusted, separators=(",", ":")),
     }
     if want_glb:
-        return light_glb(tree.mesh, yaw=request.yaw, max_faces=request.max_faces), facts
+        # TreeTooBig (a ValueError) past the most a reply holds, before exporting
+        return reply_glb(tree.mesh, yaw=request.yaw, max_faces=request.max_faces), facts
     return {
         "params": tree.params.to_dict(),
         "species": tree.species,
@@ -111,8 +126,11 @@ async def _json_body(request: Request) -> Any:
             raise HTTPException(413, f"the body must be at most {MAX_TREE_BODY} bytes")
     try:
         return json.loads(bytes(data))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise HTTPException(422, f"the body is not JSON: {exc}") from exc
+    except (ValueError, RecursionError) as exc:
+        # ValueError: not JSON (JSONDecodeError, UnicodeDecodeError) or an integer past
+        # Python's 4,300 digits; RecursionError: arrays or objects nested too deep
+        what = "nested too deep" if isinstance(exc, RecursionError) else str(exc)[:200]
+        raise HTTPException(422, f"the body is not JSON this server reads: {what}") from None
 
 
 def parse_outline_query(turn: str, size: str) -> tuple[float, int]:
@@ -154,7 +172,9 @@ def example_files(folder: Path = EXAMPLES) -> dict[str, Path]:
 
 def add_interactive_routes(app: FastAPI, store: JobStore) -> None:
     """Add the routes of the module text to ``app``."""
-    gate = asyncio.Semaphore(EDITS_AT_ONCE)
+    gate = Gate(EDITS_AT_ONCE, EDITS_WAITING, "tree edits and outlines")
+    big_gate = Gate(BIG_AT_ONCE, BIG_WAITING, "large trees")
+    replies = store.root / "trees"  # big replies, unlinked as soon as they are opened
 
     @app.get("/examples")
     async def examples() -> dict[str, Any]:
@@ -178,17 +198,51 @@ def add_interactive_routes(app: FastAPI, store: JobStore) -> None:
     async def controls() -> dict[str, Any]:
         return await run_in_threadpool(controls_table)
 
+    async def grow_cheap(body: Any, want_glb: bool) -> tuple[Any, dict[str, str]]:
+        async with gate.enter():
+            answer, facts = await run_in_threadpool(grow_request, body, want_glb)
+        if isinstance(answer, bytes) and len(answer) > MEMORY_REPLY_BYTES:
+            # a reply a slow client may hold for long: from disk, not from memory
+            try:
+                answer = await run_in_threadpool(write_reply, answer, replies)
+            except OSError as exc:  # a full disk: nothing half-written is left
+                raise HTTPException(507, f"cannot write the tree's reply: {exc}") from None
+        return answer, facts
+
+    async def grow_big(body: Any, want_glb: bool) -> tuple[Any, dict[str, str]]:
+        async with big_gate.enter():
+            try:
+                return await run_in_threadpool(
+                    grow_in_child, grow_request, body, want_glb, replies, BIG_SECONDS
+                )
+            except TreeTimeout as exc:
+                raise HTTPException(
+                    503,
+                    f"{exc}, the limit of one POST /trees: ask for a smaller tree (fewer "
+                    "branches or levels, a lower curveRes, fewer leaves) or a lighter GLB "
+                    "(max_faces)",
+                ) from None
+            except RuntimeError as exc:  # the child died (out of memory?)
+                raise HTTPException(503, f"the tree could not be grown: {exc}") from None
+
     @app.post("/trees")
     async def trees(request: Request) -> Response:
         body = await _json_body(request)
         want_glb = GLB in request.headers.get("accept", "")
-        async with gate:
-            try:
-                answer, facts = await run_in_threadpool(grow_request, body, want_glb)
-            except ValueError as exc:  # ParamError and bad controls: the request's fault
-                raise HTTPException(422, str(exc)) from exc
+        try:
+            # every field checked and the cost estimated before any gate or growing
+            expensive = await run_in_threadpool(is_expensive, body)
+            grow = grow_big if expensive else grow_cheap
+            answer, facts = await grow(body, want_glb)
+        except TreeTooBig as exc:
+            raise HTTPException(413, str(exc)) from None
+        except ValueError as exc:  # ParamError and bad controls: the request's fault
+            raise HTTPException(422, str(exc)) from None
+        headers = {**facts, "Cache-Control": "no-store"}
+        if isinstance(answer, Path):
+            return stream_file(answer, GLB, headers)
         if isinstance(answer, bytes):
-            return Response(answer, media_type=GLB, headers={**facts, "Cache-Control": "no-store"})
+            return Response(answer, media_type=GLB, headers=headers)
         return JSONResponse(answer)
 
     # registered before the app's ``/jobs/{id}/{artefact}``, which would take the name
@@ -204,7 +258,7 @@ def add_interactive_routes(app: FastAPI, store: JobStore) -> None:
         # an expired job's files are gone but its result (the tree) is still known
         if job.state not in ("done", "expired") or not (job.summary or {}).get("params"):
             raise HTTPException(409, f"job {job_id} is {job.state}: it has no tree yet")
-        async with gate:
+        async with gate.enter():
             try:
                 data = await run_in_threadpool(outline_png, job.summary, degrees, px)
             except ValueError as exc:  # a stored result the tree cannot be grown from
