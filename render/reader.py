@@ -49,6 +49,7 @@ __all__ = [
     "image_format",
     "ink_mask",
     "read_sketch",
+    "tree_ink",
 ]
 
 MAX_BYTES = 10 * 1024 * 1024  # an encoded sketch larger than this is refused unread
@@ -452,7 +453,7 @@ def stroke_width(ink: np.ndarray) -> float:
 
 def drop_specks(ink: np.ndarray) -> np.ndarray:
     """Ink without paper grain and pencil dust among the drawing's lines (which
-    :func:`_drop_strays` keeps, being near them): marks smaller than a square
+    :func:`_drop_extras` keeps, being near them): marks smaller than a square
     ``SPECK_WIDTHS`` stroke widths wide that lie more than ``SPECK_GAP`` stroke widths
     from every larger mark.  Both limits follow the drawing's own stroke width, so they
     hold at any resolution; a dash of a broken line is longer than that, and the small
@@ -491,33 +492,147 @@ def _kept_marks(ink: np.ndarray) -> np.ndarray:
 
 STRAY_GAP = 0.08  # of the page's longer side: ink this far from the drawing is apart
 STRAY_SHARE = 0.02  # a part apart from the drawing with less of its ink than this is dust
+# a part apart from the tree, mostly beside it (this share of its width outside the tree's
+# columns at least) and with less ink than EXTRA_SHARE of the tree's, is not the tree: a
+# sun, a cloud, grass or a scribble.  A part above or below the tree (a crown drawn apart
+# from its trunk, a pot, a cloud over the crown) is kept: when in doubt the ink stays
+EXTRA_BESIDE = 0.5
+EXTRA_SHARE = 0.5
 
 
-def _drop_strays(ink: np.ndarray) -> np.ndarray:
-    """Ink without the stray marks away from the drawing: groups of ink (strokes joined
-    over gaps up to ``STRAY_GAP`` of the page) holding less than ``STRAY_SHARE`` of the
-    ink, such as pencil dust, a smudge or a speck of dirt in a photo.  They would
-    otherwise stretch the frame and shrink the tree into a corner of it."""
+def _parts(ink: np.ndarray) -> tuple[np.ndarray, int]:
+    """The drawing's parts: ink joined over gaps up to ``STRAY_GAP`` of the page, so a
+    tree drawn in separate strokes stays one part.  Returns a label per pixel (0 off the
+    ink) and the count.  The joining runs on a coarse grid (blocks of half the gap), so
+    it costs little at any page size."""
     from scipy import ndimage
 
-    total = int(ink.sum())
-    if total == 0:
-        return ink
     r = max(1, int(round(STRAY_GAP * max(ink.shape) / 2)))
-    # join over the gap on a coarse grid (cheap at any page size): blocks of r pixels
     h, w = ink.shape
     hb, wb = -(-h // r), -(-w // r)
     padded = np.pad(ink, ((0, hb * r - h), (0, wb * r - w)))
     counts = padded.reshape(hb, r, wb, r).sum(axis=(1, 3))
     near = ndimage.binary_dilation(counts > 0, structure=np.ones((3, 3), bool))
     lab, n = ndimage.label(near)
+    pixels = np.repeat(np.repeat(lab, r, axis=0), r, axis=1)[:h, :w]
+    return np.where(ink, pixels, 0), n
+
+
+def _beside(box: tuple[slice, slice], tree: tuple[slice, slice]) -> bool:
+    """Whether a part's bounding box lies mostly beside the tree's (in columns the tree
+    does not reach), rather than above or below it."""
+    left, right = box[1].start, box[1].stop
+    inside = max(0, min(right, tree[1].stop) - max(left, tree[1].start))
+    return inside < (1.0 - EXTRA_BESIDE) * (right - left)
+
+
+def _drop_extras(ink: np.ndarray) -> np.ndarray:
+    """Ink without what is not the tree: the largest part is the tree; a part apart from
+    it (further than ``STRAY_GAP`` of the page) goes when it holds less than
+    ``STRAY_SHARE`` of the ink (pencil dust, a smudge, a speck of dirt in a photo), or
+    when it lies beside the tree with less than ``EXTRA_SHARE`` of the tree's ink (a sun,
+    a cloud, grass, a scribble in a corner).  Either would stretch the frame and shrink
+    the tree into a corner of it."""
+    from scipy import ndimage
+
+    total = int(ink.sum())
+    if total == 0:
+        return ink
+    lab, n = _parts(ink)
     if n <= 1:
         return ink
-    share = ndimage.sum_labels(counts, lab, index=np.arange(1, n + 1)) / total
-    keep = np.concatenate([[False], share >= STRAY_SHARE])
-    keep[1 + int(np.argmax(share))] = True
-    mask = np.repeat(np.repeat(keep[lab], r, axis=0), r, axis=1)[:h, :w]
-    return ink & mask
+    idx = np.arange(1, n + 1)
+    share = ndimage.sum_labels(ink, lab, index=idx) / total
+    tree = int(np.argmax(share))
+    boxes = ndimage.find_objects(lab)
+    keep = share >= STRAY_SHARE
+    for k, box in enumerate(boxes):
+        if box is not None and k != tree and share[k] < EXTRA_SHARE * share[tree]:
+            keep[k] &= not _beside(box, boxes[tree])
+    keep[tree] = True
+    return ink & np.concatenate([[False], keep])[lab]
+
+
+# A ground line: a long, thin, nearly level stroke in the lower half of the drawing that
+# sticks out sideways beyond the tree above it (by GROUND_OUT of the tree's width).  The
+# tree's widest part is its crown, so a crown's or a fir tier's flat base, a pot or a
+# trunk's foot never sticks out of what stands above it; a ground line under a tree
+# usually does, by a lot
+GROUND_RUN = 0.25  # of the drawing's width: the shortest level run a ground line has
+GROUND_TILT = 0.008  # of the page's longer side: the rise and wobble a level line may have
+GROUND_OUT = 0.15  # of the tree's width: how far a ground line sticks out on one side
+GROUND_GRASS = 0.05  # of the drawing's height: grass and a trunk's foot just above the line
+
+
+def _level_runs(ink: np.ndarray, tilt: int, length: float) -> np.ndarray:
+    """Nearly level strokes: the ink widened up and down by ``tilt`` rows (a hand's
+    wobble and a slight slope), kept where it runs on unbroken for ``length`` pixels."""
+    from scipy import ndimage
+
+    band = ndimage.maximum_filter1d(ink.view(np.uint8), 2 * tilt + 1, axis=0) > 0
+    runs, n = ndimage.label(band, structure=np.array([[0, 0, 0], [1, 1, 1], [0, 0, 0]]))
+    size = np.bincount(runs.ravel(), minlength=n + 1)
+    size[0] = 0
+    return (size >= length)[runs]
+
+
+def _is_ground(ink: np.ndarray, box: tuple[slice, slice], tilt: int) -> bool:
+    """Whether a level run with bounding box ``box`` is a ground line under the tree:
+    thin, in the lower half of the drawing, sticking out beyond the ink above it."""
+    ys = np.flatnonzero(ink.any(axis=1))
+    top, height = int(ys[0]), int(ys[-1] - ys[0] + 1)
+    (t, b), (left, right) = (box[0].start, box[0].stop), (box[1].start, box[1].stop)
+    if (t + b) / 2 < top + height / 2 or b - t > 0.25 * (right - left):
+        return False
+    above = ink[: max(0, t - int(round(GROUND_GRASS * height)))]
+    cols = np.flatnonzero(above.any(axis=0))
+    if cols.size == 0:  # nothing stands on it
+        return False
+    out = max(GROUND_OUT * (cols[-1] + 1 - cols[0]), 4 * tilt)
+    return bool(left < cols[0] - out or right > cols[-1] + 1 + out)
+
+
+def _drop_ground(ink: np.ndarray) -> np.ndarray:
+    """Ink without a ground line under the tree (see ``GROUND_RUN``), the whole line: the
+    renderer's sketches have none, so a line kept under the tree would be a stroke the
+    network never saw, and the trunk's foot on it would no longer mark the base."""
+    from scipy import ndimage
+
+    xs = np.flatnonzero(ink.any(axis=0))
+    if xs.size == 0:
+        return ink
+    tilt = max(1, int(round(GROUND_TILT * max(ink.shape))))
+    level = _level_runs(ink, tilt, max(8.0, GROUND_RUN * (xs[-1] + 1 - xs[0])))
+    lab, _ = ndimage.label(level, structure=np.ones((3, 3), bool))
+    out = ink.copy()
+    boxes = list(enumerate(ndimage.find_objects(lab), start=1))
+    # from the top down, each judged against what is left above it: the lower edge of a
+    # patch of ground sticks out of the tree once the patch's upper edge is gone
+    for k, box in sorted(boxes, key=lambda kb: kb[1][0].start):
+        if _is_ground(out, box, tilt):
+            rows = slice(max(0, box[0].start - tilt), box[0].stop + tilt)
+            out[rows] &= ~_touching(ink[rows], lab[rows] == k)
+    return out
+
+
+def _touching(ink: np.ndarray, seed: np.ndarray) -> np.ndarray:
+    """The strokes of ``ink`` that touch ``seed``: a ground line's wobbly ends and curls
+    that left its level run, grass on it, within the rows of the line only."""
+    from scipy import ndimage
+
+    lab, n = ndimage.label(ink, structure=np.ones((3, 3), bool))
+    hit = np.zeros(n + 1, bool)
+    hit[np.unique(lab[seed & ink])] = True
+    hit[0] = False
+    return hit[lab]
+
+
+def tree_ink(ink: np.ndarray) -> np.ndarray:
+    """The tree's ink alone, so a drawing is framed on the tree and not on everything on
+    the page: without stray marks, a sun, a cloud or grass beside the tree, and a ground
+    line under it.  The extras go first (a sun over a ground line's end would hide that
+    the line sticks out), then the ground, then what the ground joined to the tree."""
+    return _drop_extras(_drop_ground(_drop_extras(ink)))
 
 
 RULED_ROW = 0.6  # a thin horizontal line over this much of the page width is ruling
@@ -596,7 +711,7 @@ def normalise_drawing(img: np.ndarray, size: int = DRAWING_SIDE) -> np.ndarray:
         shape = (max(MIN_SIDE, round(a.shape[1] * s)), max(MIN_SIDE, round(a.shape[0] * s)))
         a = np.asarray(Image.fromarray(a).resize(shape, Image.Resampling.BOX))
     flat = flatten_paper(a)
-    ink = _drop_strays(drop_specks(_drop_ruled_lines(_ink_of(flat))))
+    ink = tree_ink(drop_specks(_drop_ruled_lines(_ink_of(flat))))
     frac = float(ink.mean())
     if frac < MIN_INK:
         raise SketchError("the sketch is blank: draw a tree (dark lines on a light page)")
