@@ -560,8 +560,12 @@ def _drop_extras(ink: np.ndarray) -> np.ndarray:
 # usually does, by a lot
 GROUND_RUN = 0.25  # of the drawing's width: the shortest level run a ground line has
 GROUND_TILT = 0.008  # of the page's longer side: the rise and wobble a level line may have
-GROUND_OUT = 0.15  # of the tree's width: how far a ground line sticks out on one side
-GROUND_GRASS = 0.05  # of the drawing's height: grass and a trunk's foot just above the line
+GROUND_OUT = 0.25  # of the tree's width: how far a ground line sticks out on one side
+GROUND_GRASS = 0.04  # of the drawing's height: grass and a trunk's foot just above the line
+# ... and the tree ends on it: below it no more ink than this share of the drawing's height
+# (the trunk below a pine's lowest whorl or a crown's flat base, the body of a bonsai's pot
+# below its rim; roots drawn below the ground keep the line too)
+GROUND_BELOW = 0.05
 
 
 def _level_runs(ink: np.ndarray, tilt: int, length: float) -> np.ndarray:
@@ -578,7 +582,8 @@ def _level_runs(ink: np.ndarray, tilt: int, length: float) -> np.ndarray:
 
 def _is_ground(ink: np.ndarray, box: tuple[slice, slice], tilt: int) -> bool:
     """Whether a level run with bounding box ``box`` is a ground line under the tree:
-    thin, in the lower half of the drawing, sticking out beyond the ink above it."""
+    thin, in the lower half of the drawing, at its foot (next to nothing below it) and
+    sticking out beyond the ink above it."""
     ys = np.flatnonzero(ink.any(axis=1))
     top, height = int(ys[0]), int(ys[-1] - ys[0] + 1)
     (t, b), (left, right) = (box[0].start, box[0].stop), (box[1].start, box[1].stop)
@@ -587,6 +592,10 @@ def _is_ground(ink: np.ndarray, box: tuple[slice, slice], tilt: int) -> bool:
     above = ink[: max(0, t - int(round(GROUND_GRASS * height)))]
     cols = np.flatnonzero(above.any(axis=0))
     if cols.size == 0:  # nothing stands on it
+        return False
+    # under the tree, not under the line's own ends (a mound's sides go down there)
+    below = np.flatnonzero(ink[b + tilt :, cols[0] : cols[-1] + 1].any(axis=1))
+    if below.size and below[-1] + 1 > GROUND_BELOW * height:  # a trunk, a pot goes on
         return False
     out = max(GROUND_OUT * (cols[-1] + 1 - cols[0]), 4 * tilt)
     return bool(left < cols[0] - out or right > cols[-1] + 1 + out)
