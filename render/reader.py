@@ -559,7 +559,7 @@ def _drop_extras(ink: np.ndarray) -> np.ndarray:
 # trunk's foot never sticks out of what stands above it; a ground line under a tree
 # usually does, by a lot
 GROUND_RUN = 0.25  # of the drawing's width: the shortest level run a ground line has
-GROUND_TILT = 0.008  # of the page's longer side: the rise and wobble a level line may have
+GROUND_TILT = 0.012  # of the page's longer side: the rise and wobble a level line may have
 GROUND_OUT = 0.25  # of the tree's width: how far a ground line sticks out on one side
 GROUND_GRASS = 0.04  # of the drawing's height: grass and a trunk's foot just above the line
 # ... and the tree ends on it: below it no more ink than this share of the drawing's height
@@ -619,8 +619,33 @@ def _drop_ground(ink: np.ndarray) -> np.ndarray:
     # patch of ground sticks out of the tree once the patch's upper edge is gone
     for k, box in sorted(boxes, key=lambda kb: kb[1][0].start):
         if _is_ground(out, box, tilt):
-            rows = slice(max(0, box[0].start - tilt), box[0].stop + tilt)
-            out[rows] &= ~_touching(ink[rows], lab[rows] == k)
+            out &= ~_ground_pixels(ink, lab == k, box, tilt)
+    return out
+
+
+def _ground_pixels(
+    ink: np.ndarray, seed: np.ndarray, box: tuple[slice, slice], tilt: int
+) -> np.ndarray:
+    """The ink of a ground line whose level run is ``seed`` (bounding box ``box``, the
+    line widened by ``tilt`` rows each way): the strokes touching the run within the
+    box's rows and ``tilt`` more (a wobbly line's crests, grass on it), less what
+    reaches them from above the line's own rows (a trunk standing on the line keeps its
+    foot down to the line)."""
+    from scipy import ndimage
+
+    top = max(0, box[0].start - tilt)
+    rows = slice(top, box[0].stop + tilt)
+    out = np.zeros_like(ink)
+    out[rows] = _touching(ink[rows], seed[rows])
+    line_top = box[0].start + tilt - max(1, tilt // 3)  # a little above the line itself
+    if top > 0 and line_top > top:
+        upper = ink[top - 1 : line_top]
+        start = np.zeros_like(upper)
+        start[0] = upper[0]
+        # under what comes down onto the line only: a crest of the line beside the
+        # trunk's foot touches it too
+        under = ndimage.maximum_filter1d(upper[0].view(np.uint8), 2 * tilt + 1) > 0
+        out[top:line_top] &= ~(_touching(upper, start)[1:] & under)
     return out
 
 
