@@ -492,10 +492,15 @@ def _kept_marks(ink: np.ndarray) -> np.ndarray:
 
 STRAY_GAP = 0.08  # of the page's longer side: ink this far from the drawing is apart
 STRAY_SHARE = 0.02  # a part apart from the drawing with less of its ink than this is dust
-# a part apart from the tree, mostly beside it (this share of its width outside the tree's
-# columns at least) and with less ink than EXTRA_SHARE of the tree's, is not the tree: a
-# sun, a cloud, grass or a scribble.  A part above or below the tree (a crown drawn apart
-# from its trunk, a pot, a cloud over the crown) is kept: when in doubt the ink stays
+# The tree among the parts: of the large ones (a box or ink at least EXTRA_SHARE of the
+# largest's: a small tree drawn with a fine pen may hold less ink than a cloud, a sun with
+# rays may have as large a box) and not thin lines (a ground line, a cloud's base), the one
+# reaching lowest: a tree stands on the ground, a sun or a cloud is in the sky.  A part
+# apart from the tree, mostly beside it (EXTRA_BESIDE of its width outside the tree's
+# columns at least) and smaller than EXTRA_SHARE of the tree in box or in ink, or wholly
+# above the tree's top, is not the tree: a sun, a cloud, grass or a scribble.  A part above or below the tree (a crown
+# drawn apart from its trunk, a pot, a cloud over the crown) is kept, and so is one as
+# large as the tree: when in doubt the ink stays
 EXTRA_BESIDE = 0.5
 EXTRA_SHARE = 0.5
 
@@ -526,13 +531,26 @@ def _beside(box: tuple[slice, slice], tree: tuple[slice, slice]) -> bool:
     return inside < (1.0 - EXTRA_BESIDE) * (right - left)
 
 
+def _the_tree(ink: np.ndarray, boxes: list[tuple[slice, slice]]) -> int:
+    """Which of the parts (their ink counts and bounding boxes) is the tree: see
+    ``EXTRA_SHARE``."""
+    height = np.array([b[0].stop - b[0].start for b in boxes])
+    width = np.array([b[1].stop - b[1].start for b in boxes])
+    area = height * width
+    large = (area >= EXTRA_SHARE * area.max()) | (ink >= EXTRA_SHARE * ink.max())
+    if (large & (height >= 0.25 * width)).any():
+        large &= height >= 0.25 * width
+    bottom = np.array([b[0].stop for b in boxes])
+    return int(np.lexsort((area, bottom, large))[-1])
+
+
 def _drop_extras(ink: np.ndarray) -> np.ndarray:
-    """Ink without what is not the tree: the largest part is the tree; a part apart from
-    it (further than ``STRAY_GAP`` of the page) goes when it holds less than
-    ``STRAY_SHARE`` of the ink (pencil dust, a smudge, a speck of dirt in a photo), or
-    when it lies beside the tree with less than ``EXTRA_SHARE`` of the tree's ink (a sun,
-    a cloud, grass, a scribble in a corner).  Either would stretch the frame and shrink
-    the tree into a corner of it."""
+    """Ink without what is not the tree (see ``EXTRA_SHARE``): a part apart from the tree
+    (further than ``STRAY_GAP`` of the page) goes when it holds less than ``STRAY_SHARE``
+    of the ink (pencil dust, a smudge, a speck of dirt in a photo), or when it is a small
+    part beside the tree or one beside it in the sky (a sun, a cloud, grass, a scribble
+    in a corner).  Either would
+    stretch the frame and shrink the tree into a corner of it."""
     from scipy import ndimage
 
     total = int(ink.sum())
@@ -541,13 +559,16 @@ def _drop_extras(ink: np.ndarray) -> np.ndarray:
     lab, n = _parts(ink)
     if n <= 1:
         return ink
-    idx = np.arange(1, n + 1)
-    share = ndimage.sum_labels(ink, lab, index=idx) / total
-    tree = int(np.argmax(share))
+    count = ndimage.sum_labels(ink, lab, index=np.arange(1, n + 1))
     boxes = ndimage.find_objects(lab)
-    keep = share >= STRAY_SHARE
+    area = np.array([(b[0].stop - b[0].start) * (b[1].stop - b[1].start) for b in boxes])
+    tree = _the_tree(count, boxes)
+    small = (area < EXTRA_SHARE * area[tree]) | (count < EXTRA_SHARE * count[tree])
+    # wholly above the tree's top: in the sky, however large (a sun with its rays)
+    sky = np.array([b[0].stop <= boxes[tree][0].start for b in boxes])
+    keep = count >= STRAY_SHARE * total
     for k, box in enumerate(boxes):
-        if box is not None and k != tree and share[k] < EXTRA_SHARE * share[tree]:
+        if k != tree and (small[k] | sky[k]):
             keep[k] &= not _beside(box, boxes[tree])
     keep[tree] = True
     return ink & np.concatenate([[False], keep])[lab]
