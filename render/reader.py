@@ -652,21 +652,26 @@ def _ground_pixels(
     box's rows and ``tilt`` more (a wobbly line's crests, grass on it), less what
     reaches them from above the line's own rows (a trunk standing on the line keeps its
     foot down to the line)."""
-    from scipy import ndimage
-
     top = max(0, box[0].start - tilt)
     rows = slice(top, box[0].stop + tilt)
     out = np.zeros_like(ink)
     out[rows] = _touching(ink[rows], seed[rows])
     line_top = box[0].start + tilt - max(1, tilt // 3)  # a little above the line itself
     if top > 0 and line_top > top:
-        upper = ink[top - 1 : line_top]
-        start = np.zeros_like(upper)
-        start[0] = upper[0]
-        # under what comes down onto the line only: a crest of the line beside the
-        # trunk's foot touches it too
-        under = ndimage.maximum_filter1d(upper[0].view(np.uint8), 2 * tilt + 1) > 0
-        out[top:line_top] &= ~(_touching(upper, start)[1:] & under)
+        out[top:line_top] &= ~_coming_down(ink[top - 1 : line_top])[1:]
+    return out
+
+
+def _coming_down(rows: np.ndarray) -> np.ndarray:
+    """The ink of ``rows`` reached from the first row going down, a pixel aside at most
+    per row: a trunk coming down onto a ground line, at a slant too, but not the line's
+    crest beside its foot, which runs sideways."""
+    from scipy import ndimage
+
+    out = np.zeros_like(rows)
+    out[0] = rows[0]
+    for r in range(1, len(rows)):
+        out[r] = ndimage.binary_dilation(out[r - 1], np.ones(3, bool)) & rows[r]
     return out
 
 
@@ -766,7 +771,9 @@ def normalise_drawing(img: np.ndarray, size: int = DRAWING_SIDE) -> np.ndarray:
         shape = (max(MIN_SIDE, round(a.shape[1] * s)), max(MIN_SIDE, round(a.shape[0] * s)))
         a = np.asarray(Image.fromarray(a).resize(shape, Image.Resampling.BOX))
     flat = flatten_paper(a)
-    ink = tree_ink(drop_specks(_drop_ruled_lines(_ink_of(flat))))
+    # a ground line drawn from edge to edge looks like ruling, whose removal keeps what
+    # crosses it and leaves the line's crests: it goes as a ground line first
+    ink = tree_ink(drop_specks(_drop_ruled_lines(_drop_ground(_ink_of(flat)))))
     frac = float(ink.mean())
     if frac < MIN_INK:
         raise SketchError("the sketch is blank: draw a tree (dark lines on a light page)")

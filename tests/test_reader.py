@@ -301,14 +301,18 @@ def _sun(d: ImageDraw.ImageDraw, cx: int, cy: int, r: int) -> None:
         d.line((cx + 1.4 * r * c, cy + 1.4 * r * s, cx + 2 * r * c, cy + 2 * r * s), 0, 3)
 
 
-@pytest.mark.parametrize("name, seed", [("maple", 3), ("pine", 5), ("poplar", 4)])
-def test_a_ground_line_across_the_page_is_not_framed(name: str, seed: int) -> None:
-    """A wobbly ground line across the page, the trunk standing on it: the tree is framed
-    as without it (before, the line's middle was taken for the trunk's axis and its length
+@pytest.mark.parametrize("name, seed", [("maple", 3), ("pine", 5), ("cherry", 1), ("poplar", 4)])
+@pytest.mark.parametrize("ends", [(24, 490), (0, 511)])
+def test_a_ground_line_across_the_page_is_not_framed(
+    name: str, seed: int, ends: tuple[int, int]
+) -> None:
+    """A wobbly ground line across the page (short of its edges, or from edge to edge,
+    where it also looks like ruling), the trunk standing on it: the tree is framed as
+    without it (before, the line's middle was taken for the trunk's axis and its length
     for the tree's width).  The trunk loses a pixel or two of its foot to the line."""
     page = _on_page(tree_doodle(name, seed), 512, (128, 100))
     foot = int(np.flatnonzero((page < 128).any(axis=1))[-1])
-    xs = np.linspace(24, 490, 40)  # short of the edges: a line from edge to edge is ruling
+    xs = np.linspace(*ends, 40)
     ys = foot + 2.0 * np.sin(xs / 23.0)
     ground = _drawn(page, lambda d: d.line(list(zip(xs, ys, strict=True)), fill=0, width=3))
     bare, framed = normalise_drawing(page), normalise_drawing(ground)
