@@ -595,10 +595,11 @@ def _level_runs(ink: np.ndarray, tilt: int, length: float) -> np.ndarray:
     from scipy import ndimage
 
     band = ndimage.maximum_filter1d(ink.view(np.uint8), 2 * tilt + 1, axis=0) > 0
-    runs, n = ndimage.label(band, structure=np.array([[0, 0, 0], [1, 1, 1], [0, 0, 0]]))
-    size = np.bincount(runs.ravel(), minlength=n + 1)
-    size[0] = 0
-    return (size >= length)[runs]
+    # each pixel's run: from the last gap before it to the first gap after it, per row
+    at = np.arange(band.shape[1])
+    before = np.maximum.accumulate(np.where(band, -1, at), axis=1)
+    after = np.minimum.accumulate(np.where(band, band.shape[1], at)[:, ::-1], axis=1)[:, ::-1]
+    return band & (after - before - 1 >= length)
 
 
 def _is_ground(ink: np.ndarray, box: tuple[slice, slice], tilt: int) -> bool:
@@ -626,13 +627,22 @@ def _drop_ground(ink: np.ndarray) -> np.ndarray:
     """Ink without a ground line under the tree (see ``GROUND_RUN``), the whole line: the
     renderer's sketches have none, so a line kept under the tree would be a stroke the
     network never saw, and the trunk's foot on it would no longer mark the base."""
-    from scipy import ndimage
-
-    xs = np.flatnonzero(ink.any(axis=0))
+    ys, xs = np.flatnonzero(ink.any(axis=1)), np.flatnonzero(ink.any(axis=0))
     if xs.size == 0:
         return ink
     tilt = max(1, int(round(GROUND_TILT * max(ink.shape))))
-    level = _level_runs(ink, tilt, max(8.0, GROUND_RUN * (xs[-1] + 1 - xs[0])))
+    # the work on the ink's bounding box (a drawing is often a small part of its page),
+    # with room above it for the rows a ground line's run is widened by
+    box = (slice(max(0, ys[0] - 2 * tilt - 1), ys[-1] + 1), slice(xs[0], xs[-1] + 1))
+    out = ink.copy()
+    out[box] = _without_ground(ink[box], tilt)
+    return out
+
+
+def _without_ground(ink: np.ndarray, tilt: int) -> np.ndarray:
+    from scipy import ndimage
+
+    level = _level_runs(ink, tilt, max(8.0, GROUND_RUN * ink.shape[1]))
     lab, _ = ndimage.label(level, structure=np.ones((3, 3), bool))
     out = ink.copy()
     boxes = list(enumerate(ndimage.find_objects(lab), start=1))
