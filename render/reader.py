@@ -595,11 +595,17 @@ def _level_runs(ink: np.ndarray, tilt: int, length: float) -> np.ndarray:
     from scipy import ndimage
 
     band = ndimage.maximum_filter1d(ink.view(np.uint8), 2 * tilt + 1, axis=0) > 0
+    out = np.zeros_like(band)
+    rows = np.flatnonzero(band.sum(axis=1) >= length)  # the only rows that may hold one
+    if rows.size == 0:
+        return out
     # each pixel's run: from the last gap before it to the first gap after it, per row
-    at = np.arange(band.shape[1])
-    before = np.maximum.accumulate(np.where(band, -1, at), axis=1)
-    after = np.minimum.accumulate(np.where(band, band.shape[1], at)[:, ::-1], axis=1)[:, ::-1]
-    return band & (after - before - 1 >= length)
+    b = band[rows]
+    at = np.arange(b.shape[1], dtype=np.int32)
+    before = np.maximum.accumulate(np.where(b, -1, at), axis=1)
+    after = np.minimum.accumulate(np.where(b, b.shape[1], at)[:, ::-1], axis=1)[:, ::-1]
+    out[rows] = b & (after - before - 1 >= length)
+    return out
 
 
 def _is_ground(ink: np.ndarray, box: tuple[slice, slice], tilt: int) -> bool:
