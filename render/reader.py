@@ -773,8 +773,10 @@ def normalise_drawing(img: np.ndarray, size: int = DRAWING_SIDE) -> np.ndarray:
 
     Pencil on grey or off-white paper and phone photos read as ink (:func:`flatten_paper`,
     Otsu) and come out as black strokes on white, like the training sketches, without the
-    paper's grain (:func:`drop_specks`) or stray marks apart from the drawing; a drawing in
-    a corner is moved and scaled to the middle.  The refinement frames every candidate's
+    paper's grain (:func:`drop_specks`) or stray marks apart from the drawing.  It is
+    framed on the tree (:func:`tree_ink`), not on all the ink: a ground line under the
+    tree, a sun, a cloud or grass beside it are left out of the frame and the picture; a
+    drawing in a corner is moved and scaled to the middle.  The refinement frames every candidate's
     sketch the same way, so drawing and candidates always compare at one framing (the
     renderer's own frame fits a tree's width over all sides, not the drawn one).  Refuses
     blank and dark pages.
