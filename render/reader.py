@@ -581,7 +581,7 @@ def _drop_extras(ink: np.ndarray) -> np.ndarray:
 # usually does, by a lot
 GROUND_RUN = 0.25  # of the drawing's width: the shortest level run a ground line has
 GROUND_TILT = 0.012  # of the page's longer side: the rise and wobble a level line may have
-GROUND_OUT = 0.25  # of the tree's width: how far a ground line sticks out on one side
+GROUND_OUT = 0.15  # of the tree's width it sticks out on one side (0.1 took a fir tier's base)
 GROUND_GRASS = 0.04  # of the drawing's height: grass and a trunk's foot just above the line
 # ... and the tree ends on it: below it no more ink than this share of the drawing's height
 # (the trunk below a pine's lowest whorl or a crown's flat base, the body of a bonsai's pot
