@@ -657,7 +657,25 @@ def _without_ground(ink: np.ndarray, tilt: int) -> np.ndarray:
     for k, box in sorted(boxes, key=lambda kb: kb[1][0].start):
         if _is_ground(out, box, tilt):
             out &= ~_ground_pixels(ink, lab == k, box, tilt)
+            out &= ~_ground_ends(out, ink & ~out, box[0].start)
     return out
+
+
+def _ground_ends(ink: np.ndarray, ground: np.ndarray, top: int) -> np.ndarray:
+    """What is left of a ground line beyond its level run: the strokes that touch the
+    removed ``ground`` and lie wholly below row ``top`` (a mound's or a hill's sloping
+    sides, a curl at a line's end, grass on it); a trunk that stood on the line goes up
+    from it and stays."""
+    from scipy import ndimage
+
+    lab, n = ndimage.label(ink, structure=np.ones((3, 3), bool))
+    near = ndimage.binary_dilation(ground, structure=np.ones((3, 3), bool))
+    hit = np.zeros(n + 1, bool)
+    hit[np.unique(lab[near & ink])] = True
+    hit[0] = False
+    for k, sl in enumerate(ndimage.find_objects(lab), start=1):
+        hit[k] &= sl is not None and sl[0].start >= top
+    return hit[lab]
 
 
 def _ground_pixels(

@@ -320,6 +320,24 @@ def test_a_ground_line_across_the_page_is_not_framed(
     assert (framed < 128).sum() < 1.06 * (bare < 128).sum()  # the line is gone
 
 
+@pytest.mark.parametrize("name, seed", [("maple", 3), ("poplar", 4)])
+@pytest.mark.parametrize("half, rise", [(200, 30), (200, 60)])
+def test_a_low_wide_mound_under_the_tree_is_not_framed(
+    name: str, seed: int, half: int, rise: int
+) -> None:
+    """A mound under the tree (its top level at the trunk's foot, its sides going down
+    and out, well beyond the crown) is ground too, sides and all."""
+    page = _on_page(tree_doodle(name, seed), 512, (128, 100))
+    ink = page < 128
+    foot = int(np.flatnonzero(ink.any(axis=1))[-1])
+    cols = np.flatnonzero(ink[foot - 3 : foot + 1].any(axis=0))
+    t = np.linspace(-1.0, 1.0, 60)
+    xs, ys = (cols[0] + cols[-1]) / 2 + half * t, foot + rise * t**2
+    mound = _drawn(page, lambda d: d.line(list(zip(xs, ys, strict=True)), fill=0, width=3))
+    bare, framed = normalise_drawing(page), normalise_drawing(mound)
+    assert np.abs(_box(framed) - _box(bare)).max() <= 5
+
+
 def test_a_ground_line_shorter_than_the_tree_is_kept() -> None:
     """A line under the trunk no wider than the crown does not stick out of the tree: when
     in doubt the ink stays."""
