@@ -583,6 +583,7 @@ GROUND_RUN = 0.25  # of the drawing's width: the shortest level run a ground lin
 GROUND_TILT = 0.012  # of the page's longer side: the rise and wobble a level line may have
 GROUND_OUT = 0.15  # of the tree's width it sticks out on one side (0.1 took a fir tier's base)
 GROUND_GRASS = 0.04  # of the drawing's height: grass and a trunk's foot just above the line
+GROUND_TUFT = 0.12  # of the drawing's height: a tuft of grass on the line is no taller
 # ... and the tree ends on it: below it no more ink than this share of the drawing's height
 # (the trunk below a pine's lowest whorl or a crown's flat base, the body of a bonsai's pot
 # below its rim; roots drawn below the ground keep the line too)
@@ -617,16 +618,33 @@ def _is_ground(ink: np.ndarray, box: tuple[slice, slice], tilt: int) -> bool:
     (t, b), (left, right) = (box[0].start, box[0].stop), (box[1].start, box[1].stop)
     if (t + b) / 2 < top + height / 2 or b - t > 0.25 * (right - left):
         return False
-    above = ink[: max(0, t - int(round(GROUND_GRASS * height)))]
-    cols = np.flatnonzero(above.any(axis=0))
-    if cols.size == 0:  # nothing stands on it
+    span = _standing(ink[: max(0, t - int(round(GROUND_GRASS * height)))], height)
+    if span is None:  # nothing stands on it
         return False
+    cols = np.array(span)
     # under the tree, not under the line's own ends (a mound's sides go down there)
     below = np.flatnonzero(ink[b + tilt :, cols[0] : cols[-1] + 1].any(axis=1))
     if below.size and below[-1] + 1 > GROUND_BELOW * height:  # a trunk, a pot goes on
         return False
     out = max(GROUND_OUT * (cols[-1] + 1 - cols[0]), 4 * tilt)
     return bool(left < cols[0] - out or right > cols[-1] + 1 + out)
+
+
+def _standing(above: np.ndarray, height: int) -> tuple[int, int] | None:
+    """The columns (first, last) of what stands on a ground line, from the ink ``above``
+    it: its strokes less the short ones at its bottom (grass on the line, up to
+    ``GROUND_TUFT`` of the drawing's ``height``); None when nothing does."""
+    from scipy import ndimage
+
+    lab, _ = ndimage.label(above, structure=np.ones((3, 3), bool))
+    tuft = GROUND_TUFT * height
+    low = above.shape[0] - tuft
+    boxes = [
+        b for b in ndimage.find_objects(lab) if b[0].stop - b[0].start >= tuft or b[0].stop < low
+    ]
+    if not boxes:
+        return None
+    return min(b[1].start for b in boxes), max(b[1].stop for b in boxes) - 1
 
 
 def _drop_ground(ink: np.ndarray) -> np.ndarray:
@@ -650,6 +668,8 @@ def _without_ground(ink: np.ndarray, tilt: int) -> np.ndarray:
 
     level = _level_runs(ink, tilt, max(8.0, GROUND_RUN * ink.shape[1]))
     lab, _ = ndimage.label(level, structure=np.ones((3, 3), bool))
+    ys = np.flatnonzero(ink.any(axis=1))
+    height = int(ys[-1] + 1 - ys[0])
     out = ink.copy()
     boxes = list(enumerate(ndimage.find_objects(lab), start=1))
     # from the top down, each judged against what is left above it: the lower edge of a
@@ -657,24 +677,27 @@ def _without_ground(ink: np.ndarray, tilt: int) -> np.ndarray:
     for k, box in sorted(boxes, key=lambda kb: kb[1][0].start):
         if _is_ground(out, box, tilt):
             out &= ~_ground_pixels(ink, lab == k, box, tilt)
-            out &= ~_ground_ends(out, ink & ~out, box[0].start)
+            out &= ~_ground_ends(out, ink & ~out, box[0].start, GROUND_TUFT * height, tilt)
     return out
 
 
-def _ground_ends(ink: np.ndarray, ground: np.ndarray, top: int) -> np.ndarray:
+def _ground_ends(
+    ink: np.ndarray, ground: np.ndarray, top: int, tuft: float, reach: int
+) -> np.ndarray:
     """What is left of a ground line beyond its level run: the strokes that touch the
     removed ``ground`` and lie wholly below row ``top`` (a mound's or a hill's sloping
-    sides, a curl at a line's end, grass on it); a trunk that stood on the line goes up
-    from it and stays."""
+    sides, a curl at a line's end) or are less than ``tuft`` rows tall (grass on it); a
+    trunk that stood on the line goes up from it and stays."""
     from scipy import ndimage
 
     lab, n = ndimage.label(ink, structure=np.ones((3, 3), bool))
-    near = ndimage.binary_dilation(ground, structure=np.ones((3, 3), bool))
+    # touching, or nearly: a tuft drawn as its own stroke stands a pixel or two off it
+    near = ndimage.maximum_filter(ground.view(np.uint8), size=2 * reach + 1) > 0
     hit = np.zeros(n + 1, bool)
     hit[np.unique(lab[near & ink])] = True
     hit[0] = False
     for k, sl in enumerate(ndimage.find_objects(lab), start=1):
-        hit[k] &= sl is not None and sl[0].start >= top
+        hit[k] &= sl is not None and (sl[0].start >= top or sl[0].stop - sl[0].start < tuft)
     return hit[lab]
 
 

@@ -338,6 +338,25 @@ def test_a_low_wide_mound_under_the_tree_is_not_framed(
     assert np.abs(_box(framed) - _box(bare)).max() <= 5
 
 
+@pytest.mark.parametrize("name, seed", [("pine", 5), ("cherry", 1), ("poplar", 4)])
+@pytest.mark.parametrize("rise, lift", [(16, 0), (12, 4)])
+def test_grass_along_the_ground_goes_with_it(name: str, seed: int, rise: int, lift: int) -> None:
+    """Tufts of grass along a ground line, on it or drawn a little apart: they go with
+    the line (a tuft by the trunk's foot may stay: a few pixels of the frame)."""
+    page = _on_page(tree_doodle(name, seed), 512, (128, 100))
+    foot = int(np.flatnonzero((page < 128).any(axis=1))[-1])
+
+    def grass(d: ImageDraw.ImageDraw) -> None:
+        d.line([(30, foot), (480, foot)], fill=0, width=3)
+        for x in range(40, 480, 37):
+            y = foot - lift
+            tuft = [(x, y), (x + 4, y - rise), (x + 8, y), (x + 12, y - 0.8 * rise), (x + 16, y)]
+            d.line(tuft, fill=0, width=2)
+
+    bare, framed = normalise_drawing(page), normalise_drawing(_drawn(page, grass))
+    assert np.abs(_box(framed) - _box(bare)).max() <= 8
+
+
 def test_a_ground_line_shorter_than_the_tree_is_kept() -> None:
     """A line under the trunk no wider than the crown does not stick out of the tree: when
     in doubt the ink stays."""
@@ -411,7 +430,7 @@ def test_the_hand_drawings_keep_all_their_ink() -> None:
 def test_finding_the_tree_is_quick() -> None:
     ink = ink_mask(_on_page(tree_doodle("oak", 2), 512, (128, 100)))
     tree_ink(ink)
-    start = time.perf_counter()
+    start = time.process_time()  # CPU time: the machine may be busy with other work
     for _ in range(5):
         tree_ink(ink)
-    assert (time.perf_counter() - start) / 5 < 0.02  # a few ms; loose for a busy machine
+    assert (time.process_time() - start) / 5 < 0.02  # a few ms at 512 px
