@@ -498,11 +498,13 @@ STRAY_SHARE = 0.02  # a part apart from the drawing with less of its ink than th
 # reaching lowest: a tree stands on the ground, a sun or a cloud is in the sky.  A part
 # apart from the tree, mostly beside it (EXTRA_BESIDE of its width outside the tree's
 # columns at least) and smaller than EXTRA_SHARE of the tree in box or in ink, or wholly
-# above the tree's top, is not the tree: a sun, a cloud, grass or a scribble.  A part above or below the tree (a crown
-# drawn apart from its trunk, a pot, a cloud over the crown) is kept, and so is one as
-# large as the tree: when in doubt the ink stays
+# above the tree's top, is not the tree: a sun, a cloud, grass or a scribble.  A part
+# above or below the tree (a crown drawn apart from its trunk, a pot, a cloud over the
+# crown) is kept, and so is one as large as the tree beside it: when in doubt the ink
+# stays
 EXTRA_BESIDE = 0.5
 EXTRA_SHARE = 0.5
+LINE_ASPECT = 0.25  # a part or a run no taller than this share of its width is a line
 
 
 def _parts(ink: np.ndarray) -> tuple[np.ndarray, int]:
@@ -538,8 +540,8 @@ def _the_tree(ink: np.ndarray, boxes: list[tuple[slice, slice]]) -> int:
     width = np.array([b[1].stop - b[1].start for b in boxes])
     area = height * width
     large = (area >= EXTRA_SHARE * area.max()) | (ink >= EXTRA_SHARE * ink.max())
-    if (large & (height >= 0.25 * width)).any():
-        large &= height >= 0.25 * width
+    if (large & (height > LINE_ASPECT * width)).any():
+        large &= height > LINE_ASPECT * width
     bottom = np.array([b[0].stop for b in boxes])
     return int(np.lexsort((area, bottom, large))[-1])
 
@@ -549,8 +551,8 @@ def _drop_extras(ink: np.ndarray) -> np.ndarray:
     (further than ``STRAY_GAP`` of the page) goes when it holds less than ``STRAY_SHARE``
     of the ink (pencil dust, a smudge, a speck of dirt in a photo), or when it is a small
     part beside the tree or one beside it in the sky (a sun, a cloud, grass, a scribble
-    in a corner).  Either would
-    stretch the frame and shrink the tree into a corner of it."""
+    in a corner).  Either would stretch the frame and shrink the tree into a corner of
+    it."""
     from scipy import ndimage
 
     total = int(ink.sum())
@@ -616,7 +618,7 @@ def _is_ground(ink: np.ndarray, box: tuple[slice, slice], tilt: int) -> bool:
     ys = np.flatnonzero(ink.any(axis=1))
     top, height = int(ys[0]), int(ys[-1] - ys[0] + 1)
     (t, b), (left, right) = (box[0].start, box[0].stop), (box[1].start, box[1].stop)
-    if (t + b) / 2 < top + height / 2 or b - t > 0.25 * (right - left):
+    if (t + b) / 2 < top + height / 2 or b - t > LINE_ASPECT * (right - left):
         return False
     span = _standing(ink[: max(0, t - int(round(GROUND_GRASS * height)))], height)
     if span is None:  # nothing stands on it
@@ -664,6 +666,8 @@ def _drop_ground(ink: np.ndarray) -> np.ndarray:
 
 
 def _without_ground(ink: np.ndarray, tilt: int) -> np.ndarray:
+    """:func:`_drop_ground` on the drawing's box: each level run that is a ground line
+    goes, with its crests, its ends and its grass."""
     from scipy import ndimage
 
     level = _level_runs(ink, tilt, max(8.0, GROUND_RUN * ink.shape[1]))
@@ -817,8 +821,8 @@ def normalise_drawing(img: np.ndarray, size: int = DRAWING_SIDE) -> np.ndarray:
     paper's grain (:func:`drop_specks`) or stray marks apart from the drawing.  It is
     framed on the tree (:func:`tree_ink`), not on all the ink: a ground line under the
     tree, a sun, a cloud or grass beside it are left out of the frame and the picture; a
-    drawing in a corner is moved and scaled to the middle.  The refinement frames every candidate's
-    sketch the same way, so drawing and candidates always compare at one framing (the
+    drawing in a corner is moved and scaled to the middle.  The refinement frames every
+    candidate's sketch the same way, so drawing and candidates always compare at one framing (the
     renderer's own frame fits a tree's width over all sides, not the drawn one).  Refuses
     blank and dark pages.
     """
