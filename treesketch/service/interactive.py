@@ -7,7 +7,8 @@ job's current best tree.
 - ``POST /trees`` (JSON: ``params``, ``controls``, ``seed``, ``species``, ``max_faces``,
   ``yaw``): the tree grown (its GLB turned to face the view from ``yaw``); ``Accept: model/gltf-binary`` answers its GLB (the tree's height,
   species and control values in ``X-Tree-*`` headers), otherwise JSON with its
-  parameters, species, height and control values.
+  parameters, species, height and control values; ``Accept: application/zip`` answers
+  the tree as OBJ (``tree.obj``, ``tree.mtl``, the bark and leaf textures) in a zip.
 - ``GET /jobs/{id}/preview/tree.glb`` and ``.../sketch.png``: the job's current best tree
   while it runs (``preview.PreviewWriter``; the job's progress says which ``preview``
   version is there).  Local worker processes write it beside the job's results; a Ray
@@ -19,6 +20,8 @@ job's current best tree.
   cheap way (``treesketch.trees.tree_sketch``: a median 0.18 s at 256 px, 0.30 s at 512
   px on a busy 2-core machine) and cached by the browser: a finished job's tree never
   changes.
+- ``GET /jobs/{id}/drawing.png?view=N``: the drawing the job was sent (its first, or its
+  ``view``-th), as uploaded: the page puts it back on the pad when a job's link is opened.
 - ``GET /examples`` (names and links) and ``GET /examples/{name}``: the example drawings
   (the repository's ``examples/hand/``, when the service runs from a checkout);
   ``GET /help/controls.png``: pictures of what each control does (``docs/controls.png``).
@@ -58,6 +61,15 @@ CONTROLS_PICTURE = REPO / "docs" / "controls.png"
 EDITS_AT_ONCE = 2
 MAX_TREE_BODY = 256 * 1024  # bytes: a parameter dictionary is about 3 KB
 GLB = "model/gltf-binary"
+ZIP = "application/zip"
+# an uploaded drawing's media type by its first bytes (the reader took it, so it is one)
+PICTURE_MAGIC = (
+    (b"\x89PNG", "image/png"),
+    (b"\xff\xd8", "image/jpeg"),
+    (b"GIF8", "image/gif"),
+    (b"BM", "image/bmp"),
+    (b"RIFF", "image/webp"),
+)
 OUTLINE_SIZES = (64, 512)  # px: the page's pad is 512 px
 MAX_TURN = 3600.0  # degrees: ten turns either way (any finite turn means the same modulo 360)
 
@@ -76,9 +88,11 @@ def controls_table() -> dict[str, Any]:
     }
 
 
-def grow_request(body: Any, want_glb: bool) -> tuple[bytes | dict[str, Any], dict[str, str]]:
-    """(GLB bytes or the JSON answer, headers) of one ``POST /trees`` body; ValueError
-    for a bad one."""
+def grow_request(
+    body: Any, want_glb: bool, want_zip: bool = False
+) -> tuple[bytes | dict[str, Any], dict[str, str]]:
+    """(GLB bytes, the OBJ zip's bytes or the JSON answer, headers) of one ``POST /trees``
+    body; ValueError for a bad one."""
     from treesketch.trees import TreeRequest, edit_tree, light_glb
 
     request = TreeRequest.from_json(body)
@@ -91,6 +105,8 @@ def grow_request(body: Any, want_glb: bool) -> tuple[bytes | dict[str, Any], dic
     }
     if want_glb:
         return light_glb(tree.mesh, yaw=request.yaw, max_faces=request.max_faces), facts
+    if want_zip:
+        return obj_zip(tree.mesh, yaw=request.yaw, max_faces=request.max_faces), facts
     return {
         "params": tree.params.to_dict(),
         "species": tree.species,
@@ -98,6 +114,32 @@ def grow_request(body: Any, want_glb: bool) -> tuple[bytes | dict[str, Any], dic
         "controls": tree.controls,
         "adjusted": tree.adjusted,
     }, facts
+
+
+def obj_zip(mesh: Any, yaw: float = 0.0, max_faces: int | None = None) -> bytes:
+    """The tree's OBJ export (``treesketch.trees.obj_files``: ``tree.obj``, ``tree.mtl``,
+    the textures) as the bytes of one zip."""
+    import io
+    import tempfile
+    import zipfile
+
+    from weberpenn.export import obj_files
+
+    with tempfile.TemporaryDirectory() as d:
+        files = obj_files(mesh, Path(d) / "tree.obj", yaw=yaw, max_faces=max_faces)
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as z:
+        for path, content in files.items():
+            z.writestr(path.name, content)
+    return out.getvalue()
+
+
+def picture_type(data: bytes) -> str:
+    """The media type of an uploaded picture by its first bytes."""
+    for magic, media in PICTURE_MAGIC:
+        if data.startswith(magic):
+            return media
+    return "application/octet-stream"
 
 
 async def _json_body(request: Request) -> Any:
@@ -181,14 +223,18 @@ def add_interactive_routes(app: FastAPI, store: JobStore) -> None:
     @app.post("/trees")
     async def trees(request: Request) -> Response:
         body = await _json_body(request)
-        want_glb = GLB in request.headers.get("accept", "")
+        accept = request.headers.get("accept", "")
+        want_glb, want_zip = GLB in accept, ZIP in accept
         async with gate:
             try:
-                answer, facts = await run_in_threadpool(grow_request, body, want_glb)
+                answer, facts = await run_in_threadpool(grow_request, body, want_glb, want_zip)
             except ValueError as exc:  # ParamError and bad controls: the request's fault
                 raise HTTPException(422, str(exc)) from exc
         if isinstance(answer, bytes):
-            return Response(answer, media_type=GLB, headers={**facts, "Cache-Control": "no-store"})
+            media = GLB if want_glb else ZIP
+            return Response(
+                answer, media_type=media, headers={**facts, "Cache-Control": "no-store"}
+            )
         return JSONResponse(answer)
 
     # registered before the app's ``/jobs/{id}/{artefact}``, which would take the name
@@ -212,6 +258,28 @@ def add_interactive_routes(app: FastAPI, store: JobStore) -> None:
         # a finished job's tree never changes
         return Response(
             data, media_type="image/png", headers={"Cache-Control": "private, max-age=86400"}
+        )
+
+    @app.get("/jobs/{job_id}/drawing.png")
+    async def drawing(job_id: str, view: str = "1") -> Response:
+        n = int(view) if view.isdigit() and len(view) <= 2 else 0
+        job = await run_in_threadpool(store.get, job_id)
+        if job is None:
+            raise HTTPException(404, f"no job {job_id!r}")
+        views = 1 + len(job.options.get("yaws") or ())
+        if not 1 <= n <= views:
+            raise HTTPException(422, f"view must be 1..{views}, got {view[:8]!r}")
+        path = store.upload_path(job_id, n)
+        if not path.is_file():
+            raise HTTPException(410, f"job {job_id}'s drawing was removed")
+        data = await run_in_threadpool(path.read_bytes)
+        return Response(
+            data,
+            media_type=picture_type(data),
+            headers={
+                "Cache-Control": "private, max-age=86400",
+                "X-Content-Type-Options": "nosniff",
+            },
         )
 
     @app.get("/jobs/{job_id}/preview/{name}")
