@@ -465,7 +465,7 @@ function showCandidates(job) {
   // tree leads with the question, the species after it
   const picked = (job.options || {}).species;
   let text = r.species_text ? `It is ${r.species_text}.` : "";
-  if (picked) text = `You picked the species: ${displayName(picked)} (the drawing did not decide it).`;
+  if (picked) text = `You picked this species: ${displayName(picked)}. It was not judged from the drawing.`;
   else if (r.warning) text = `Is this a tree? The drawing does not look much like one.${r.species_text ? ` If it is, the closest is ${r.species_text}.` : ""}`;
   $("species-text").textContent = text;
   cands.forEach((c, i) => {
