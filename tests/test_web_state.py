@@ -187,6 +187,40 @@ def test_a_reload_and_the_link_keep_the_drawing_the_edits_and_the_settings(
         assert shared["budget"] == "2" and shared["refine"] and shared["species"] == ""
         other.wait_for_function(f"({INK})() > 500")
         assert other.inner_text("#view-note") == "edited"
+        # its drawing came from the server: the tree can be drawn from another side here
+        n = _edits(other)
+        other.click("#reset-controls")
+        _wait_edit(other, n)
+        other.wait_for_function("!document.getElementById('draw-side').disabled")
+        assert "crown_width" not in other.url and "seed" not in other.url
+
+
+def test_the_api_gives_a_jobs_drawing_and_a_tree_as_obj(
+    server: str, sketch: bytes, jobs: dict
+) -> None:
+    import httpx
+
+    with httpx.Client(base_url=server, timeout=60) as http:
+        r = http.get(f"/jobs/{jobs['palm']}/drawing.png")
+        assert r.status_code == 200 and r.content == sketch
+        assert r.headers["content-type"] == "image/png"
+        assert r.headers["x-content-type-options"] == "nosniff"
+        for bad in ("2", "0", "x", "-1", "1" * 40):
+            r = http.get(f"/jobs/{jobs['palm']}/drawing.png", params={"view": bad})
+            assert r.status_code == 422, (bad, r.text)
+        assert http.get("/jobs/nope/drawing.png").status_code == 404
+        params = http.get(f"/jobs/{jobs['palm']}").json()["result"]["params"]
+        r = http.post(
+            "/trees",
+            json={"params": params, "species": "palm", "max_faces": 5000},
+            headers={"Accept": "application/zip"},
+        )
+        assert r.status_code == 200 and r.headers["content-type"] == "application/zip"
+        with zipfile.ZipFile(io.BytesIO(r.content)) as z:
+            names = sorted(z.namelist())
+            assert names == ["tree.mtl", "tree.obj", "tree_bark.png", "tree_leaf.png"], names
+            faces = z.read("tree.obj").decode().count("\nf ")
+        assert 1000 < faces <= 5000
 
 
 def test_ctrl_z_undoes_what_was_changed_last_the_pad_or_the_tree(

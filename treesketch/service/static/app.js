@@ -687,6 +687,7 @@ async function restoreFromUrl() {
   }
   if (pad === null) padFrom(`/jobs/${encodeURIComponent(job.id)}/drawing.png`).then((ok) => { if (ok) savePad(); });
   restoreViews(id);
+  fetchViews(job);
   restoring = true;
   startJob(job);
   restoring = false;
@@ -1261,6 +1262,24 @@ function restoreViews(id) {
     const kept = JSON.parse(sessionStorage.getItem(VIEWS_KEY) || "{}")[id];
     if (kept) sentViews.set(id, kept.map((v) => ({ blob: dataBlob(v.png), yaw: v.yaw })));
   } catch { /* none kept */ }
+}
+// a finished job opened by its link in another tab: its drawings from the server (GET
+// /jobs/{id}/drawing.png), each with its turn (the one searched for where none was given)
+async function fetchViews(job) {
+  if (sentViews.has(job.id) || job.state !== "done") return;
+  const yaws = [0, ...((job.options || {}).yaws || [])];
+  const found = (job.result.views || []).map((v) => v.yaw);
+  try {
+    const blobs = await Promise.all(yaws.map(async (_, i) => {
+      const r = await api(`/jobs/${encodeURIComponent(job.id)}/drawing.png?view=${i + 1}`);
+      if (!r.ok) throw new Error(String(r.status));
+      return r.blob();
+    }));
+    const views = blobs.map((blob, i) => ({ blob, yaw: yaws[i] ?? found[i] ?? 0 }));
+    sentViews.set(job.id, views);
+    keepViews(job.id, views);
+    updateSideButton();
+  } catch { /* the drawings are gone: no other side from here */ }
 }
 
 // ---- start ---------------------------------------------------------------------------
