@@ -223,6 +223,27 @@ def test_the_api_gives_a_jobs_drawing_and_a_tree_as_obj(
         assert 1000 < faces <= 5000
 
 
+def test_a_reload_keeps_the_candidate_species_on_show(page: Any, server: str, jobs: dict) -> None:
+    _open(page, server, jobs["palm"])
+    other = page.get_attribute("#candidates .candidate >> nth=1", "data-species")
+    n = int(page.get_attribute("body", "data-loads"))
+    page.click("#candidates .candidate >> nth=1")
+    page.wait_for_function(f"Number(document.body.dataset.loads) > {n}", timeout=30_000)
+    page.wait_for_selector(READY)
+    n = _edits(page)
+    _slide(page, "crown_width", 1.3)
+    _wait_edit(page, n)
+    assert "cand=1" in page.url
+    page.reload()
+    page.wait_for_selector(READY, timeout=30_000)
+    page.wait_for_function("Number(document.body.dataset.edits || 0) >= 1", timeout=30_000)
+    assert page.get_attribute("body", "data-shown") == other
+    assert page.get_attribute("#candidates .candidate >> nth=1", "aria-pressed") == "true"
+    assert page.input_value("#c-crown_width") == "1.3"
+    # the candidate's tree, then its edit: never the job's own tree first
+    assert page.get_attribute("body", "data-loads") == "2"
+
+
 def test_ctrl_z_undoes_what_was_changed_last_the_pad_or_the_tree(
     page: Any, server: str, jobs: dict
 ) -> None:

@@ -404,13 +404,14 @@ function showResult(job) {
   showViews(job);
   updateSideButton();
   $("view-note").textContent = "";
+  if (phone() && !restoring) $("result-panel").scrollIntoView({ behavior: "smooth" });
+  // a candidate species from the address (a reload, a link): its tree, not the job's
+  const cand = pending && pending.job === job.id ? pending.cand : 0;
+  framedJob = job.id;
+  if (cand > 0 && cand < Math.min(3, (r.candidates || []).length)) { switchTo(cand); return; }
   // the viewer's light tree; the GLB download keeps full detail
   loadModel(links["tree_view.glb"], frameFor(job));
-  framedJob = job.id;
-  if (phone() && !restoring) $("result-panel").scrollIntoView({ behavior: "smooth" });
-  const cand = pending && pending.job === job.id ? pending.cand : 0;
-  if (cand > 0 && (r.candidates || [])[cand]) switchTo(cand);
-  else startEdit(r);
+  startEdit(r);
 }
 
 // the full GLB's size and triangles (its header, read with a range request), beside the
