@@ -7,7 +7,8 @@ job's current best tree.
 - ``POST /trees`` (JSON: ``params``, ``controls``, ``seed``, ``species``, ``max_faces``,
   ``yaw``): the tree grown (its GLB turned to face the view from ``yaw``); ``Accept: model/gltf-binary`` answers its GLB (the tree's height,
   species and control values in ``X-Tree-*`` headers), otherwise JSON with its
-  parameters, species, height and control values.
+  parameters, species, height and control values; ``Accept: application/zip`` answers
+  the tree as OBJ (``tree.obj``, ``tree.mtl``, the bark and leaf textures) in a zip.
 - ``GET /jobs/{id}/preview/tree.glb`` and ``.../sketch.png``: the job's current best tree
   while it runs (``preview.PreviewWriter``; the job's progress says which ``preview``
   version is there).  Local worker processes write it beside the job's results; a Ray
@@ -19,6 +20,8 @@ job's current best tree.
   cheap way (``treesketch.trees.tree_sketch``: a median 0.18 s at 256 px, 0.30 s at 512
   px on a busy 2-core machine) and cached by the browser: a finished job's tree never
   changes.
+- ``GET /jobs/{id}/drawing.png?view=N``: the drawing the job was sent (its first, or its
+  ``view``-th), as uploaded: the page puts it back on the pad when a job's link is opened.
 - ``GET /examples`` (names and links) and ``GET /examples/{name}``: the example drawings
   (the repository's ``examples/hand/``, when the service runs from a checkout);
   ``GET /help/controls.png``: pictures of what each control does (``docs/controls.png``).
@@ -72,6 +75,15 @@ EXAMPLES = REPO / "examples" / "hand"
 CONTROLS_PICTURE = REPO / "docs" / "controls.png"
 MAX_TREE_BODY = 256 * 1024  # bytes: a parameter dictionary is about 3 KB
 GLB = "model/gltf-binary"
+ZIP = "application/zip"
+# an uploaded drawing's media type by its first bytes (the reader took it, so it is one)
+PICTURE_MAGIC = (
+    (b"\x89PNG", "image/png"),
+    (b"\xff\xd8", "image/jpeg"),
+    (b"GIF8", "image/gif"),
+    (b"BM", "image/bmp"),
+    (b"RIFF", "image/webp"),
+)
 OUTLINE_SIZES = (64, 512)  # px: the page's pad is 512 px
 MAX_TURN = 3600.0  # degrees: ten turns either way (any finite turn means the same modulo 360)
 
@@ -90,9 +102,11 @@ def controls_table() -> dict[str, Any]:
     }
 
 
-def grow_request(body: Any, want_glb: bool) -> tuple[bytes | dict[str, Any], dict[str, str]]:
-    """(GLB bytes or the JSON answer, headers) of one ``POST /trees`` body; ValueError
-    for a bad one."""
+def grow_request(
+    body: Any, want_glb: bool, want_zip: bool = False
+) -> tuple[bytes | dict[str, Any], dict[str, str]]:
+    """(GLB bytes, the OBJ zip's bytes or the JSON answer, headers) of one ``POST /trees``
+    body; ValueError for a bad one."""
     from treesketch.trees import TreeRequest, edit_tree, reply_glb
 
     request = TreeRequest.from_json(body)
@@ -106,6 +120,8 @@ def grow_request(body: Any, want_glb: bool) -> tuple[bytes | dict[str, Any], dic
     if want_glb:
         # TreeTooBig (a ValueError) past the most a reply holds, before exporting
         return reply_glb(tree.mesh, yaw=request.yaw, max_faces=request.max_faces), facts
+    if want_zip:
+        return obj_zip(tree.mesh, yaw=request.yaw, max_faces=request.max_faces), facts
     return {
         "params": tree.params.to_dict(),
         "species": tree.species,
@@ -113,6 +129,46 @@ def grow_request(body: Any, want_glb: bool) -> tuple[bytes | dict[str, Any], dic
         "controls": tree.controls,
         "adjusted": tree.adjusted,
     }, facts
+
+
+def grow_zip_request(body: Any, want_glb: bool) -> tuple[bytes | dict[str, Any], dict[str, str]]:
+    """:func:`grow_request` answering the OBJ zip (``want_glb`` is ignored): the grower
+    ``tree_work`` runs for an ``Accept: application/zip`` request."""
+    return grow_request(body, False, True)
+
+
+def obj_zip(mesh: Any, yaw: float = 0.0, max_faces: int | None = None) -> bytes:
+    """The tree's OBJ export (``weberpenn.export.obj_files``: ``tree.obj``, ``tree.mtl``,
+    the textures) as the bytes of one zip; :class:`TreeTooBig` past the most a reply holds,
+    as for a GLB."""
+    import io
+    import tempfile
+    import zipfile
+
+    from treesketch.trees import REPLY_FACES, TreeTooBig
+    from weberpenn.export import obj_files
+
+    budget = REPLY_FACES if max_faces is None else min(max_faces, REPLY_FACES)
+    if (max_faces is None or max_faces > REPLY_FACES) and mesh.n_faces > budget:
+        raise TreeTooBig(
+            f"the tree has {mesh.n_faces:,} triangles; a reply holds at most "
+            f"{REPLY_FACES:,}: ask for max_faces <= {REPLY_FACES} (the same tree, lighter)"
+        )
+    with tempfile.TemporaryDirectory() as d:
+        files = obj_files(mesh, Path(d) / "tree.obj", yaw=yaw, max_faces=max_faces)
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as z:
+        for path, content in files.items():
+            z.writestr(path.name, content)
+    return out.getvalue()
+
+
+def picture_type(data: bytes) -> str:
+    """The media type of an uploaded picture by its first bytes."""
+    for magic, media in PICTURE_MAGIC:
+        if data.startswith(magic):
+            return media
+    return "application/octet-stream"
 
 
 async def _json_body(request: Request) -> Any:
@@ -198,9 +254,9 @@ def add_interactive_routes(app: FastAPI, store: JobStore) -> None:
     async def controls() -> dict[str, Any]:
         return await run_in_threadpool(controls_table)
 
-    async def grow_cheap(body: Any, want_glb: bool) -> tuple[Any, dict[str, str]]:
+    async def grow_cheap(body: Any, want_glb: bool, fn: Any) -> tuple[Any, dict[str, str]]:
         async with gate.enter():
-            answer, facts = await run_in_threadpool(grow_request, body, want_glb)
+            answer, facts = await run_in_threadpool(fn, body, want_glb)
         if isinstance(answer, bytes) and len(answer) > MEMORY_REPLY_BYTES:
             # a reply a slow client may hold for long: from disk, not from memory
             try:
@@ -209,11 +265,11 @@ def add_interactive_routes(app: FastAPI, store: JobStore) -> None:
                 raise HTTPException(507, f"cannot write the tree's reply: {exc}") from None
         return answer, facts
 
-    async def grow_big(body: Any, want_glb: bool) -> tuple[Any, dict[str, str]]:
+    async def grow_big(body: Any, want_glb: bool, fn: Any) -> tuple[Any, dict[str, str]]:
         async with big_gate.enter():
             try:
                 return await run_in_threadpool(
-                    grow_in_child, grow_request, body, want_glb, replies, BIG_SECONDS
+                    grow_in_child, fn, body, want_glb, replies, BIG_SECONDS
                 )
             except TreeTimeout as exc:
                 raise HTTPException(
@@ -228,21 +284,26 @@ def add_interactive_routes(app: FastAPI, store: JobStore) -> None:
     @app.post("/trees")
     async def trees(request: Request) -> Response:
         body = await _json_body(request)
-        want_glb = GLB in request.headers.get("accept", "")
+        accept = request.headers.get("accept", "")
+        want_glb = GLB in accept
+        # the OBJ zip: another grower, answered as the GLB is (from disk when big)
+        fn, media = (
+            (grow_request, GLB) if want_glb or ZIP not in accept else (grow_zip_request, ZIP)
+        )
         try:
             # every field checked and the cost estimated before any gate or growing
             expensive = await run_in_threadpool(is_expensive, body)
             grow = grow_big if expensive else grow_cheap
-            answer, facts = await grow(body, want_glb)
+            answer, facts = await grow(body, want_glb, fn)
         except TreeTooBig as exc:
             raise HTTPException(413, str(exc)) from None
         except ValueError as exc:  # ParamError and bad controls: the request's fault
             raise HTTPException(422, str(exc)) from None
         headers = {**facts, "Cache-Control": "no-store"}
         if isinstance(answer, Path):
-            return stream_file(answer, GLB, headers)
+            return stream_file(answer, media, headers)
         if isinstance(answer, bytes):
-            return Response(answer, media_type=GLB, headers=headers)
+            return Response(answer, media_type=media, headers=headers)
         return JSONResponse(answer)
 
     # registered before the app's ``/jobs/{id}/{artefact}``, which would take the name
@@ -266,6 +327,28 @@ def add_interactive_routes(app: FastAPI, store: JobStore) -> None:
         # a finished job's tree never changes
         return Response(
             data, media_type="image/png", headers={"Cache-Control": "private, max-age=86400"}
+        )
+
+    @app.get("/jobs/{job_id}/drawing.png")
+    async def drawing(job_id: str, view: str = "1") -> Response:
+        n = int(view) if view.isdigit() and len(view) <= 2 else 0
+        job = await run_in_threadpool(store.get, job_id)
+        if job is None:
+            raise HTTPException(404, f"no job {job_id!r}")
+        views = 1 + len(job.options.get("yaws") or ())
+        if not 1 <= n <= views:
+            raise HTTPException(422, f"view must be 1..{views}, got {view[:8]!r}")
+        path = store.upload_path(job_id, n)
+        if not path.is_file():
+            raise HTTPException(410, f"job {job_id}'s drawing was removed")
+        data = await run_in_threadpool(path.read_bytes)
+        return Response(
+            data,
+            media_type=picture_type(data),
+            headers={
+                "Cache-Control": "private, max-age=86400",
+                "X-Content-Type-Options": "nosniff",
+            },
         )
 
     @app.get("/jobs/{job_id}/preview/{name}")
