@@ -13,6 +13,8 @@
     .venv/bin/python benchmarks/bench_species.py calibrate runs.jsonl --png docs/confidence.png
     # the paper's own five drawings, as published and as light pencil on grey paper
     .venv/bin/python benchmarks/bench_species.py paper [--strip PNG]
+    # drawings by people of held-out authors: "is this a tree?" and the kind of tree
+    .venv/bin/python benchmarks/bench_species.py people [--per-kind N] [--lco DIR/lco_detector.npz]
 
 ``network``: the checkpoint's species (its calibrated classifier when it has one) on
 every test sketch of ``--data``, prepared as the pipeline prepares a drawing, per style and
@@ -34,6 +36,14 @@ the paper's figure (``../shared/reference/style_reference.png``: maple, palm, pi
 bonsai from left to right, cut apart at the blank columns between them), each as published
 and as light pencil on grey paper (strokes 40 % as dark, paper 150-205 of 255 lit from one
 side, grain of 4 levels; seeded).
+
+``people``: the first estimate's "is this a tree?" and species on the held part of
+people's drawings (``eval.people``: authors never trained or fitted on), per source and
+kind: the share of trees left unwarned, of other things warned, and of trees read as a palm,
+bonsai or pine (a person who means one draws one); with ``--lco``, the same warnings of the
+detector ``scripts/fit_people.py`` fitted with :data:`eval.people.LEFT_OUT_KINDS` left out,
+on those kinds.  ``--features`` reads the readings ``scripts/people_features.py`` cached
+(the same reader and network) instead of reading the drawings again (about 5 minutes).
 
 ``calibrate``: the posterior's ``NET_WEIGHT`` and ``DISTANCE_SCALE`` by maximum likelihood
 of the true species among the candidates (half the runs fit, the other half score: the
@@ -413,6 +423,72 @@ def doodles(args: argparse.Namespace) -> None:
             print(f"- {k}: {p} (a person: {people[k]['species']})")
 
 
+# --------------------------------------------------------------------------- people
+ODD_FOR_A_TREE = ("palm", "bonsai", "pine")  # a person's "tree" is none of these
+
+
+def _people_readings(args: argparse.Namespace, model: Any) -> dict[str, np.ndarray]:
+    from eval.fitting import read_drawings
+    from eval.people import people_drawings
+    from treesketch.pipeline import load_sketch, prepare_input
+
+    if args.features:
+        return dict(np.load(Path(args.features) / "people_held.npz"))
+    ds = people_drawings(part="held", per_kind=args.per_kind)
+    _, feats, kept = read_drawings(
+        model, [d.image() for d in ds], lambda im: prepare_input(load_sketch(im))
+    )
+    ds = [d for d, k in zip(ds, kept, strict=True) if k]
+    return {
+        "features": feats,
+        "source": np.array([d.source for d in ds]),
+        "kind": np.array([d.kind for d in ds]),
+    }
+
+
+def people(args: argparse.Namespace) -> None:
+    from eval.people import LEFT_OUT_KINDS
+    from tsn.predict import load_model
+    from tsn.tree_detect import TreeDetector
+
+    model = load_model(args.checkpoint)
+    t0 = time.perf_counter()
+    r = _people_readings(args, model)
+    feats, source, kind = r["features"], r["source"], r["kind"]
+    p_tree = model.tree_probabilities(feats)
+    clf = model.species_id.classifier
+    species = np.array(clf.species)[clf.probabilities_many(feats).argmax(axis=1)]
+    warned = p_tree < 0.5
+    print(f"## Drawings by people, held-out authors ({args.checkpoint or 'shipped'}), {_stamp()}")
+    print(f"{len(kind)} drawings read in {time.perf_counter() - t0:.0f} s\n")
+    print("| source | kind | drawings | warned | read as |")
+    print("|---|---|---:|---:|---|")
+    for src in sorted(set(source)):
+        for k in sorted(set(kind[source == src])):
+            m = (source == src) & (kind == k)
+            top = Counter(species[m]).most_common(3)
+            read = ", ".join(f"{s} {n / m.sum():.0%}" for s, n in top)
+            print(f"| {src} | {k} | {m.sum()} | {warned[m].mean():.1%} | {read} |")
+    trees = kind == "tree"
+    odd = np.isin(species[trees], ODD_FOR_A_TREE)
+    print(f"\ntrees unwarned: **{1 - warned[trees].mean():.1%}** of {trees.sum()}")
+    print(f"other things warned: **{warned[~trees].mean():.1%}** of {(~trees).sum()}")
+    print(f"trees read as a palm, bonsai or pine: **{odd.mean():.1%}**")
+    if args.lco:
+        lco = TreeDetector.from_dict(dict(np.load(args.lco)))
+        left = np.isin(kind, LEFT_OUT_KINDS)
+        pl = lco.probabilities(model.head_features(feats))
+        print(
+            f"leave-categories-out detector: kinds never fitted ({', '.join(LEFT_OUT_KINDS)}) "
+            f"warned **{np.mean(pl[left] < 0.5):.1%}** of {left.sum()}; kinds fitted warned "
+            f"{np.mean(pl[~left & ~trees] < 0.5):.1%}; trees unwarned {np.mean(pl[trees] >= 0.5):.1%}"
+        )
+        for k in LEFT_OUT_KINDS:
+            m = kind == k
+            if m.any():
+                print(f"- {k}: {np.mean(pl[m] < 0.5):.1%} warned of {m.sum()}")
+
+
 PAPER_STRIP = Path(__file__).resolve().parents[2] / "shared" / "reference" / "style_reference.png"
 PAPER_SPECIES = ("maple", "palm", "pine", "cherry", "bonsai")  # the figure, left to right
 
@@ -441,7 +517,7 @@ def paper(args: argparse.Namespace) -> None:
     print(f"## Species of the paper's drawings ({args.strip.name}), {_stamp()}\n")
     print("| drawing | as published | light pencil on grey paper |")
     print("|---|---|---|")
-    right = 0
+    right = warned = 0
     for truth, img in zip(PAPER_SPECIES, drawings, strict=True):
         h, w = img.shape
         light = np.linspace(150.0, 205.0, w)[None, :] - 0.4 * (255.0 - img)
@@ -450,9 +526,12 @@ def paper(args: argparse.Namespace) -> None:
         for version in (img, grey):
             est = pipe.estimate(version)
             right += est.species == truth
-            cells.append(f"{est.species} ({est.species_scores[est.species]:.0%})")
+            p = est.tree_probability
+            warned += p is not None and p < 0.5
+            tree = "" if p is None else f", P(tree) {p:.2f}"
+            cells.append(f"{est.species} ({est.species_scores[est.species]:.0%}{tree})")
         print(f"| {truth} | {cells[0]} | {cells[1]} |")
-    print(f"\nright: **{right} of {2 * len(PAPER_SPECIES)}**")
+    print(f'\nright: **{right} of {2 * len(PAPER_SPECIES)}**; warned "is this a tree?": {warned}')
 
 
 def main() -> None:
@@ -482,6 +561,11 @@ def main() -> None:
     q = sub.add_parser("paper")
     q.add_argument("--strip", type=Path, default=PAPER_STRIP)
     q.add_argument("--checkpoint", default=None)
+    e = sub.add_parser("people")
+    e.add_argument("--checkpoint", default=None)
+    e.add_argument("--per-kind", type=int, default=None, help="at most this many per kind")
+    e.add_argument("--features", default=None, help="scripts/people_features.py's --out")
+    e.add_argument("--lco", default=None, help="scripts/fit_people.py's lco_detector.npz")
     c = sub.add_parser("calibrate")
     c.add_argument("runs")
     c.add_argument("--png", default=None)
@@ -493,6 +577,7 @@ def main() -> None:
         "detector": detector,
         "calibrate": calibrate,
         "paper": paper,
+        "people": people,
     }
     parts[args.part](args)
 

@@ -4,9 +4,24 @@ made outside the training styles.
 - :func:`nontree_doodle` (``kind`` of :data:`NONTREE_KINDS`: houses, cars, faces, animals,
   cups, words, a sun, a flower, a bicycle, a chair...) for the "is this a tree?" calibration;
 - :func:`tree_doodle` (``species`` of :data:`TREE_SPECIES`, the project's eleven) for held-out
-  tree doodles with the species a person would name.
+  tree doodles with the species a person would name (:func:`tree_doodle_strokes`: the same
+  drawing's strokes in page pixels);
+- :func:`palm_doodle` (``form`` of :data:`PALM_FORMS`) for palms as people draw them: a
+  curved or straight trunk, often ringed, and 3-8 fronds, each a closed pointed leaf, a
+  drooping arc, a jagged leaf or a spike of a star burst.  There are no palms among
+  people's drawings (``shared/people_doodles``), so these forms are all there is.
 
-Both return a ``(256, 256)`` uint8 image, 255 paper, dark ink.  Each drawing is written as
+``tree_doodle`` mixes in varieties besides each species' own drawer, chosen per seed on a
+stream of their own (a seed that keeps the species' own drawer keeps its bytes): half the
+palms are drawn in the forms of ``palm_doodle``; about 40% of oaks, maples and cherries as
+people draw "a tree" (measured on their drawings with :mod:`eval.drawing_stats`: a crown of
+big loops often left open where a thick, short, flaring trunk comes in, sometimes roots, a
+ground line, a hill, grass, a sun or a cloud beside it, few and shaky strokes, near the
+middle of the page or now and then small in a corner).
+
+Seeds: the benchmarks score seeds below 1000; the fitting scripts draw from 1000 up.
+
+Each returns a ``(256, 256)`` uint8 image, 255 paper, dark ink.  Each drawing is written as
 strokes (:mod:`eval.strokes`), never from :mod:`render.styles` (``render.styles.doodle``
 derives from our renderer's trees; these do not, so a network trained on that style is
 tested on drawings it never saw the like of).  Every drawing varies with its seed: its
@@ -28,7 +43,16 @@ from PIL import Image, ImageDraw
 
 from .strokes import Stroke, arc, bumpy, curve, jag, line, wobble
 
-__all__ = ["NONTREE_KINDS", "SIZE", "TREE_SPECIES", "nontree_doodle", "tree_doodle"]
+__all__ = [
+    "NONTREE_KINDS",
+    "PALM_FORMS",
+    "SIZE",
+    "TREE_SPECIES",
+    "nontree_doodle",
+    "palm_doodle",
+    "tree_doodle",
+    "tree_doodle_strokes",
+]
 
 #: The side of every doodle, in pixels.
 SIZE = 256
@@ -780,6 +804,148 @@ def _palm(rng: np.random.Generator) -> Strokes:
     return s
 
 
+# --------------------------------------------------------------------- palms as people draw them
+# a trunk (curved or straight, one line or two, often ringed) and 3-8 fronds from its top;
+# each form draws every frond the same way.  Strokes as above: the base near (0, 0), up -y.
+
+
+def _palm_trunk(rng: np.random.Generator) -> tuple[Strokes, tuple[float, float]]:
+    """A palm's trunk and its top: curved (most) or straight, one line or two, tapering, and
+    often ringed (short strokes across it, the mark people use to say "palm")."""
+    h = _u(rng, 170, 250)
+    bend = _u(rng, -70, 70) if _chance(rng, 0.7) else _u(rng, -8, 8)
+    t = np.linspace(0, 1, 16)
+    xs, ys = bend * t**2, -h * t
+    half = _u(rng, 5, 11) * (1 - 0.45 * t)
+    if _chance(rng, 0.25):  # one line, a quick doodle; rings as ticks across it
+        s = [np.stack([xs, ys], 1)]
+        if _chance(rng, 0.35):
+            ticks = zip(xs[2:-1:2], ys[2:-1:2], strict=True)
+            s += [line((x - 5, y + 1), (x + 5, y - 1)) for x, y in ticks]
+        return s, (bend, -h)
+    s = [np.stack([xs - half, ys], 1), np.stack([xs + half, ys], 1)]
+    if _chance(rng, 0.6):  # rings: short arcs or chevrons from side to side
+        every = int(rng.integers(1, 3))
+        sag = _u(rng, -4, 4)
+        for x, y, w in zip(xs[1:-1:every], ys[1:-1:every], half[1:-1:every], strict=True):
+            s.append(line((x - w, y), (x, y + sag), (x + w, y)))
+    return s, (bend, -h)
+
+
+def _frond_axis(
+    rng: np.random.Generator, top: tuple[float, float], k: int, n: int, burst: bool
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """The ``k``-th of ``n`` fronds: where it ends, the point its midline bows through, and
+    its length.  Fronds fan out sideways from the top, the outer ones drooping below it and
+    none quite upright (people draw a palm's fronds hanging); a burst's spikes go all round
+    but straight down."""
+    spread = _u(rng, 280, 320) if burst else _u(rng, 200, 250)
+    off = (k + 0.5) / n * 2 - 1  # -1 .. 1 across the fan
+    if not burst:  # keep clear of upright: at least a third of the half fan off vertical
+        off = math.copysign(0.35 + 0.65 * abs(off), off) if n > 1 else _u(rng, -1, 1)
+    a = math.radians(90 + off * spread / 2 + _u(rng, -6, 6))
+    reach = _u(rng, 55, 95) * (1.0 - 0.25 * math.sin(a))  # the upright ones a bit shorter
+    if burst:
+        reach *= _u(rng, 0.6, 0.85)
+    tip = np.array(top) + reach * np.array([math.cos(a), -math.sin(a)])
+    droop = 0.0 if burst else reach * _u(rng, 0.2, 0.45) * abs(math.cos(a))
+    tip[1] += droop
+    mid = (np.array(top) + tip) / 2 + np.array([0.0, -droop * 0.9 - _u(rng, 4, 12)])
+    return tip, mid, reach
+
+
+def _normals(pts: Stroke) -> np.ndarray:
+    """Unit normals to one side of a stroke's direction, one per point."""
+    d = np.gradient(pts, axis=0)
+    d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-9)
+    return np.stack([d[:, 1], -d[:, 0]], 1)
+
+
+def _leaf(top: tuple[float, float], mid: np.ndarray, tip: np.ndarray, width: float) -> Stroke:
+    """A closed pointed leaf: out along one side of the midline to the tip and back along
+    the other, widest a third of the way."""
+    axis = curve(top, tuple(mid), tuple(tip), 24)
+    s = np.linspace(0, 1, 24)
+    w = width * np.sin(np.pi * s**0.7)[:, None] * _normals(axis)
+    return np.concatenate([axis + w, (axis - w)[::-1]])
+
+
+def _jagged_leaf(
+    rng: np.random.Generator,
+    top: tuple[float, float],
+    mid: np.ndarray,
+    tip: np.ndarray,
+    width: float,
+) -> Stroke:
+    """A leaf whose edges are zigzags (the leaflets drawn as teeth), closed at the tip."""
+    teeth = int(rng.integers(3, 6))
+    axis = curve(top, tuple(mid), tuple(tip), 2 * teeth + 1)
+    s = np.linspace(0, 1, 2 * teeth + 1)
+    saw = np.where(np.arange(2 * teeth + 1) % 2 == 1, 1.0, 0.2)
+    w = (width * np.sin(np.pi * s**0.8) * saw)[:, None] * _normals(axis)
+    return np.concatenate([axis + w, (axis - w)[::-1]])
+
+
+def _palm_fronds(rng: np.random.Generator, form: str, top: tuple[float, float]) -> Strokes:
+    # a burst of fewer than six spikes reads as a cross or a windmill, not a palm
+    n = int(rng.integers(6, 9)) if form == "burst" else int(rng.integers(3, 9))
+    width = _u(rng, 8, 16)
+    rib = _chance(rng, 0.4)
+    s: Strokes = []
+    for k in range(n):
+        tip, mid, reach = _frond_axis(rng, top, k, n, form == "burst")
+        if form == "leaf":
+            s.append(_leaf(top, mid, tip, width * reach / 80))
+            if rib:  # the midrib drawn in
+                s.append(curve(top, tuple(mid), tuple(tip), 16))
+        elif form == "arc":
+            s.append(curve(top, tuple(mid + (0, -reach * 0.1)), tuple(tip), 24))
+        elif form == "jagged":
+            s.append(_jagged_leaf(rng, top, mid, tip, width * 1.3 * reach / 80))
+        else:  # burst: straight spikes, as narrow triangles or single lines
+            if rib:
+                s.append(line(top, tuple(tip)))
+            else:
+                d = tip - np.array(top)
+                nrm = np.array([d[1], -d[0]]) / max(float(np.hypot(*d)), 1e-9) * width * 0.45
+                s.append(line(tuple(np.array(top) + nrm), tuple(tip), tuple(np.array(top) - nrm)))
+    return s
+
+
+def _coconuts(rng: np.random.Generator, top: tuple[float, float]) -> Strokes:
+    """Two to four small circles hanging just under the fronds."""
+    r = _u(rng, 4, 7)
+    n = int(rng.integers(2, 5))
+    return [
+        _circle(top[0] + (k - (n - 1) / 2) * r * 1.9, top[1] + r * _u(rng, 0.9, 1.6), r, 14)
+        for k in range(n)
+    ]
+
+
+def _palm_ground(rng: np.random.Generator) -> Strokes:
+    """Where the palm stands, when drawn: a ground line, or an island's mound over the sea."""
+    w = _u(rng, 60, 110)
+    if _chance(rng, 0.5):
+        return [line((-w, _u(rng, 0, 3)), (w * _u(rng, 0.6, 1.1), _u(rng, -2, 4)))]
+    mound = arc(0, 8, w, _u(rng, 12, 22), 180, 360, 30)
+    s = [mound]
+    if _chance(rng, 0.6):  # the sea it rises from
+        xs = np.linspace(-w * 1.4, w * 1.4, 40)
+        s.append(np.stack([xs, 10 + 3 * np.sin(xs / 7)], 1))
+    return s
+
+
+def _people_palm(rng: np.random.Generator, form: str) -> Strokes:
+    """A palm the way people draw one, its fronds of one ``form`` of :data:`PALM_FORMS`."""
+    s, top = _palm_trunk(rng)
+    s += _palm_fronds(rng, form, top)
+    if _chance(rng, 0.35):
+        s += _coconuts(rng, top)
+    if _chance(rng, 0.35):
+        s += _palm_ground(rng)
+    return s
+
+
 def _bonsai(rng: np.random.Generator) -> Strokes:
     pw, ph = _u(rng, 80, 120), _u(rng, 22, 35)
     s = []
@@ -811,12 +977,214 @@ def _bonsai(rng: np.random.Generator) -> Strokes:
     return s
 
 
+# --------------------------------------------------------------------- broadleaf trees as people draw them
+# measured on people's drawings of "a tree" (eval.drawing_stats, benchmarks/probes/people_stats.py):
+# a crown of big loops, about three quarters as tall as wide and often open where the trunk
+# comes in; a trunk two lines about a quarter of the crown's width, flaring at its base and
+# about 40% of the tree's height; few strokes, most of them open; the drawing near the middle
+# of the page.  Units: the crown is 100 wide; the trunk's base at (0, 0), up is -y.
+
+
+@dataclass(frozen=True)
+class _Crown:
+    """A people's tree's proportions: the crown's height over its width, the trunk's width
+    at the crown over the crown's width, and the trunk's height over the crown's."""
+
+    aspect: tuple[float, float]
+    trunk_width: tuple[float, float]
+    trunk_height: tuple[float, float]
+
+
+_PEOPLE_CROWNS = {
+    "oak": _Crown(aspect=(0.55, 0.8), trunk_width=(0.18, 0.3), trunk_height=(0.6, 1.0)),
+    "maple": _Crown(aspect=(0.75, 1.0), trunk_width=(0.14, 0.26), trunk_height=(0.6, 1.0)),
+    "cherry": _Crown(aspect=(0.42, 0.58), trunk_width=(0.15, 0.26), trunk_height=(0.5, 0.8)),
+}
+
+#: How often a broadleaf's seed draws the people's tree instead of the species' own drawer.
+_PEOPLE_SHARE = {"oak": 0.45, "maple": 0.45, "cherry": 0.35}
+
+
+def _scallops(base: Stroke, loops: int, depth: float, rng: np.random.Generator) -> Stroke:
+    """A chain of ``loops`` bulges of relative ``depth`` along ``base`` (a path going
+    clockwise on the page round the crown, so its outward side is to the left of its
+    direction of travel): the crown's loops."""
+    s = np.linspace(0, 1, len(base))
+    # anchors at jittered equal steps, so that no loop is much smaller than another
+    cuts = np.sort(rng.uniform(0.05, 0.95, loops - 1))
+    cuts = 0.5 * np.concatenate([[0.0], cuts, [1.0]]) + 0.5 * np.linspace(0, 1, loops + 1)
+    t = np.linspace(0, 1, loops * 14)
+    path = np.stack([np.interp(t, s, base[:, i]) for i in range(2)], axis=1)
+    seg = np.clip(np.searchsorted(cuts, t, side="right") - 1, 0, loops - 1)
+    local = (t - cuts[seg]) / (cuts[seg + 1] - cuts[seg])
+    bulge = depth * np.diff(cuts)[seg] * _path_length(base) * np.sin(np.pi * local)
+    d = np.gradient(path, axis=0)
+    d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-9)
+    outward = np.stack([d[:, 1], -d[:, 0]], 1)
+    return path + bulge[:, None] * outward
+
+
+def _path_length(pts: Stroke) -> float:
+    return float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
+
+
+def _crown_base(kind: str, rx: float, ry: float, cy: float, join: float) -> Stroke:
+    """The crown's outline before its loops, from the left trunk top clockwise over the top
+    to the right one (``join``: the trunk's half-width where it meets the crown, a quarter
+    of ``ry`` above the ellipse's bottom)."""
+    start = math.degrees(math.atan2(0.75, -join / rx))  # between 90 (bottom) and 180
+    a = np.radians(np.linspace(start, 540 - start, 90))
+    x, y = rx * np.cos(a), cy + ry * np.sin(a)
+    if kind == "mushroom":  # a dome over a flat underside
+        y = np.minimum(y, cy + ry * 0.3)
+    elif kind == "flat":  # a wide, flat-topped crown
+        y = np.maximum(y, cy - ry * 0.7)
+    return np.stack([x, y], 1)
+
+
+def _people_crown(rng: np.random.Generator, rx: float, ry: float, cy: float, join: float) -> Stroke:
+    kind = str(rng.choice(["cloud", "cloud", "cloud", "mushroom", "mushroom", "flat"]))
+    base = _crown_base(kind, rx, ry, cy, join)
+    loops = int(rng.integers(4, 10))
+    return _scallops(base, loops, _u(rng, 0.22, 0.42), rng)
+
+
+def _people_trunk(
+    rng: np.random.Generator, top_left: np.ndarray, top_right: np.ndarray
+) -> tuple[Stroke, Stroke]:
+    """The trunk's two lines from the ground up to where the crown begins, flaring at the
+    base."""
+    join = (top_right[0] - top_left[0]) / 2
+    mid = (top_right[0] + top_left[0]) / 2
+    flare = join * (_u(rng, 0.2, 0.9) if _chance(rng, 0.7) else 0.0)
+    t = np.linspace(0, 1, 12)
+    widen = flare * (1 - t) ** 3  # wide at the base, quickly narrowing
+    xs = mid * t  # the base under the middle, the top where the crown opens
+    left = np.stack([xs - join - widen, top_left[1] * t], 1)
+    right = np.stack([xs + join + widen, top_right[1] * t], 1)
+    return left, right
+
+
+def _roots(rng: np.random.Generator, base: float) -> Strokes:
+    """A few root strokes spreading from the trunk's base."""
+    out = []
+    for _ in range(int(rng.integers(2, 6))):
+        x = _u(rng, -base, base)
+        reach = _u(rng, 8, 22) * (1 if x > 0 else -1)
+        out.append(curve((x, -2), (x + reach * 0.6, 1), (x + reach, _u(rng, 3, 8)), 8))
+    return out
+
+
+def _sun(rng: np.random.Generator, x: float, y: float) -> Strokes:
+    r = _u(rng, 9, 15)
+    s = [_circle(x, y, r, 24)]
+    n = int(rng.integers(6, 11))
+    for k in range(n):
+        a = 2 * math.pi * k / n + _u(rng, -0.1, 0.1)
+        c, si = math.cos(a), math.sin(a)
+        s.append(line((x + (r + 3) * c, y + (r + 3) * si), (x + (r + 11) * c, y + (r + 11) * si)))
+    return s
+
+
+def _cloud(rng: np.random.Generator, x: float, y: float) -> Strokes:
+    w = _u(rng, 22, 35)
+    base = np.stack([np.linspace(x - w, x + w, 20), np.full(20, y)], 1)  # left to right
+    arcs = _scallops(base, int(rng.integers(3, 5)), _u(rng, 0.35, 0.5), rng)
+    return [np.concatenate([arcs, arcs[:1]])]
+
+
+def _beside(rng: np.random.Generator, rx: float, height: float) -> Strokes:
+    """What people draw beside a tree (crown half-width ``rx``, ``height`` tall): a ground
+    line or a hill, grass, a sun or a cloud."""
+    width = rx * 1.3
+    s: Strokes = []
+    if _chance(rng, 0.18):
+        w = width * _u(rng, 0.5, 0.9)
+        s.append(line((-w, _u(rng, -1, 2)), (w * _u(rng, 0.6, 1.1), _u(rng, -2, 3))))
+    elif _chance(rng, 0.08):  # the tree on a hill
+        s.append(arc(0, 6, width * _u(rng, 0.7, 1.0), _u(rng, 10, 20), 180, 360, 30))
+    if _chance(rng, 0.1):  # tufts of grass
+        for x in rng.uniform(-width * 0.8, width * 0.8, int(rng.integers(2, 6))):
+            s.append(
+                line(
+                    (x - 4, 0),
+                    (x - 2, -_u(rng, 5, 10)),
+                    (x, 0),
+                    (x + 2, -_u(rng, 5, 10)),
+                    (x + 4, 0),
+                )
+            )
+    side = 1 if _chance(rng, 0.5) else -1
+    if _chance(rng, 0.08):
+        s += _sun(rng, side * rx * _u(rng, 1.5, 1.9), -height * _u(rng, 0.85, 1.0))
+    elif _chance(rng, 0.06):
+        s += _cloud(rng, side * rx * _u(rng, 1.4, 1.8), -height * _u(rng, 0.95, 1.1))
+    return s
+
+
+def _inside(
+    rng: np.random.Generator, join: float, h: float, rx: float, ry: float, cy: float
+) -> Strokes:
+    """What people draw inside: limbs up from the trunk, little loops for leaves, a knot."""
+    s: Strokes = []
+    if _chance(rng, 0.3):
+        for side in (-1, 1):
+            s.append(
+                curve(
+                    (side * join * 0.5, -h),
+                    (side * join, -h - ry * 0.3),
+                    (side * rx * _u(rng, 0.25, 0.5), cy - ry * _u(rng, 0.0, 0.3)),
+                    10,
+                )
+            )
+    if _chance(rng, 0.15):  # curls for leaves, scattered (two level ones read as eyes)
+        for _ in range(int(rng.integers(3, 7))):
+            x, y = rx * _u(rng, -0.65, 0.65), cy + ry * _u(rng, -0.55, 0.35)
+            r, a0 = _u(rng, 4, 8), _u(rng, 0, 360)
+            s.append(arc(x, y, r, r * 0.8, a0, a0 + _u(rng, 160, 220), 12))
+    if _chance(rng, 0.12):  # a knot hole in the trunk
+        s.append(_circle(_u(rng, -0.3, 0.3) * join, -h * _u(rng, 0.4, 0.7), _u(rng, 2.5, 5), 12))
+    return s
+
+
+def _people_tree(rng: np.random.Generator, species: str) -> Strokes:
+    """A broadleaf tree the way people draw "a tree" (proportions per species)."""
+    shape = _PEOPLE_CROWNS[species]
+    rx = 50.0
+    ry = rx * _u(rng, *shape.aspect) * 0.9  # the loops add about a tenth
+    join = rx * _u(rng, *shape.trunk_width)
+    h = 2 * ry * _u(rng, *shape.trunk_height)
+    cy = -h - ry * 0.75
+    crown = _people_crown(rng, rx, ry, cy, join)
+    left, right = _people_trunk(rng, crown[0], crown[-1])
+    if _chance(rng, 0.35):  # trunk and crown in one stroke, up one side and down the other
+        s = [np.concatenate([left, crown, right[::-1]])]
+    else:
+        s = [left, right, _outline(rng, crown, 0.3)]
+    if _chance(rng, 0.35):
+        s += _roots(rng, join * 1.4)
+    elif _chance(rng, 0.3):  # the trunk's base closed with a line
+        s.append(line(tuple(left[0]), tuple(right[0])))
+    if species == "cherry" and _chance(rng, 0.5):  # blossoms
+        for _ in range(int(rng.integers(4, 10))):
+            a, rr = _u(rng, 0, 2 * math.pi), math.sqrt(_u(rng, 0, 0.6))
+            s.append(_circle(rx * rr * math.cos(a), cy + ry * rr * math.sin(a), _u(rng, 2.5, 4), 8))
+    s += _inside(rng, join, h, rx, ry, cy)
+    if _chance(rng, 0.45):  # hasty: shaky strokes
+        s = [jag(st, rng, amp=_u(rng, 0.4, 1.0), step=_u(rng, 3, 6)) for st in s]
+    return s + _beside(rng, rx, h + 2 * ry)
+
+
 _TREES = _by_name(
     _maple, _pine, _bonsai, _palm, _cherry, _fir, _willow, _oak, _birch, _poplar, _winter
 )
 
 #: The species :func:`tree_doodle` draws: the project's eleven (``weberpenn.species.SPECIES``).
 TREE_SPECIES: tuple[str, ...] = tuple(_TREES)
+
+#: How :func:`palm_doodle` draws a palm's fronds: each a closed pointed leaf, a single
+#: drooping arc, a leaf with zigzag edges, or a straight spike of a star burst.
+PALM_FORMS: tuple[str, ...] = ("leaf", "arc", "jagged", "burst")
 
 
 # --------------------------------------------------------------------- the hand and the page
@@ -848,6 +1216,15 @@ def _hand(rng: np.random.Generator) -> _Hand:
 def _page(strokes: Strokes, rng: np.random.Generator, fill: tuple[float, float]) -> np.ndarray:
     """The strokes fitted to a random box (longest side ``fill`` of the page), tilted a
     little, drawn by a random hand, all ink inside the page."""
+    return _ink(*_laid_out(strokes, rng, fill))
+
+
+def _laid_out(
+    strokes: Strokes, rng: np.random.Generator, fill: tuple[float, float], place: str = "anywhere"
+) -> tuple[Strokes, _Hand]:
+    """The strokes as the hand draws them on the page, in page pixels, and the hand; the
+    drawing's box goes anywhere on the page (``place`` ``"anywhere"``), near its middle
+    (``"centred"``, as people mostly draw) or in a corner (``"corner"``)."""
     hand = _hand(rng)
     pts = np.concatenate(strokes)
     lo, hi = pts.min(axis=0), pts.max(axis=0)
@@ -857,7 +1234,6 @@ def _page(strokes: Strokes, rng: np.random.Generator, fill: tuple[float, float])
     tilt = math.radians(_u(rng, -5, 5))
     rot = np.array([[math.cos(tilt), -math.sin(tilt)], [math.sin(tilt), math.cos(tilt)]])
     placed = [((st - centre) * scale) @ rot.T for st in strokes]
-    ss = 1 if hand.tool == "mouse" else 2  # the mouse draws aliased pixels
     drawn = []
     for st in placed:
         if hand.tool == "mouse":
@@ -872,12 +1248,23 @@ def _page(strokes: Strokes, rng: np.random.Generator, fill: tuple[float, float])
     drawn = [(st - (lo + hi) / 2) * shrink for st in drawn]
     half = (hi - lo) * shrink / 2
     room = SIZE / 2 - pad - half
-    offset = SIZE / 2 + np.array([_u(rng, -room[0], room[0]), _u(rng, -room[1], room[1])])
+    if place == "anywhere":
+        offset = SIZE / 2 + np.array([_u(rng, -room[0], room[0]), _u(rng, -room[1], room[1])])
+    elif place == "centred":
+        offset = SIZE / 2 + room * rng.uniform(-0.25, 0.25, 2)
+    else:  # a corner
+        offset = SIZE / 2 + room * rng.choice([-1.0, 1.0], 2) * rng.uniform(0.75, 1.0, 2)
+    return [st + offset for st in drawn], hand
+
+
+def _ink(drawn: Strokes, hand: _Hand) -> np.ndarray:
+    """The laid-out strokes inked by the hand: aliased for the mouse, else antialiased."""
+    ss = 1 if hand.tool == "mouse" else 2  # the mouse draws aliased pixels
     im = Image.new("L", (SIZE * ss, SIZE * ss), 255)
     d = ImageDraw.Draw(im)
     width = max(1, round(hand.width * ss))
     for st in drawn:
-        xy = [tuple(p) for p in (st + offset) * ss]
+        xy = [tuple(p) for p in st * ss]
         d.line(xy, fill=hand.ink, width=width, joint="curve")
         if width >= 3:  # round ends, as a pen or a finger leaves them
             for x, y in (xy[0], xy[-1]):
@@ -902,14 +1289,58 @@ def nontree_doodle(kind: str, seed: int) -> np.ndarray:
     return _page(_NONTREES[kind](rng), rng, (0.4, 0.9))
 
 
-def tree_doodle(species: str, seed: int) -> np.ndarray:
-    """A doodle of a tree of ``species`` as a person would draw one and name it: a
+def palm_doodle(form: str, seed: int) -> np.ndarray:
+    """A palm as people draw one, its fronds of ``form`` (one of :data:`PALM_FORMS`): a
     ``(256, 256)`` uint8 image, 255 paper."""
+    if not isinstance(form, str) or form not in PALM_FORMS:
+        raise ValueError(f"unknown palm form {form!r}; one of {', '.join(PALM_FORMS)}")
+    rng = _rng("palm:" + form, seed)
+    return _page(_people_palm(rng, form), rng, (0.5, 0.92))
+
+
+def _variety(species: str, seed: int) -> str | None:
+    """Which drawing of ``species`` a seed gets besides the species' own: a palm form,
+    ``"people"`` (a broadleaf as people draw "a tree"), or None for the species' own drawer.  Drawn from a generator of its own, so a seed that
+    keeps the species' own drawer keeps its bytes from before the varieties came."""
+    rng = _rng("variety:" + species, seed)
+    if species == "palm" and _chance(rng, 0.5):
+        return PALM_FORMS[int(rng.integers(len(PALM_FORMS)))]
+    if species in _PEOPLE_SHARE and _chance(rng, _PEOPLE_SHARE[species]):
+        return "people"
+    return None
+
+
+def _tree_strokes(
+    species: str, seed: int
+) -> tuple[Strokes, np.random.Generator, tuple[float, float], str]:
+    """A tree of ``species``'s strokes as drawn (before the page), the generator that goes
+    on to lay them out and ink them, and how big and where on the page they go."""
     if not isinstance(species, str) or species not in _TREES:
         raise ValueError(f"unknown tree species {species!r}; one of {', '.join(TREE_SPECIES)}")
     rng = _rng("tree:" + species, seed)
+    variety = _variety(species, seed)
+    if variety in PALM_FORMS:
+        return _people_palm(rng, variety), rng, (0.5, 0.92), "anywhere"
+    if variety == "people":
+        strokes = _people_tree(rng, species)
+        if _chance(rng, 0.1):  # drawn small in a corner of the page
+            return strokes, rng, (0.3, 0.5), "corner"
+        return strokes, rng, (0.6, 0.92), "centred"
     strokes = _TREES[species](rng)
     if species != "bonsai" and _chance(rng, 0.1):  # a line for the ground
         w = _u(rng, 30, 80)
         strokes.append(line((-w, _u(rng, 0, 3)), (w * _u(rng, 0.6, 1.2), _u(rng, -2, 4))))
-    return _page(strokes, rng, (0.5, 0.92))
+    return strokes, rng, (0.5, 0.92), "anywhere"
+
+
+def tree_doodle(species: str, seed: int) -> np.ndarray:
+    """A doodle of a tree of ``species`` as a person would draw one and name it: a
+    ``(256, 256)`` uint8 image, 255 paper."""
+    return _ink(*_laid_out(*_tree_strokes(species, seed)))
+
+
+def tree_doodle_strokes(species: str, seed: int) -> list[np.ndarray]:
+    """The strokes of ``tree_doodle(species, seed)`` as the hand drew them on its page:
+    ``(n, 2)`` arrays of page pixels, x right, y down (for measuring a drawing's strokes,
+    :func:`eval.drawing_stats.stroke_stats`)."""
+    return _laid_out(*_tree_strokes(species, seed))[0]

@@ -49,6 +49,7 @@ __all__ = [
     "image_format",
     "ink_mask",
     "read_sketch",
+    "tree_ink",
 ]
 
 MAX_BYTES = 10 * 1024 * 1024  # an encoded sketch larger than this is refused unread
@@ -452,7 +453,7 @@ def stroke_width(ink: np.ndarray) -> float:
 
 def drop_specks(ink: np.ndarray) -> np.ndarray:
     """Ink without paper grain and pencil dust among the drawing's lines (which
-    :func:`_drop_strays` keeps, being near them): marks smaller than a square
+    :func:`_drop_extras` keeps, being near them): marks smaller than a square
     ``SPECK_WIDTHS`` stroke widths wide that lie more than ``SPECK_GAP`` stroke widths
     from every larger mark.  Both limits follow the drawing's own stroke width, so they
     hold at any resolution; a dash of a broken line is longer than that, and the small
@@ -491,33 +492,268 @@ def _kept_marks(ink: np.ndarray) -> np.ndarray:
 
 STRAY_GAP = 0.08  # of the page's longer side: ink this far from the drawing is apart
 STRAY_SHARE = 0.02  # a part apart from the drawing with less of its ink than this is dust
+# The tree among the parts: of the large ones (a box or ink at least EXTRA_SHARE of the
+# largest's: a small tree drawn with a fine pen may hold less ink than a cloud, a sun with
+# rays may have as large a box) and not thin lines (a ground line, a cloud's base), the one
+# reaching lowest: a tree stands on the ground, a sun or a cloud is in the sky.  A part
+# apart from the tree, mostly beside it (EXTRA_BESIDE of its width outside the tree's
+# columns at least) and smaller than EXTRA_SHARE of the tree in box or in ink, or wholly
+# above the tree's top, is not the tree: a sun, a cloud, grass or a scribble.  A part
+# above or below the tree (a crown drawn apart from its trunk, a pot, a cloud over the
+# crown) is kept, and so is one as large as the tree beside it: when in doubt the ink
+# stays
+EXTRA_BESIDE = 0.5
+EXTRA_SHARE = 0.5
+LINE_ASPECT = 0.25  # a part or a run no taller than this share of its width is a line
 
 
-def _drop_strays(ink: np.ndarray) -> np.ndarray:
-    """Ink without the stray marks away from the drawing: groups of ink (strokes joined
-    over gaps up to ``STRAY_GAP`` of the page) holding less than ``STRAY_SHARE`` of the
-    ink, such as pencil dust, a smudge or a speck of dirt in a photo.  They would
-    otherwise stretch the frame and shrink the tree into a corner of it."""
+def _parts(ink: np.ndarray) -> tuple[np.ndarray, int]:
+    """The drawing's parts: ink joined over gaps up to ``STRAY_GAP`` of the page, so a
+    tree drawn in separate strokes stays one part.  Returns a label per pixel (0 off the
+    ink) and the count.  The joining runs on a coarse grid (blocks of half the gap), so
+    it costs little at any page size."""
     from scipy import ndimage
 
-    total = int(ink.sum())
-    if total == 0:
-        return ink
     r = max(1, int(round(STRAY_GAP * max(ink.shape) / 2)))
-    # join over the gap on a coarse grid (cheap at any page size): blocks of r pixels
     h, w = ink.shape
     hb, wb = -(-h // r), -(-w // r)
     padded = np.pad(ink, ((0, hb * r - h), (0, wb * r - w)))
     counts = padded.reshape(hb, r, wb, r).sum(axis=(1, 3))
     near = ndimage.binary_dilation(counts > 0, structure=np.ones((3, 3), bool))
     lab, n = ndimage.label(near)
+    pixels = np.repeat(np.repeat(lab, r, axis=0), r, axis=1)[:h, :w]
+    return np.where(ink, pixels, 0), n
+
+
+def _beside(box: tuple[slice, slice], tree: tuple[slice, slice]) -> bool:
+    """Whether a part's bounding box lies mostly beside the tree's (in columns the tree
+    does not reach), rather than above or below it."""
+    left, right = box[1].start, box[1].stop
+    inside = max(0, min(right, tree[1].stop) - max(left, tree[1].start))
+    return inside < (1.0 - EXTRA_BESIDE) * (right - left)
+
+
+def _the_tree(ink: np.ndarray, boxes: list[tuple[slice, slice]]) -> int:
+    """Which of the parts (their ink counts and bounding boxes) is the tree: see
+    ``EXTRA_SHARE``."""
+    height = np.array([b[0].stop - b[0].start for b in boxes])
+    width = np.array([b[1].stop - b[1].start for b in boxes])
+    area = height * width
+    large = (area >= EXTRA_SHARE * area.max()) | (ink >= EXTRA_SHARE * ink.max())
+    if (large & (height > LINE_ASPECT * width)).any():
+        large &= height > LINE_ASPECT * width
+    bottom = np.array([b[0].stop for b in boxes])
+    return int(np.lexsort((area, bottom, large))[-1])
+
+
+def _drop_extras(ink: np.ndarray) -> np.ndarray:
+    """Ink without what is not the tree (see ``EXTRA_SHARE``): a part apart from the tree
+    (further than ``STRAY_GAP`` of the page) goes when it holds less than ``STRAY_SHARE``
+    of the ink (pencil dust, a smudge, a speck of dirt in a photo), or when it is a small
+    part beside the tree or one beside it in the sky (a sun, a cloud, grass, a scribble
+    in a corner).  Either would stretch the frame and shrink the tree into a corner of
+    it."""
+    from scipy import ndimage
+
+    total = int(ink.sum())
+    if total == 0:
+        return ink
+    lab, n = _parts(ink)
     if n <= 1:
         return ink
-    share = ndimage.sum_labels(counts, lab, index=np.arange(1, n + 1)) / total
-    keep = np.concatenate([[False], share >= STRAY_SHARE])
-    keep[1 + int(np.argmax(share))] = True
-    mask = np.repeat(np.repeat(keep[lab], r, axis=0), r, axis=1)[:h, :w]
-    return ink & mask
+    count = ndimage.sum_labels(ink, lab, index=np.arange(1, n + 1))
+    boxes = ndimage.find_objects(lab)
+    area = np.array([(b[0].stop - b[0].start) * (b[1].stop - b[1].start) for b in boxes])
+    tree = _the_tree(count, boxes)
+    small = (area < EXTRA_SHARE * area[tree]) | (count < EXTRA_SHARE * count[tree])
+    # wholly above the tree's top: in the sky, however large (a sun with its rays)
+    sky = np.array([b[0].stop <= boxes[tree][0].start for b in boxes])
+    keep = count >= STRAY_SHARE * total
+    for k, box in enumerate(boxes):
+        if k != tree and (small[k] | sky[k]):
+            keep[k] &= not _beside(box, boxes[tree])
+    keep[tree] = True
+    return ink & np.concatenate([[False], keep])[lab]
+
+
+# A ground line: a long, thin, nearly level stroke in the lower half of the drawing that
+# sticks out sideways beyond the tree above it (by GROUND_OUT of the tree's width).  The
+# tree's widest part is its crown, so a crown's or a fir tier's flat base, a pot or a
+# trunk's foot never sticks out of what stands above it; a ground line under a tree
+# usually does, by a lot
+GROUND_RUN = 0.25  # of the drawing's width: the shortest level run a ground line has
+GROUND_TILT = 0.012  # of the page's longer side: the rise and wobble a level line may have
+GROUND_OUT = 0.15  # of the tree's width it sticks out on one side (0.1 took a fir tier's base)
+GROUND_GRASS = 0.04  # of the drawing's height: grass and a trunk's foot just above the line
+GROUND_TUFT = 0.12  # of the drawing's height: a tuft of grass on the line is no taller
+# ... and the tree ends on it: below it no more ink than this share of the drawing's height
+# (the trunk below a pine's lowest whorl or a crown's flat base, the body of a bonsai's pot
+# below its rim; roots drawn below the ground keep the line too)
+GROUND_BELOW = 0.05
+
+
+def _level_runs(ink: np.ndarray, tilt: int, length: float) -> np.ndarray:
+    """Nearly level strokes: the ink widened up and down by ``tilt`` rows (a hand's
+    wobble and a slight slope), kept where it runs on unbroken for ``length`` pixels."""
+    from scipy import ndimage
+
+    band = ndimage.maximum_filter1d(ink.view(np.uint8), 2 * tilt + 1, axis=0) > 0
+    out = np.zeros_like(band)
+    rows = np.flatnonzero(band.sum(axis=1) >= length)  # the only rows that may hold one
+    if rows.size == 0:
+        return out
+    # each pixel's run: from the last gap before it to the first gap after it, per row
+    b = band[rows]
+    at = np.arange(b.shape[1], dtype=np.int32)
+    before = np.maximum.accumulate(np.where(b, -1, at), axis=1)
+    after = np.minimum.accumulate(np.where(b, b.shape[1], at)[:, ::-1], axis=1)[:, ::-1]
+    out[rows] = b & (after - before - 1 >= length)
+    return out
+
+
+def _is_ground(ink: np.ndarray, box: tuple[slice, slice], tilt: int) -> bool:
+    """Whether a level run with bounding box ``box`` is a ground line under the tree:
+    thin, in the lower half of the drawing, at its foot (next to nothing below it) and
+    sticking out beyond the ink above it."""
+    ys = np.flatnonzero(ink.any(axis=1))
+    top, height = int(ys[0]), int(ys[-1] - ys[0] + 1)
+    (t, b), (left, right) = (box[0].start, box[0].stop), (box[1].start, box[1].stop)
+    if (t + b) / 2 < top + height / 2 or b - t > LINE_ASPECT * (right - left):
+        return False
+    span = _standing(ink[: max(0, t - int(round(GROUND_GRASS * height)))], height)
+    if span is None:  # nothing stands on it
+        return False
+    cols = np.array(span)
+    # under the tree, not under the line's own ends (a mound's sides go down there)
+    below = np.flatnonzero(ink[b + tilt :, cols[0] : cols[-1] + 1].any(axis=1))
+    if below.size and below[-1] + 1 > GROUND_BELOW * height:  # a trunk, a pot goes on
+        return False
+    out = max(GROUND_OUT * (cols[-1] + 1 - cols[0]), 4 * tilt)
+    return bool(left < cols[0] - out or right > cols[-1] + 1 + out)
+
+
+def _standing(above: np.ndarray, height: int) -> tuple[int, int] | None:
+    """The columns (first, last) of what stands on a ground line, from the ink ``above``
+    it: its strokes less the short ones at its bottom (grass on the line, up to
+    ``GROUND_TUFT`` of the drawing's ``height``); None when nothing does."""
+    from scipy import ndimage
+
+    lab, _ = ndimage.label(above, structure=np.ones((3, 3), bool))
+    tuft = GROUND_TUFT * height
+    low = above.shape[0] - tuft
+    boxes = [
+        b for b in ndimage.find_objects(lab) if b[0].stop - b[0].start >= tuft or b[0].stop < low
+    ]
+    if not boxes:
+        return None
+    return min(b[1].start for b in boxes), max(b[1].stop for b in boxes) - 1
+
+
+def _drop_ground(ink: np.ndarray) -> np.ndarray:
+    """Ink without a ground line under the tree (see ``GROUND_RUN``), the whole line: the
+    renderer's sketches have none, so a line kept under the tree would be a stroke the
+    network never saw, and the trunk's foot on it would no longer mark the base."""
+    ys, xs = np.flatnonzero(ink.any(axis=1)), np.flatnonzero(ink.any(axis=0))
+    if xs.size == 0:
+        return ink
+    tilt = max(1, int(round(GROUND_TILT * max(ink.shape))))
+    # the work on the ink's bounding box (a drawing is often a small part of its page),
+    # with room above it for the rows a ground line's run is widened by
+    box = (slice(max(0, ys[0] - 2 * tilt - 1), ys[-1] + 1), slice(xs[0], xs[-1] + 1))
+    out = ink.copy()
+    out[box] = _without_ground(ink[box], tilt)
+    return out
+
+
+def _without_ground(ink: np.ndarray, tilt: int) -> np.ndarray:
+    """:func:`_drop_ground` on the drawing's box: each level run that is a ground line
+    goes, with its crests, its ends and its grass."""
+    from scipy import ndimage
+
+    level = _level_runs(ink, tilt, max(8.0, GROUND_RUN * ink.shape[1]))
+    lab, _ = ndimage.label(level, structure=np.ones((3, 3), bool))
+    ys = np.flatnonzero(ink.any(axis=1))
+    height = int(ys[-1] + 1 - ys[0])
+    out = ink.copy()
+    boxes = list(enumerate(ndimage.find_objects(lab), start=1))
+    # from the top down, each judged against what is left above it: the lower edge of a
+    # patch of ground sticks out of the tree once the patch's upper edge is gone
+    for k, box in sorted(boxes, key=lambda kb: kb[1][0].start):
+        if _is_ground(out, box, tilt):
+            out &= ~_ground_pixels(ink, lab == k, box, tilt)
+            out &= ~_ground_ends(out, ink & ~out, box[0].start, GROUND_TUFT * height, tilt)
+    return out
+
+
+def _ground_ends(
+    ink: np.ndarray, ground: np.ndarray, top: int, tuft: float, reach: int
+) -> np.ndarray:
+    """What is left of a ground line beyond its level run: the strokes that touch the
+    removed ``ground`` and lie wholly below row ``top`` (a mound's or a hill's sloping
+    sides, a curl at a line's end) or are less than ``tuft`` rows tall (grass on it); a
+    trunk that stood on the line goes up from it and stays."""
+    from scipy import ndimage
+
+    lab, n = ndimage.label(ink, structure=np.ones((3, 3), bool))
+    # touching, or nearly: a tuft drawn as its own stroke stands a pixel or two off it
+    near = ndimage.maximum_filter(ground.view(np.uint8), size=2 * reach + 1) > 0
+    hit = np.zeros(n + 1, bool)
+    hit[np.unique(lab[near & ink])] = True
+    hit[0] = False
+    for k, sl in enumerate(ndimage.find_objects(lab), start=1):
+        hit[k] &= sl is not None and (sl[0].start >= top or sl[0].stop - sl[0].start < tuft)
+    return hit[lab]
+
+
+def _ground_pixels(
+    ink: np.ndarray, seed: np.ndarray, box: tuple[slice, slice], tilt: int
+) -> np.ndarray:
+    """The ink of a ground line whose level run is ``seed`` (bounding box ``box``, the
+    line widened by ``tilt`` rows each way): the strokes touching the run within the
+    box's rows and ``tilt`` more (a wobbly line's crests, grass on it), less what
+    reaches them from above the line's own rows (a trunk standing on the line keeps its
+    foot down to the line)."""
+    top = max(0, box[0].start - tilt)
+    rows = slice(top, box[0].stop + tilt)
+    out = np.zeros_like(ink)
+    out[rows] = _touching(ink[rows], seed[rows])
+    line_top = box[0].start + tilt - max(1, tilt // 3)  # a little above the line itself
+    if top > 0 and line_top > top:
+        out[top:line_top] &= ~_coming_down(ink[top - 1 : line_top])[1:]
+    return out
+
+
+def _coming_down(rows: np.ndarray) -> np.ndarray:
+    """The ink of ``rows`` reached from the first row going down, a pixel aside at most
+    per row: a trunk coming down onto a ground line, at a slant too, but not the line's
+    crest beside its foot, which runs sideways."""
+    from scipy import ndimage
+
+    out = np.zeros_like(rows)
+    out[0] = rows[0]
+    for r in range(1, len(rows)):
+        out[r] = ndimage.binary_dilation(out[r - 1], np.ones(3, bool)) & rows[r]
+    return out
+
+
+def _touching(ink: np.ndarray, seed: np.ndarray) -> np.ndarray:
+    """The strokes of ``ink`` that touch ``seed``: a ground line's wobbly ends and curls
+    that left its level run, grass on it, within the rows of the line only."""
+    from scipy import ndimage
+
+    lab, n = ndimage.label(ink, structure=np.ones((3, 3), bool))
+    hit = np.zeros(n + 1, bool)
+    hit[np.unique(lab[seed & ink])] = True
+    hit[0] = False
+    return hit[lab]
+
+
+def tree_ink(ink: np.ndarray) -> np.ndarray:
+    """The tree's ink alone, so a drawing is framed on the tree and not on everything on
+    the page: without stray marks, a sun, a cloud or grass beside the tree, and a ground
+    line under it.  The extras go first (a sun over a ground line's end would hide that
+    the line sticks out), then the ground, then what the ground joined to the tree."""
+    return _drop_extras(_drop_ground(_drop_extras(ink)))
 
 
 RULED_ROW = 0.6  # a thin horizontal line over this much of the page width is ruling
@@ -582,9 +818,11 @@ def normalise_drawing(img: np.ndarray, size: int = DRAWING_SIDE) -> np.ndarray:
 
     Pencil on grey or off-white paper and phone photos read as ink (:func:`flatten_paper`,
     Otsu) and come out as black strokes on white, like the training sketches, without the
-    paper's grain (:func:`drop_specks`) or stray marks apart from the drawing; a drawing in
-    a corner is moved and scaled to the middle.  The refinement frames every candidate's
-    sketch the same way, so drawing and candidates always compare at one framing (the
+    paper's grain (:func:`drop_specks`) or stray marks apart from the drawing.  It is
+    framed on the tree (:func:`tree_ink`), not on all the ink: a ground line under the
+    tree, a sun, a cloud or grass beside it are left out of the frame and the picture; a
+    drawing in a corner is moved and scaled to the middle.  The refinement frames every
+    candidate's sketch the same way, so drawing and candidates always compare at one framing (the
     renderer's own frame fits a tree's width over all sides, not the drawn one).  Refuses
     blank and dark pages.
     """
@@ -596,7 +834,9 @@ def normalise_drawing(img: np.ndarray, size: int = DRAWING_SIDE) -> np.ndarray:
         shape = (max(MIN_SIDE, round(a.shape[1] * s)), max(MIN_SIDE, round(a.shape[0] * s)))
         a = np.asarray(Image.fromarray(a).resize(shape, Image.Resampling.BOX))
     flat = flatten_paper(a)
-    ink = _drop_strays(drop_specks(_drop_ruled_lines(_ink_of(flat))))
+    # a ground line drawn from edge to edge looks like ruling, whose removal keeps what
+    # crosses it and leaves the line's crests: it goes as a ground line first
+    ink = tree_ink(drop_specks(_drop_ruled_lines(_drop_ground(_ink_of(flat)))))
     frac = float(ink.mean())
     if frac < MIN_INK:
         raise SketchError("the sketch is blank: draw a tree (dark lines on a light page)")

@@ -1,7 +1,9 @@
 """docs/web.png: a real screenshot of the page after a drawing was turned into a tree;
 docs/side.png: the page in "Draw from this side" mode (the 3D view turned, the tree's
 outline from there faint behind the pad, a second drawing begun over it);
-docs/edit.png: that tree in the 3D view, then after each of four edits with the sliders.
+docs/edit.png: that tree in the 3D view, then after each of four edits with the sliders;
+docs/web_phone.png: the same job opened by its link on a phone-sized screen (390 x 844,
+touch): the drawing brought back on the pad, and the result scrolled to, side by side.
 
 Starts the service (the shipped TSN checkpoint, one worker) in this process, draws a tree
 with mouse strokes in headless Debian chromium (Playwright), submits it and waits for the
@@ -10,7 +12,7 @@ the start of a second drawing and saves that screenshot; then moves four control
 after the other (each on top of the last) and puts the 3D view after each side by side.
 
     PYTHONPATH=$PWD .venv/bin/python scripts/make_web_png.py --out docs/web.png \
-        --side-out docs/side.png --edit-out docs/edit.png
+        --side-out docs/side.png --edit-out docs/edit.png --phone-out docs/web_phone.png
 
 ``PYTHONPATH=$PWD`` is needed even in the main checkout: the mouse strokes and the browser
 are the page tests' own (``tests.web_helpers``), and tests/ is no installed package.
@@ -37,6 +39,7 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "web.png")
     ap.add_argument("--side-out", type=Path, default=ROOT / "docs" / "side.png")
     ap.add_argument("--edit-out", type=Path, default=ROOT / "docs" / "edit.png")
+    ap.add_argument("--phone-out", type=Path, default=ROOT / "docs" / "web_phone.png")
     args = ap.parse_args()
 
     from playwright.sync_api import sync_playwright
@@ -60,10 +63,41 @@ def main() -> None:
                 page.screenshot(path=str(tmp), full_page=True, type="png")
             print(page.inner_text("#species"), page.inner_text("#confidence"))
             print(page.inner_text("#status"))
+            job = page.get_attribute("body", "data-job")
             side(page, args.side_out)
             edits(page, args.edit_out)
+            phone(browser, url, job, args.phone_out)
             browser.close()
-    print(f"wrote {args.out}, {args.side_out} and {args.edit_out}")
+    print(f"wrote {args.out}, {args.side_out}, {args.edit_out} and {args.phone_out}")
+
+
+def phone(browser, url: str, job: str, out: Path) -> None:
+    """The job opened by its link on a phone: the top of the page (the drawing back on the
+    pad) and the result (scrolled to), side by side."""
+    import io
+
+    from PIL import Image
+
+    ctx = browser.new_context(
+        viewport={"width": 390, "height": 844}, has_touch=True, device_scale_factor=2
+    )
+    page = ctx.new_page()
+    page.goto(f"{url}/?job={job}")
+    page.wait_for_selector("body[data-edit=ready]", timeout=60_000)
+    page.wait_for_selector("body[data-model=loaded]", timeout=60_000)
+    page.wait_for_selector("body[data-pad=restored]", timeout=60_000)
+    page.wait_for_timeout(300)
+    shots = [Image.open(io.BytesIO(page.screenshot(type="png")))]
+    page.evaluate("document.getElementById('result-panel').scrollIntoView()")
+    page.wait_for_timeout(500)
+    shots.append(Image.open(io.BytesIO(page.screenshot(type="png"))))
+    ctx.close()
+    w, h = shots[0].size
+    sheet = Image.new("RGB", (2 * w + 24, h), "white")
+    for i, im in enumerate(shots):
+        sheet.paste(im.convert("RGB"), (i * (w + 24), 0))
+    with atomic_target(out) as tmp:
+        sheet.save(tmp, format="PNG", optimize=True)
 
 
 def side(page, out: Path) -> None:

@@ -45,6 +45,18 @@ class LeaningPalmEstimator:
 leaning_palm_estimator = LeaningPalmEstimator()
 
 
+class NotATreeEstimator(PalmEstimator):
+    """The fixed palm, from an estimator sure the drawing is no tree (probability 0)."""
+
+    name = "not-a-tree"
+
+    def estimate(self, sketch: np.ndarray) -> Estimate:
+        return Estimate(species.sample("palm", 8), "palm", {"palm": 1.0}, tree_probability=0.0)
+
+
+not_a_tree_estimator = NotATreeEstimator()
+
+
 def png(img: np.ndarray) -> bytes:
     from PIL import Image
 

@@ -188,3 +188,15 @@ def test_grow_writes_all_or_nothing(tmp_path, monkeypatch):
                 "--preset", str(tmp_path / "p.py"))  # fmt: skip
     assert res.exit_code == 0, res.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["p.json", "p.py", "t.glb", "t_lod1.glb"]
+
+
+@pytest.mark.parametrize("chain", ["-" * 200_000 + "1", "not " * 100_000 + "1"])
+def test_grow_a_preset_nested_too_deep_exits_2(tmp_path, chain):
+    """Issue 49, item 6: a preset of 200,000 unary minus signs (the parser's MemoryError or
+    RecursionError) is a plain error naming the file, not a traceback."""
+    preset = tmp_path / "u.py"
+    preset.write_text('{"levels": ' + chain + "}\n")
+    res = runner.invoke(app, ["grow", "--params", str(preset), "--out", str(tmp_path / "t.glb")])
+    assert res.exit_code == 2, res.output
+    assert "nested too deep" in res.output and str(preset.name) in res.output
+    assert "Traceback" not in res.output and not (tmp_path / "t.glb").exists()

@@ -200,3 +200,15 @@ def test_preview_keeps_the_current_best_tree(tmp_path, sketch_png) -> None:
     blocked.write_text("not a folder")
     res = runner.invoke(app, _args(tmp_path, sketch_png, "--preview", str(blocked)))
     assert res.exit_code == 2 and "--preview" in res.output
+
+
+def test_a_preview_that_cannot_be_written_never_costs_the_result(tmp_path, sketch_png) -> None:
+    """Issue 49, item 5: ``--preview LINK`` with ``LINK`` a dangling symlink (its folder
+    cannot be made) warns and refines on; every output is written."""
+    link = tmp_path / "preview"
+    link.symlink_to(tmp_path / "gone")
+    res = runner.invoke(app, _args(tmp_path, sketch_png, "--budget", "3", "--preview", str(link)))
+    assert res.exit_code == 0, res.output
+    assert "cannot write the preview" in res.output and "Traceback" not in res.output
+    out = tmp_path / "out"
+    assert (out / "tree.glb").read_bytes()[:4] == b"glTF" and (out / "tree.json").is_file()

@@ -154,3 +154,17 @@ def test_mesh_files_for_write_together(tree, tmp_path):
     with pytest.raises(ValueError, match="format"):
         mesh_files(tree, tmp_path / "a.ply")
     assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_textures_are_png_encoded_once_not_per_export(tree, monkeypatch):
+    """Issue 49: trimesh PNG-encoded both textures on every GLB (half of a slider edit's
+    time); they are encoded once per species and the file is byte for byte the same."""
+    from PIL import Image
+
+    first = glb_bytes(tree, max_faces=20_000)
+
+    def encoded(*args, **kwargs):
+        raise AssertionError("a texture was PNG-encoded again")
+
+    monkeypatch.setattr(Image.Image, "save", encoded)
+    assert glb_bytes(tree, max_faces=20_000) == first

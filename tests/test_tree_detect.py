@@ -81,3 +81,22 @@ def test_a_new_detector_is_saved_into_a_checkpoint_with_the_rest_kept(tmp_path) 
     assert loaded.species_branch is not None and again.species_branch is not None
     a, b = loaded.species_branch.stage_state(), again.species_branch.stage_state()
     assert a.keys() == b.keys() and all(bool((a[k] == b[k]).all()) for k in a)
+
+
+def test_weights_move_the_fit_toward_the_drawings_that_weigh_more() -> None:
+    x, y = _data(0)
+    # a second kind of "other thing" that overlaps the trees; weighted up, it is learned
+    rng = np.random.default_rng(5)
+    odd = rng.normal(size=(40, 5))
+    odd[:, 0] += 1.5
+    odd[:, 1] += 3.0
+    xs, ys = np.concatenate([x, odd]), np.concatenate([y, np.zeros(40, bool)])
+    light = TreeDetector.fit(xs, ys, weights=np.r_[np.ones(len(x)), np.full(40, 0.05)])
+    heavy = TreeDetector.fit(xs, ys, weights=np.r_[np.ones(len(x)), np.full(40, 5.0)])
+    test = rng.normal(size=(200, 5))
+    test[:, 0] += 1.5
+    test[:, 1] += 3.0
+    assert np.mean(heavy.probabilities(test) < 0.5) > np.mean(light.probabilities(test) < 0.5)
+    assert np.mean(heavy.probabilities(test) < 0.5) > 0.8
+    with pytest.raises(ValueError, match="weights"):
+        TreeDetector.fit(x, y, weights=np.ones(3))

@@ -10,7 +10,7 @@ from paths import GT_PARAM_FILES as REF_FILES
 from tsn_helpers import sampled_matrices
 
 from tsn import encoding
-from tsn.species_id import SpeciesIdentifier, SpeciesIdError
+from tsn.species_id import SpeciesClassifier, SpeciesIdentifier, SpeciesIdError
 from weberpenn import load_params, species
 
 
@@ -125,3 +125,27 @@ def test_a_classifier_that_reads_the_network_features(identifier: SpeciesIdentif
         SpeciesClassifier.from_dict({**clf.to_dict(), "reads": "pixels"})
     with pytest.raises(SpeciesIdError, match=r"\(N, m\)"):
         clf.probabilities_many(np.zeros((2, 4, 62)))
+
+
+def test_refit_learns_drawings_known_only_as_a_set_of_species() -> None:
+    # three species; a new kind of drawing (shifted on feature 2) that the old classifier
+    # reads as "c", and that is known only to be "a" or "b"
+    rng = np.random.default_rng(0)
+    centres = {"a": [2.0, 0.0, 0.0], "b": [0.0, 2.0, 0.0], "c": [0.0, 0.0, 2.0]}
+    x = np.concatenate([rng.normal(centres[s], 0.5, (60, 3)) for s in centres])
+    labels = [s for s in centres for _ in range(60)]
+    clf = SpeciesClassifier.fit(x, labels, np.ones(62), reads="features")
+    new = rng.normal([1.5, 0.3, 2.5], 0.4, (80, 3))
+    before = clf.probabilities_many(new)[:, clf.species.index("c")].mean()
+    allowed = labels + [frozenset({"a", "b"})] * 80
+    again = clf.refit(np.concatenate([x, new]), allowed, pull=1e-3)
+    p = again.probabilities_many(new)
+    assert before > 0.5 and p[:, again.species.index("c")].mean() < 0.2
+    # the old drawings keep their species
+    old = again.probabilities_many(x).argmax(axis=1)
+    assert np.mean(np.array(again.species)[old] == np.array(labels)) > 0.95
+    assert again.temperature == clf.temperature and again.species == clf.species
+    with pytest.raises(SpeciesIdError, match="no known species"):
+        clf.refit(x[:1], [frozenset({"zebra"})])
+    with pytest.raises(SpeciesIdError, match="weights"):
+        clf.refit(x[:2], ["a", "b"], weights=[1.0])

@@ -249,7 +249,25 @@ def _progress_bar(
         loss = "-" if math.isnan(p.best_loss) else f"{p.best_loss:.4f}"
         bar.update(task, total=max(1, p.budget), completed=p.evaluations, loss=loss)
         if preview is not None:
+            offer_preview(p)
+
+    def offer_preview(p: Progress) -> None:
+        """The preview is a convenience: one that cannot be written (a dangling link, a
+        full disk) is warned of once and given up, never costs the result (issue 49)."""
+        nonlocal preview
+        assert preview is not None
+        try:
             preview.offer(p)
+        except Exception as exc:  # noqa: BLE001 - whatever went wrong, the result goes on
+            preview = None
+            why = f"{exc.strerror or exc}" if isinstance(exc, OSError) else f"{exc}"
+            bar.console.print(
+                f"warning: --preview {preview_dir}: cannot write the preview ({why}); "
+                "refining on without it",
+                markup=False,
+                highlight=False,
+                soft_wrap=True,  # one line, whatever the terminal's width
+            )
 
     return bar, on_progress
 

@@ -101,6 +101,17 @@ def serve_command(
             "is for the ray executor (add --executor ray)", param_hint="--address"
         )
 
+    from .service.app import check_cors
+
+    try:
+        check_cors(tuple(cors or ()), token or None)  # before anything starts
+    except ValueError as exc:
+        fail(str(exc))
+    if cors and not token:
+        typer.echo(
+            f"warning: without --token, pages at {', '.join(cors)} can read every job here",
+            err=True,
+        )
     if host not in LOCAL_HOSTS:
         typer.echo(
             f"warning: listening on {host}: other machines can reach this service"

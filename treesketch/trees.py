@@ -18,11 +18,30 @@ import numpy as np
 from weberpenn import TreeMesh, TreeParams
 from weberpenn import species as species_table
 
-__all__ = ["VIEW_FACES", "EditedTree", "TreeRequest", "edit_tree", "light_glb", "tree_sketch"]
+__all__ = [
+    "REPLY_FACES",
+    "VIEW_FACES",
+    "EditedTree",
+    "TreeRequest",
+    "TreeTooBig",
+    "edit_tree",
+    "estimated_faces",
+    "light_glb",
+    "reply_glb",
+    "tree_sketch",
+]
 
 # the viewer's default triangle budget (and the live preview's): the heaviest species
 # stays under 5 MB of GLB with its textures (benchmarks/RESULTS.md, "The interactive loop")
 VIEW_FACES = 80_000
+# the most triangles one reply's GLB holds (26-31 bytes each: at most 47 MB): every
+# species' tree at full detail fits (the largest, willow, about 0.85 M); a bigger export
+# is `treesketch grow`'s (issue 49: a 4.3 M-triangle reply was 110 MB, held per client)
+REPLY_FACES = 1_500_000
+
+
+class TreeTooBig(ValueError):
+    """The tree has more triangles than one reply holds (:data:`REPLY_FACES`)."""
 
 
 @dataclass(frozen=True)
@@ -72,9 +91,7 @@ class TreeRequest:
         max_faces = body.get("max_faces", VIEW_FACES)
         if max_faces is not None:
             check_budget(max_faces)
-        yaw = body.get("yaw", 0.0)
-        if isinstance(yaw, bool) or not isinstance(yaw, int | float) or not math.isfinite(yaw):
-            raise ValueError(f"'yaw' must be a finite number of degrees, got {yaw!r:.40}")
+        yaw = _degrees(body.get("yaw", 0.0))
         fit = body.get("fit", False)
         if isinstance(fit, list) and all(isinstance(k, str) for k in fit):
             unknown = sorted(set(fit) - {c.name for c in CONTROLS})
@@ -85,7 +102,26 @@ class TreeRequest:
             raise ValueError(
                 f"'fit' must be true, false or a list of control names, got {fit!r:.40}"
             )
-        return cls(params, controls, controls.get("seed"), name, max_faces, float(yaw) % 360.0, fit)
+        return cls(params, controls, controls.get("seed"), name, max_faces, yaw % 360.0, fit)
+
+
+def _degrees(yaw: Any) -> float:
+    """``yaw`` as finite float degrees; ValueError otherwise (an int of 309 digits or more
+    overflows a float: that is a bad value too, not an OverflowError)."""
+    if isinstance(yaw, int) and not isinstance(yaw, bool) and yaw.bit_length() > 100:
+        shown = f"a number of about {int(yaw.bit_length() * 0.30103) + 1} digits"
+    else:
+        shown = f"{yaw!r:.40}"
+    bad = ValueError(f"'yaw' must be a finite number of degrees, got {shown}")
+    if isinstance(yaw, bool) or not isinstance(yaw, int | float):
+        raise bad
+    try:
+        degrees = float(yaw)
+    except OverflowError:
+        raise bad from None
+    if not math.isfinite(degrees):
+        raise bad
+    return degrees
 
 
 @dataclass(frozen=True)
@@ -123,6 +159,48 @@ def edit_tree(request: TreeRequest) -> EditedTree:
     lo, hi = mesh.bounds()
     height = float(np.asarray(hi)[2] - np.asarray(lo)[2])
     return EditedTree(params, name, mesh, height, current(params, height), adjusted)
+
+
+def estimated_faces(request: TreeRequest) -> float:
+    """About how many triangles growing ``request`` builds, from its dictionary alone
+    (``weberpenn.params.estimate_load``, an upper-bound-ish count, 2 to 10 times the
+    real one; no growing): what tells a cheap edit from an expensive tree before paying
+    for it.  A ``height`` control regrows the tree (half as much again); controls past
+    the generator's limits count as the tree at their neutral values grown three times
+    (``fit`` searches, growing up to nine trees, most of them smaller), ``inf`` when even
+    that is past the limits."""
+    from weberpenn.controls import CONTROLS, apply_controls
+    from weberpenn.params import ParamError, estimate_load
+
+    controls = {k: v for k, v in request.controls.items() if k != "height"}
+    factor = 1.5 if "height" in request.controls else 1.0
+    try:
+        params = apply_controls(request.params, controls)
+    except ParamError:
+        movable = {c.name for c in CONTROLS if c.relative and c.kind == "number"}
+        try:
+            params = apply_controls(
+                request.params, {k: v for k, v in controls.items() if k not in movable}
+            )
+        except ParamError:
+            return math.inf
+        factor *= 3.0
+    _, leaves, tube_vertices = estimate_load(params)
+    return factor * (2.0 * tube_vertices + 4.0 * leaves)  # a tube's quad per vertex; a leaf's 2-4
+
+
+def reply_glb(mesh: TreeMesh, yaw: float = 0.0, max_faces: int | None = VIEW_FACES) -> bytes:
+    """:func:`light_glb` for one reply: :class:`TreeTooBig` (before exporting) when it
+    would hold more than :data:`REPLY_FACES` triangles."""
+    budget = REPLY_FACES if max_faces is None else min(max_faces, REPLY_FACES)
+    asked = max_faces is None or max_faces > REPLY_FACES
+    if asked and mesh.n_faces > budget:
+        raise TreeTooBig(
+            f"the tree has {mesh.n_faces:,} triangles; a reply holds at most "
+            f"{REPLY_FACES:,}: ask for max_faces <= {REPLY_FACES} (the same tree, lighter), "
+            "or export it full size with `treesketch grow --params tree.json --out tree.glb`"
+        )
+    return light_glb(mesh, yaw=yaw, max_faces=max_faces)
 
 
 def light_glb(mesh: TreeMesh, yaw: float = 0.0, max_faces: int | None = VIEW_FACES) -> bytes:

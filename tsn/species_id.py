@@ -123,6 +123,53 @@ class SpeciesClassifier:
         )  # fmt: skip
         return out if held_out is None else out.calibrated(*held_out)
 
+    def refit(
+        self,
+        inputs: np.ndarray,
+        allowed: Sequence[str | frozenset[str]],
+        weights: Sequence[float] | None = None,
+        pull: float = 1e-2,
+    ) -> SpeciesClassifier:
+        """This classifier refitted on more drawings (of the kind it ``reads``), some of
+        which are known only as one of a set of species (a tree a person drew is a
+        broadleaf or a fir, never a palm): it maximises each drawing's probability of
+        its ``allowed`` species (one name, or a set), ``weights`` per drawing, with an L2
+        pull of strength ``pull`` toward this classifier's weights, so what it learned
+        from drawings not at hand stays.  Its standardisation and the columns it gives no
+        weight stay as they are; the temperature is this one's (recalibrate after)."""
+        import torch
+
+        x = (self.design(inputs, self.scale, self.reads) - self.mean) / self.std
+        mask = np.zeros((len(x), len(self.species)), bool)
+        for i, a in enumerate(allowed):
+            names = {a} if isinstance(a, str) else set(a)
+            unknown = names - set(self.species)
+            if unknown or not names:
+                raise SpeciesIdError(f"drawing {i}: no known species among {sorted(names)}")
+            mask[i, [self.species.index(s) for s in names]] = True
+        wt = np.ones(len(x)) if weights is None else np.asarray(weights, np.float64)
+        if wt.shape != (len(x),) or (wt < 0).any():
+            raise SpeciesIdError("weights must be one non-negative number per drawing")
+        used = torch.from_numpy(np.abs(self.weight).sum(axis=0) > 0)
+        w0, b0 = torch.from_numpy(self.weight), torch.from_numpy(self.bias)
+        xt, wt_t = torch.from_numpy(x), torch.from_numpy(wt / wt.sum())
+        log_mask = torch.from_numpy(np.where(mask, 0.0, -np.inf))
+        w = w0.clone().requires_grad_(True)
+        b = b0.clone().requires_grad_(True)
+        opt = torch.optim.LBFGS([w, b], max_iter=500, line_search_fn="strong_wolfe")
+
+        def closure() -> torch.Tensor:
+            opt.zero_grad()
+            logp = torch.log_softmax(xt @ (w * used).T + b, dim=1)
+            nll = -(torch.logsumexp(logp + log_mask, dim=1) * wt_t).sum()
+            loss = nll + pull * (((w - w0) * used) ** 2).sum()
+            loss.backward()
+            return loss
+
+        opt.step(closure)
+        weight = (w * used).detach().numpy()
+        return dataclasses.replace(self, weight=weight, bias=b.detach().numpy())
+
     def calibrated(self, inputs: np.ndarray, labels: Sequence[str]) -> SpeciesClassifier:
         """This classifier with the temperature that makes its probabilities most likely
         on held-out ``inputs`` (of the kind it ``reads``) and their species (species it

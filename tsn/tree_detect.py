@@ -39,10 +39,12 @@ class TreeDetector:
         is_tree: Sequence[bool],
         held_out: tuple[np.ndarray, Sequence[bool]] | None = None,
         l2: float = 1e-2,
+        weights: Sequence[float] | None = None,
     ) -> TreeDetector:
         """Fit on features and labels (classes weighted equally, so the ratio of trees
-        to other drawings in the fitting set does not move the threshold); the
-        temperature on ``held_out`` when given."""
+        to other drawings in the fitting set does not move the threshold; within a class,
+        each drawing by its ``weights``, default equal); the temperature on ``held_out``
+        when given."""
         import torch
         from scipy.optimize import minimize_scalar
 
@@ -53,8 +55,11 @@ class TreeDetector:
         mean, std = x.mean(axis=0), np.maximum(x.std(axis=0), 1e-6)
         xt = torch.from_numpy((x - mean) / std)
         yt = torch.from_numpy(y.astype(np.float64))
-        pos = float(y.mean())
-        wt = torch.from_numpy(np.where(y, 0.5 / pos, 0.5 / (1 - pos)))
+        given = np.ones(len(y)) if weights is None else np.asarray(weights, np.float64)
+        if given.shape != y.shape or (given < 0).any():
+            raise ValueError("weights must be one non-negative number per drawing")
+        pos, neg = float(given[y].sum()), float(given[~y].sum())
+        wt = torch.from_numpy(given * np.where(y, 0.5 / pos, 0.5 / neg) * len(y))
         w = torch.zeros(x.shape[1], dtype=torch.float64, requires_grad=True)
         b = torch.zeros(1, dtype=torch.float64, requires_grad=True)
         opt = torch.optim.LBFGS([w, b], max_iter=500, line_search_fn="strong_wolfe")

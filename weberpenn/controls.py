@@ -69,6 +69,14 @@ HEIGHT_TRIES = 3  # regrowths at most to meet a height
 TRUNK_CURVE_RES = 6  # segments the trunk needs before a lean or a bend can show
 
 
+def _shown(value: Any) -> str:
+    """``value`` for an error message, at most 40 characters (repr of an int of more than
+    4,300 digits raises; one of 400 says nothing more)."""
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 100:
+        return f"a number of about {int(value.bit_length() * 0.30103) + 1} digits"
+    return f"{value!r:.40}"
+
+
 @dataclass(frozen=True)
 class Control:
     """One control: see the module text.  ``neutral`` is None for absolute controls."""
@@ -111,9 +119,11 @@ class Control:
         try:
             number = float(value)
         except (TypeError, ValueError):
-            raise ValueError(f"{bad} must be a number, got {value!r}") from None
+            raise ValueError(f"{bad} must be a number, got {_shown(value)}") from None
+        except OverflowError:  # an int of 309 digits or more: out of range, not a crash
+            number = math.inf
         if not math.isfinite(number) or not self.lo <= number <= self.hi:
-            raise ValueError(f"{bad} must be in [{self.lo:g}, {self.hi:g}], got {value!r}")
+            raise ValueError(f"{bad} must be in [{self.lo:g}, {self.hi:g}], got {_shown(value)}")
         if self.kind == "integer":
             if number != int(number):
                 raise ValueError(f"{bad} must be a whole number, got {value!r}")

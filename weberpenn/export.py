@@ -93,13 +93,37 @@ def _parts(tm: TreeMesh, yaw: float, max_faces: int | None) -> list[_Part]:
     return out
 
 
+class _EncodedTexture(Image.Image):
+    """A texture that saves as PNG from bytes encoded once.  trimesh PNG-encodes every
+    material image on every GLB export: half of a slider edit's time (issue 49).  The
+    bytes are those of a plain ``save(f, format="png")``, so the file is unchanged; any
+    other save encodes as usual."""
+
+    png: bytes = b""
+
+    def save(self, fp: Any, format: str | None = None, **params: Any) -> None:  # noqa: A002
+        if self.png and str(format).lower() == "png" and not params and hasattr(fp, "write"):
+            fp.write(self.png)
+            return
+        super().save(fp, format, **params)
+
+
+def _encoded(image: Image.Image) -> Image.Image:
+    buf = io.BytesIO()
+    image.save(buf, format="png")  # as trimesh saves it
+    out = image.copy()
+    out.__class__ = _EncodedTexture  # a subclass adding only a method and a field
+    out.png = buf.getvalue()
+    return out
+
+
 @lru_cache(maxsize=32)
 def _textures(species: str | None) -> dict[str, Image.Image]:
     # a pure function of the species, made per export before: an edit's light GLB paid
     # for drawing both pictures every time (read-only for the callers)
     return {
-        "bark": bark_texture(species, TEXTURE_SIZE),
-        "leaf": leaf_texture(species, TEXTURE_SIZE),
+        "bark": _encoded(bark_texture(species, TEXTURE_SIZE)),
+        "leaf": _encoded(leaf_texture(species, TEXTURE_SIZE)),
     }
 
 

@@ -290,8 +290,10 @@ def _coerce(key: str, value: Any) -> Any:
     return _coerce_scalar(spec, value, key)
 
 
-def _estimate_load(v: Mapping[str, Any]) -> tuple[float, float, float]:
-    """Upper-bound-ish estimate of (stems, leaves, tube vertices) a dictionary grows."""
+def estimate_load(v: Mapping[str, Any]) -> tuple[float, float, float]:
+    """Upper-bound-ish estimate of (stems, leaves, tube vertices) a dictionary grows, from
+    the dictionary alone (no growing): validation bounds it, and a caller can tell a
+    cheap tree from an expensive one before paying for it."""
     levels = int(v["levels"])
     stems_at = [1.0 + float(v["baseSplits"])]
     for n in range(1, levels):
@@ -388,7 +390,7 @@ def _validate_dict(values: Mapping[str, Any]) -> dict[str, Any]:
             f"scale={out['scale']!r}, scaleV={out['scaleV']!r}",
             "scaleV",
         )
-    stems, leaves, verts = _estimate_load(out)
+    stems, leaves, verts = estimate_load(out)
     if stems > MAX_STEMS:
         raise ParamError(
             f"parameter 'branches': the tree would have about {stems:.3g} stems "
@@ -480,6 +482,18 @@ def _embedded_params(text: str) -> dict | None:
     return None
 
 
+# what Python's parser raises for a literal: SyntaxError and ValueError for a bad one;
+# MemoryError ("parser stack overflow") and RecursionError for one nested or chained too
+# deep (200,000 unary minus signs: a preset is one dict literal, nothing like that)
+_LITERAL_ERRORS = (ValueError, SyntaxError, MemoryError, RecursionError)
+
+
+def _why(exc: BaseException) -> str:
+    if isinstance(exc, MemoryError | RecursionError):
+        return "its expression is nested too deep for a dict literal"
+    return str(exc)
+
+
 def _read_preset_literal(text: str, path: Path) -> Any:
     for line in text.splitlines():
         stripped = line.strip()
@@ -487,17 +501,21 @@ def _read_preset_literal(text: str, path: Path) -> Any:
             continue
         try:
             return ast.literal_eval(stripped)
-        except (ValueError, SyntaxError) as exc:
+        except _LITERAL_ERRORS as exc:
             break_exc = exc
             break
     else:
         raise ParamError(f"{path}: no dictionary found (expected a Python dict literal)")
+    if isinstance(break_exc, MemoryError | RecursionError):
+        # the whole file holds the same line: parsing it again fails the same way
+        raise ParamError(f"{path}: not a valid Sapling preset: {_why(break_exc)}")
     # Not a one-line dict: try the whole file (a multi-line dict literal).
     try:
         return ast.literal_eval(text.strip())
-    except (ValueError, SyntaxError):
+    except _LITERAL_ERRORS as exc:
+        why = _why(exc) if isinstance(exc, MemoryError | RecursionError) else _why(break_exc)
         raise ParamError(
-            f"{path}: not a valid Sapling preset (a Python dict literal): {break_exc}"
+            f"{path}: not a valid Sapling preset (a Python dict literal): {why}"
         ) from None
 
 

@@ -23,6 +23,7 @@ from fastapi.responses import FileResponse, JSONResponse, Response, StreamingRes
 from starlette.concurrency import run_in_threadpool
 
 from refine.search import DEFAULT_BUDGET
+from treesketch.trees import REPLY_FACES
 
 from .guards import LOOPBACK_HOSTS, AccessGuard, RedactTokens
 from .interactive import add_interactive_routes
@@ -33,8 +34,9 @@ from .preview import PREVIEW_FILES
 from .ray_pool import RayWorkerPool
 from .runner import ARTEFACTS, VIEW_ARTEFACTS, view_artefacts
 from .store import Job, JobStore, StorageFull
+from .tree_work import BIG_SECONDS
 
-__all__ = ["ServiceConfig", "create_app"]
+__all__ = ["ServiceConfig", "check_cors", "create_app"]
 
 STATIC = Path(__file__).parent / "static"
 EVENT_TICK = 0.25  # seconds between checks in the events stream and /predict
@@ -163,11 +165,25 @@ def storage_problem(store: JobStore, min_free_bytes: int) -> str | None:
     return None
 
 
+def check_cors(cors: tuple[str, ...], token: str | None) -> None:
+    """ValueError for a CORS origin of any page (``*``, or ``null``: sandboxed frames and
+    local files) without a token: every page a user visits could then read the job list,
+    the drawings and the results (issue 49)."""
+    wild = [o for o in cors if o.strip().lower() in ("*", "null")]
+    if wild and not token:
+        raise ValueError(
+            f"--cors {wild[0]!r} lets any web page call this server: it needs a token "
+            "(--token or TREESKETCH_TOKEN), or name the origins allowed "
+            "(--cors https://app.example.org)"
+        )
+
+
 def create_app(config: ServiceConfig) -> FastAPI:
     """The app; its worker pool starts and stops with the app's lifespan, which first takes
     the data folder (``owner.DataOwner``: a second server on it is refused before it
     touches any job).  Raises ``store.StoreError`` for a data folder or database that
-    cannot be used."""
+    cannot be used, ValueError for CORS open to any page without a token."""
+    check_cors(config.cors, config.token)
     store = JobStore(config.data)
     pool = make_pool(config, store)
     owner = DataOwner(config.data)
@@ -341,6 +357,9 @@ def create_app(config: ServiceConfig) -> FastAPI:
                 "max_pixels": config.limits.max_pixels,
                 "max_budget": config.limits.max_budget,
                 "default_budget": config.default_budget,
+                # POST /trees (interactive.py, tree_work.py)
+                "tree_reply_faces": REPLY_FACES,
+                "tree_seconds": BIG_SECONDS,
             },
         }
 

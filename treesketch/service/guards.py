@@ -13,8 +13,15 @@ in this order:
    a plain form post, token or not.  Requests without ``Origin`` (curl, scripts) pass.
 3. **Token** (only when one is set): ``Authorization: Bearer TOKEN`` (the scheme in any
    case) or, for the page, the session cookie that ``POST /session`` (sent with that
-   header) sets: HttpOnly, SameSite=Strict, holding an HMAC of the token, not the token.
+   header) sets: HttpOnly, SameSite=Strict, holding a random session id made for that
+   login (kept by the server, at most :data:`MAX_SESSIONS`), not the token; ``DELETE
+   /session`` ends it, so a copied cookie is worth nothing after "log out" (sessions
+   live in the server's memory: a restart ends them all).
    A token is never read from the URL: URLs end up in logs, histories and shared links.
+
+Every answer also says it may not be framed by another site and that its type is the
+one given (``X-Frame-Options``, ``Content-Security-Policy: frame-ancestors``,
+``X-Content-Type-Options``).
 
 ``RedactTokens`` is a logging filter that blanks any ``token=...`` in a log line (the
 access log prints query strings), whatever a client sent.
@@ -26,15 +33,18 @@ import hashlib
 import hmac
 import logging
 import re
+import secrets
 from http.cookies import SimpleCookie
 from urllib.parse import urlsplit
 
 from starlette.datastructures import Headers
 from starlette.responses import JSONResponse, Response
-from starlette.types import ASGIApp, Receive, Scope, Send
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 __all__ = [
     "LOOPBACK_HOSTS",
+    "MAX_SESSIONS",
+    "SECURITY_HEADERS",
     "SESSION_COOKIE",
     "SESSION_PATH",
     "AccessGuard",
@@ -47,6 +57,14 @@ LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
 SESSION_COOKIE = "treesketch_session"
 SESSION_PATH = "/session"
 SAFE_METHODS = ("GET", "HEAD", "OPTIONS")
+MAX_SESSIONS = 256  # page logins kept at once; the oldest ends first
+# on every answer: no other site may frame the page (clickjacking), and no answer is
+# sniffed into another type than the one it says
+SECURITY_HEADERS = (
+    (b"x-frame-options", b"DENY"),
+    (b"content-security-policy", b"frame-ancestors 'none'"),
+    (b"x-content-type-options", b"nosniff"),
+)
 _DEFAULT_PORTS = {"http": "80", "https": "443"}
 
 
@@ -106,18 +124,26 @@ class AccessGuard:
         self.hosts = frozenset(host_name(h) for h in hosts if h != "*")
         self.cors = frozenset(o.strip().lower().rstrip("/") for o in cors)
         self.token = token.encode() if token else None
-        # the cookie holds a value derived from the token: a stolen cookie is not the token
-        self.session = (
-            hmac.new(self.token, b"treesketch page session", hashlib.sha256).hexdigest()
-            if self.token
-            else ""
-        )
+        # a random id per login, kept here as its hash (insertion order: the oldest first):
+        # a copied cookie is not the token, and it ends with its session
+        self.sessions: dict[str, None] = {}
         self.open_paths, self.open_prefixes = open_paths, open_prefixes
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
+
+        async def send_secured(message: Message) -> None:
+            if message["type"] == "http.response.start":
+                have = {name.lower() for name, _ in message.get("headers", [])}
+                extra = [(n, v) for n, v in SECURITY_HEADERS if n not in have]
+                message = {**message, "headers": [*message.get("headers", []), *extra]}
+            await send(message)
+
+        await self._guarded(scope, receive, send_secured)
+
+    async def _guarded(self, scope: Scope, receive: Receive, send: Send) -> None:
         headers = Headers(scope=scope)
         refusal = self._host(headers) or self._origin(scope, headers)
         if refusal is None and scope.get("path") == SESSION_PATH:
@@ -177,16 +203,30 @@ class AccessGuard:
             "/#token=TOKEN); a token in the URL is never read",
         )
 
-    def _has_session(self, headers: Headers) -> bool:
+    @staticmethod
+    def _session_key(headers: Headers) -> str | None:
+        """The hash of the request's session cookie, or None."""
         cookies = SimpleCookie()
         try:
             cookies.load(headers.get("cookie", ""))
         except Exception:  # noqa: BLE001 - a malformed cookie header is no session
-            return False
+            return None
         morsel = cookies.get(SESSION_COOKIE)
-        return morsel is not None and hmac.compare_digest(
-            morsel.value.encode(), self.session.encode()
-        )
+        if morsel is None or not morsel.value:
+            return None
+        # looked up by its hash: the lookup's time says nothing of a live id
+        return hashlib.sha256(morsel.value.encode()).hexdigest()
+
+    def _has_session(self, headers: Headers) -> bool:
+        key = self._session_key(headers)
+        return key is not None and key in self.sessions
+
+    def _new_session(self) -> str:
+        session = secrets.token_urlsafe(32)
+        self.sessions[hashlib.sha256(session.encode()).hexdigest()] = None
+        while len(self.sessions) > MAX_SESSIONS:
+            del self.sessions[next(iter(self.sessions))]
+        return session
 
     def _session(self, scope: Scope, headers: Headers) -> Response:
         """``POST /session`` with the token in the header: the page's cookie;
@@ -194,6 +234,9 @@ class AccessGuard:
         if self.token is None:
             return Response(status_code=204)  # nothing to log in to
         if scope["method"] == "DELETE":
+            key = self._session_key(headers)
+            if key is not None:
+                self.sessions.pop(key, None)  # the cookie is worth nothing from now on
             response = Response(status_code=204)
             response.delete_cookie(SESSION_COOKIE, path="/", httponly=True, samesite="strict")
             return response
@@ -205,7 +248,7 @@ class AccessGuard:
         response = Response(status_code=204)
         response.set_cookie(
             SESSION_COOKIE,
-            self.session,
+            self._new_session(),
             path="/",
             httponly=True,
             samesite="strict",

@@ -33,6 +33,18 @@ let strokes = []; // {erase, width, points: [[x, y], ...]}, {image} or {clear}
 let undone = []; // what Undo took, for Redo
 let current = null;
 let erasing = false;
+// one history for the pad and the tree: Ctrl+Z undoes what was changed last, the Undo
+// buttons their own (the pad's, the tree's); "pad" | "tree", oldest first
+let steps = [];
+let redoSteps = [];
+function noteStep(kind) {
+  steps.push(kind);
+  redoSteps = redoSteps.filter((k) => k !== kind);
+}
+function dropLast(list, kind) {
+  const i = list.lastIndexOf(kind);
+  if (i >= 0) list.splice(i, 1);
+}
 // the page is empty when nothing was drawn since the last Clear
 const drawn = () => strokes.length > 0 && !strokes[strokes.length - 1].clear;
 
@@ -95,7 +107,7 @@ pad.addEventListener("pointermove", (ev) => {
   redraw();
   ev.preventDefault();
 });
-const endStroke = () => { current = null; };
+const endStroke = () => { if (current) { current = null; savePad(); } };
 pad.addEventListener("pointerup", endStroke);
 pad.addEventListener("pointercancel", endStroke);
 
@@ -108,20 +120,54 @@ function setTool(erase) {
 }
 $("pen").onclick = () => setTool(false);
 $("eraser").onclick = () => setTool(true);
-function addStroke(s) { strokes.push(s); undone = []; }
-function undo() { if (strokes.length) { undone.push(strokes.pop()); redraw(); } }
-function redo() { if (undone.length) { strokes.push(undone.pop()); redraw(); } }
+function addStroke(s) { strokes.push(s); undone = []; noteStep("pad"); }
+function undo() {
+  if (!strokes.length) return;
+  undone.push(strokes.pop());
+  dropLast(steps, "pad");
+  redoSteps.push("pad");
+  redraw();
+  savePad();
+}
+function redo() {
+  if (!undone.length) return;
+  strokes.push(undone.pop());
+  dropLast(redoSteps, "pad");
+  steps.push("pad");
+  redraw();
+  savePad();
+}
 $("undo").onclick = undo;
 $("redo").onclick = redo;
 // Clear is a step of its own, so Undo brings the drawing back
-$("clear").onclick = () => { if (drawn()) { addStroke({ clear: true }); redraw(); } };
+$("clear").onclick = () => { if (drawn()) { addStroke({ clear: true }); redraw(); savePad(); } };
+// Ctrl+Z: the latest change, of the pad or of the tree (a step whose pad or tree has
+// gone meanwhile, e.g. another job's, is skipped)
+function undoLatest() {
+  while (steps.length) {
+    const kind = steps[steps.length - 1];
+    if (kind === "pad" && strokes.length) { undo(); return; }
+    if (kind === "tree" && treeSteps.length) { undoTree(); return; }
+    steps.pop();
+  }
+}
+function redoLatest() {
+  while (redoSteps.length) {
+    const kind = redoSteps[redoSteps.length - 1];
+    if (kind === "pad" && undone.length) { redo(); return; }
+    if (kind === "tree" && treeRedo.length) { redoTree(); return; }
+    redoSteps.pop();
+  }
+}
+// fields where Ctrl+Z is the browser's own (typing); sliders, boxes and lists are not
+const TYPED = new Set(["text", "number", "search", "email", "url", "password", "tel"]);
 document.addEventListener("keydown", (ev) => {
   if (!(ev.ctrlKey || ev.metaKey) || ev.altKey) return;
   const t = ev.target;
-  if (t && (t.tagName === "INPUT" || t.tagName === "TEXTAREA" || t.tagName === "SELECT" || t.isContentEditable)) return;
+  if (t && ((t.tagName === "INPUT" && TYPED.has(t.type)) || t.tagName === "TEXTAREA" || t.isContentEditable)) return;
   const key = ev.key.toLowerCase();
-  if (key === "z" && !ev.shiftKey) { undo(); ev.preventDefault(); }
-  else if ((key === "z" && ev.shiftKey) || key === "y") { redo(); ev.preventDefault(); }
+  if (key === "z" && !ev.shiftKey) { undoLatest(); ev.preventDefault(); }
+  else if ((key === "z" && ev.shiftKey) || key === "y") { redoLatest(); ev.preventDefault(); }
 });
 $("brush").oninput = () => { penWidth = Number($("brush").value); $("brush-size").textContent = String(penWidth); };
 $("upload").onclick = () => $("file").click();
@@ -130,7 +176,7 @@ function loadImageFile(file) {
   if (!file || !file.type.startsWith("image/")) { say("That is not an image."); return; }
   const url = URL.createObjectURL(file);
   const im = new Image();
-  im.onload = () => { addStroke({ clear: true }); addStroke({ image: im }); redraw(); say("Picture loaded: draw over it or press \"Make the tree\"."); };
+  im.onload = () => { addStroke({ clear: true }); addStroke({ image: im }); redraw(); savePad(); say("Picture loaded: draw over it or press \"Make the tree\"."); };
   im.onerror = () => say("The browser cannot read that image.");
   im.src = url;
 }
@@ -143,6 +189,29 @@ pad.addEventListener("drop", (ev) => {
   loadImageFile(ev.dataTransfer.files[0]);
 });
 clearPad();
+
+// the pad is kept for the tab (sessionStorage): a reload brings it back ("" once cleared)
+const PAD_KEY = "treesketch.pad";
+let padTimer = null;
+function savePad() {
+  if (side) return; // a drawing from another side is not the tab's drawing
+  clearTimeout(padTimer);
+  padTimer = setTimeout(() => {
+    try { sessionStorage.setItem(PAD_KEY, drawn() ? pad.toDataURL("image/png") : ""); } catch { /* full or off */ }
+  }, 150);
+}
+// the pad shows ``url``'s picture as its only content (no undo steps); a promise
+function padFrom(url) {
+  return new Promise((ok) => {
+    const im = new Image();
+    im.onload = () => { strokes = [{ image: im }]; undone = []; redraw(); document.body.dataset.pad = "restored"; ok(true); };
+    im.onerror = () => ok(false);
+    im.src = url;
+  });
+}
+function keptPad() {
+  try { return sessionStorage.getItem(PAD_KEY); } catch { return null; }
+}
 
 // ---- the job -------------------------------------------------------------------------
 let jobId = null;
@@ -160,9 +229,17 @@ function setState(state) {
   $("cancel").disabled = !busy || !jobId;
 }
 
+let sending = false; // a job is being sent: a second press (a double click) is ignored
 async function submit(ev) {
   ev.preventDefault();
+  if (sending || $("submit").disabled) return;
   if (!drawn()) { say(side ? "Draw the tree from this side first." : "The page is empty: draw a tree first."); return; }
+  sending = true;
+  try { await send(); } finally { sending = false; }
+}
+async function send() {
+  jobId = null;
+  setState("sending");
   const blob = await new Promise((ok) => pad.toBlob(ok, "image/png"));
   // drawing from another side: the tree's earlier drawings go too, the first at yaw 0
   const views = side ? [...side.views, { blob, yaw: side.turn }] : [{ blob, yaw: 0 }];
@@ -174,8 +251,6 @@ async function submit(ev) {
   if ($("height").value) form.append("height", $("height").value);
   if ($("max_faces").value) form.append("max_faces", $("max_faces").value);
   if ($("species-pick").value) form.append("species", $("species-pick").value);
-  jobId = null;
-  setState("sending");
   say("Sending...");
   $("progress").removeAttribute("value");
   let r;
@@ -207,10 +282,13 @@ function startJob(body) {
   shownPreview = 0;
   framedJob = null;
   endEdit();
+  clearResult();
   document.body.dataset.job = jobId;
   const url = new URL(location.href);
+  url.search = "";
   url.searchParams.set("job", jobId);
   history.replaceState(null, "", url);
+  showLink();
   setState(body.state);
   show(body);
   if (!["done", "failed", "cancelled", "expired"].includes(body.state)) follow(jobId);
@@ -243,7 +321,8 @@ function show(job) {
       const n = Math.min(p.evaluations, p.budget); // never past the plan
       bar.max = p.budget;
       bar.value = n;
-      const best = p.best_loss == null ? "" : `, best distance ${p.best_loss.toFixed(3)}`;
+      // the search's quick sketches: the result's distance is measured again, in full
+      const best = p.best_loss == null ? "" : `, best quick-sketch distance ${p.best_loss.toFixed(3)}`;
       say(`Refining: ${n} of ${p.budget} trees${best}, ${secs}${tree}`);
     } else if (p.stage === "render") {
       bar.max = 1; bar.value = 1;
@@ -260,9 +339,11 @@ function show(job) {
   } else if (job.state === "cancelled") {
     bar.max = 1; bar.value = 0;
     say("Cancelled.");
+    $("view-note").textContent = shownPreview ? "cancelled: its best tree so far (no files)" : "";
   } else {
     bar.max = 1; bar.value = 0;
     say(`Failed: ${job.error || job.state}`);
+    $("view-note").textContent = shownPreview ? "failed: its best tree so far (no files)" : "";
   }
 }
 
@@ -283,28 +364,77 @@ $("cancel").onclick = async () => {
   await api(`/jobs/${jobId}`, { method: "DELETE" });
 };
 
+// one job on screen: a new job (or one from the address) takes the last one's result off
+const DOWNLOADS = [["dl-glb", "tree.glb"], ["dl-glb-light", "tree_view.glb"], ["dl-obj", null], ["dl-json", "tree.json"], ["dl-preset", "tree_sapling.py"]];
+function clearResult() {
+  for (const [id] of DOWNLOADS) {
+    $(id).removeAttribute("href");
+    $(id).classList.add("disabled");
+  }
+  $("glb-note").textContent = "";
+  for (const id of ["species", "confidence", "distance"]) $(id).textContent = "-";
+  $("species-label").textContent = "Species";
+  $("species-text").textContent = "";
+  $("warning").hidden = true;
+  $("warning").textContent = "";
+  $("before").removeAttribute("src");
+  $("after").removeAttribute("src");
+  $("view-note").textContent = "";
+  delete document.body.dataset.preview;
+  delete document.body.dataset.shown;
+}
+
 function showResult(job) {
   const r = job.result;
   const links = job.links;
   shownJob = job;
+  // a drawing that may be no tree: the question leads (showCandidates), the numbers follow
+  const details = (r.warning || "").replace(/;? *is this a sketch of a tree\?$/, "");
   $("warning").hidden = !r.warning;
-  $("warning").textContent = r.warning || "";
+  $("warning").textContent = r.warning ? `Why: ${details}.` : "";
   $("before").src = links["sketch_before.png"];
   $("after").src = links["sketch_after.png"];
-  for (const [id, name] of [["dl-glb", "tree.glb"], ["dl-json", "tree.json"], ["dl-preset", "tree_sapling.py"]]) {
-    $(id).href = links[name];
+  for (const [id, name] of DOWNLOADS) {
+    $(id).href = name ? links[name] : "#obj";
     $(id).classList.remove("disabled");
   }
+  describeGlb(job);
   showCandidates(job);
   showFacts(null);
   showViews(job);
   updateSideButton();
   $("view-note").textContent = "";
+  if (phone() && !restoring) $("result-panel").scrollIntoView({ behavior: "smooth" });
+  // a candidate species from the address (a reload, a link): its tree, not the job's
+  const cand = pending && pending.job === job.id ? pending.cand : 0;
+  framedJob = job.id;
+  if (cand > 0 && cand < Math.min(3, (r.candidates || []).length)) { switchTo(cand); return; }
   // the viewer's light tree; the GLB download keeps full detail
   loadModel(links["tree_view.glb"], frameFor(job));
-  framedJob = job.id;
-  if (phone()) $("result-panel").scrollIntoView({ behavior: "smooth" });
   startEdit(r);
+}
+
+// the full GLB's size and triangles (its header, read with a range request), beside the
+// button; the light one is the 3D view's
+async function describeGlb(job) {
+  const url = job.links["tree.glb"];
+  const note = (text) => { if (shownJob === job) $("glb-note").textContent = text; };
+  const light = table ? `; light: at most ${Math.round(table.view_faces / 1000)}k` : "";
+  try {
+    const head = await api(url, { headers: { Range: "bytes=0-19" } });
+    if (head.status !== 206) { note(""); return; }
+    const b = new DataView(await head.arrayBuffer());
+    const bytes = b.getUint32(8, true), jsonLength = b.getUint32(12, true);
+    const r = await api(url, { headers: { Range: `bytes=20-${19 + jsonLength}` } });
+    const gltf = JSON.parse(new TextDecoder().decode(await r.arrayBuffer()));
+    let triangles = 0;
+    for (const m of gltf.meshes || []) for (const p of m.primitives) {
+      const acc = gltf.accessors[p.indices ?? p.attributes.POSITION];
+      triangles += Math.round(acc.count / 3);
+    }
+    const mb = bytes / 1e6;
+    note(`full detail: ${mb.toFixed(mb < 10 ? 1 : 0)} MB, ${Math.round(triangles / 1000)}k triangles${light}`);
+  } catch { note(""); }
 }
 
 // ---- the species: the picker (GET /species) and the result's candidates ---------------
@@ -332,7 +462,13 @@ function showCandidates(job) {
   const box = $("candidates");
   box.replaceChildren();
   const cands = (r.candidates || []).slice(0, 3);
-  $("species-text").textContent = r.species_text ? `It is ${r.species_text}.` : "";
+  // a species picked by hand was not judged from the drawing; a drawing that may be no
+  // tree leads with the question, the species after it
+  const picked = (job.options || {}).species;
+  let text = r.species_text ? `It is ${r.species_text}.` : "";
+  if (picked) text = `You picked this species: ${displayName(picked)}. It was not judged from the drawing.`;
+  else if (r.warning) text = `Is this a tree? The drawing does not look much like one.${r.species_text ? ` If it is, the closest is ${r.species_text}.` : ""}`;
+  $("species-text").textContent = text;
   cands.forEach((c, i) => {
     const b = document.createElement("button");
     b.type = "button";
@@ -348,8 +484,9 @@ function showCandidates(job) {
     name.textContent = c.name;
     const prob = document.createElement("span");
     prob.className = "cand-prob";
-    prob.textContent = percent(c.probability);
-    b.setAttribute("aria-label", `${c.name}, ${percent(c.probability)}`);
+    const p = picked && c.species === picked ? "your pick" : percent(c.probability);
+    prob.textContent = p;
+    b.setAttribute("aria-label", `${c.name}, ${p}`);
     b.append(im, name, prob);
     b.onclick = () => switchTo(i);
     box.append(b);
@@ -363,7 +500,9 @@ function showFacts(c) {
   const species = c ? c.species : r.species;
   $("species").textContent = displayName(species);
   document.body.dataset.shown = species;
-  $("confidence").textContent = percent(c ? c.probability : r.confidence);
+  const picked = (shownJob.options || {}).species;
+  $("species-label").textContent = r.warning && !picked ? "Closest species" : "Species";
+  $("confidence").textContent = picked && species === picked ? "picked by you" : percent(c ? c.probability : r.confidence);
   if (!c) $("distance").textContent = `${r.losses.before.toFixed(3)} → ${r.losses.after.toFixed(3)}`;
   else $("distance").textContent = c.distance == null ? "– (not refined)" : c.distance.toFixed(3);
 }
@@ -385,18 +524,20 @@ async function switchTo(i) {
     loadModel(job.links["tree_view.glb"], true);
     setPreset(true);
     startEdit(job.result);
+    updateUrl();
     return;
   }
   setPreset(false);
   updateSideButton();
   $("edit-status").textContent = `Growing the ${c.name}...`;
-  await startEdit({ params: c.params, species: c.species, yaw: job.result.yaw }, true);
+  await startEdit({ params: c.params, species: c.species, yaw: job.result.yaw }, true, i);
   if (mine !== switchCount || !edit) return;
   const r = await treeRequest({}, "model/gltf-binary", table ? table.view_faces : null);
   if (mine !== switchCount) return;
   if (!r.ok) { $("edit-status").textContent = `Refused (${r.status})`; return; }
   loadModel(await r.arrayBuffer(), true);
   $("edit-status").textContent = "";
+  updateUrl();
 }
 
 // the Sapling preset is the job's own tree's: a switched or edited tree has none
@@ -421,14 +562,28 @@ async function loadGallery() {
     im.src = ex.url;
     im.alt = ex.name;
     b.append(im, document.createTextNode(ex.name));
+    b.tabIndex = box.children.length ? -1 : 0; // one tab stop: the arrows move along
     b.onclick = () => {
       const pic = new Image();
-      pic.onload = () => { addStroke({ clear: true }); addStroke({ image: pic }); redraw(); say(`Example "${ex.name}" loaded: press "Make the tree".`); };
+      pic.onload = () => { addStroke({ clear: true }); addStroke({ image: pic }); redraw(); savePad(); say(`Example "${ex.name}" loaded: press "Make the tree".`); };
       pic.src = ex.url;
     };
     box.append(b);
   }
 }
+$("gallery").addEventListener("keydown", (ev) => {
+  const moves = { ArrowRight: 1, ArrowDown: 1, ArrowLeft: -1, ArrowUp: -1 };
+  if (!(ev.key in moves) && ev.key !== "Home" && ev.key !== "End") return;
+  const items = [...$("gallery").children];
+  const i = items.indexOf(document.activeElement);
+  if (i < 0) return;
+  let j = ev.key === "Home" ? 0 : ev.key === "End" ? items.length - 1 : i + moves[ev.key];
+  j = Math.max(0, Math.min(items.length - 1, j));
+  items[i].tabIndex = -1;
+  items[j].tabIndex = 0;
+  items[j].focus();
+  ev.preventDefault();
+});
 
 function mine() {
   try { return JSON.parse(localStorage.getItem(MINE) || "[]"); } catch { return []; }
@@ -462,13 +617,81 @@ async function refreshRecent() {
   }
 }
 
+// the settings of the next job, kept for the tab (a reload keeps them)
+const SETTINGS_KEY = "treesketch.settings";
+const SETTINGS = ["species-pick", "budget", "height", "max_faces", "refine"];
+function saveSettings() {
+  const kept = {};
+  for (const id of SETTINGS) kept[id] = id === "refine" ? $(id).checked : $(id).value;
+  try { sessionStorage.setItem(SETTINGS_KEY, JSON.stringify(kept)); } catch { /* full or off */ }
+}
+function setSettings(kept) {
+  for (const id of SETTINGS) {
+    if (!(id in kept)) continue;
+    if (id === "refine") $(id).checked = Boolean(kept[id]);
+    else $(id).value = kept[id] == null ? "" : String(kept[id]);
+  }
+}
+$("options").addEventListener("input", saveSettings);
+$("options").addEventListener("change", saveSettings);
+
+// the edits of the tree on show, in the address (a reload and a shared link bring them
+// back): ?job=ID&cand=I&e.NAME=VALUE...
+let pending = null; // {job, cand, controls}: edits from the address, put on once it loads
+let restoring = false;
+function updateUrl() {
+  if (!jobId) return;
+  const url = new URL(location.href);
+  url.search = "";
+  url.searchParams.set("job", jobId);
+  if (edit && edit.initial && shownJob && shownJob.id === jobId) {
+    if (edit.cand) url.searchParams.set("cand", String(edit.cand));
+    for (const [k, v] of Object.entries(changedControls())) url.searchParams.set(`e.${k}`, String(v));
+  }
+  history.replaceState(null, "", url);
+  showLink();
+}
+function showLink() {
+  $("share-link").value = location.href;
+  $("share").hidden = !jobId;
+}
+$("copy-link").onclick = async () => {
+  const link = location.href;
+  let ok = true;
+  try { await navigator.clipboard.writeText(link); } catch {
+    $("share-link").select();
+    ok = document.execCommand && document.execCommand("copy");
+  }
+  document.body.dataset.copied = ok ? "yes" : "";
+  $("share-note").textContent = ok ? "Copied." : "Select the link and copy it.";
+};
+
 async function restoreFromUrl() {
-  const id = new URLSearchParams(location.search).get("job");
+  const query = new URLSearchParams(location.search);
+  const id = query.get("job");
+  let kept = null;
+  try { kept = JSON.parse(sessionStorage.getItem(SETTINGS_KEY) || "null"); } catch { /* none */ }
+  if (kept) setSettings(kept);
+  const pad = keptPad();
+  if (pad) await padFrom(pad);
   if (!id) return;
   const r = await api(`/jobs/${encodeURIComponent(id)}`).catch(() => null);
   if (!r || !r.ok) { say(`Job ${id} is not on this server.`); return; }
+  const job = await r.json();
+  const controls = {};
+  for (const [k, v] of query) if (k.startsWith("e.")) controls[k.slice(2)] = v;
+  pending = { job: job.id, cand: Number(query.get("cand")) || 0, controls };
+  // a shared link: the settings the tree was made with, and its drawing
+  if (!kept) {
+    const o = job.options || {};
+    setSettings({ "species-pick": o.species || "", budget: o.budget, height: o.height, max_faces: o.max_faces, refine: o.refine !== false });
+  }
+  if (pad === null) padFrom(`/jobs/${encodeURIComponent(job.id)}/drawing.png`).then((ok) => { if (ok) savePad(); });
   restoreViews(id);
-  startJob(await r.json());
+  fetchViews(job);
+  restoring = true;
+  startJob(job);
+  restoring = false;
 }
 
 // ---- shaping the tree: the controls (GET /controls, POST /trees) ---------------------
@@ -520,12 +743,67 @@ async function loadControls() {
     input.addEventListener(c.kind === "toggle" || c.kind === "choice" ? "change" : "input", () => {
       showValue(c, input, out);
       if (edit) edit.moved = c;
+      recordTree(c.name);
       scheduleEdit();
     });
     row.append(label, input, out, help);
     box.append(row);
   }
 }
+
+// the tree's undo steps: {from, to} (every control's value), a drag or a run of key
+// presses on one control being one step
+let treeSteps = [];
+let treeRedo = [];
+const MERGE_MS = 1500;
+function controlValues() {
+  const out = {};
+  for (const c of table.controls) out[c.name] = controlValue(c);
+  return out;
+}
+function setControls(values) {
+  for (const c of table.controls) if (c.name in values) setControl(c, values[c.name]);
+}
+function recordTree(name) {
+  if (!edit || !edit.initial) return;
+  const now = controlValues();
+  const last = treeSteps[treeSteps.length - 1];
+  const t = performance.now();
+  if (name && last && last.name === name && t - last.time < MERGE_MS && steps[steps.length - 1] === "tree") {
+    last.to = now;
+    last.time = t;
+  } else {
+    treeSteps.push({ from: edit.committed, to: now, name, time: t });
+    treeRedo = [];
+    noteStep("tree");
+  }
+  edit.committed = now;
+}
+function undoTree() {
+  if (!edit || !edit.initial || !treeSteps.length) return;
+  const step = treeSteps.pop();
+  treeRedo.push(step);
+  dropLast(steps, "tree");
+  redoSteps.push("tree");
+  setControls(step.from);
+  edit.committed = step.from;
+  edit.moved = null;
+  scheduleEdit();
+}
+function redoTree() {
+  if (!edit || !edit.initial || !treeRedo.length) return;
+  const step = treeRedo.pop();
+  step.time = 0; // never merged with a later step
+  treeSteps.push(step);
+  dropLast(redoSteps, "tree");
+  steps.push("tree");
+  setControls(step.to);
+  edit.committed = step.to;
+  edit.moved = null;
+  scheduleEdit();
+}
+$("edit-undo").onclick = undoTree;
+$("edit-redo").onclick = redoTree;
 
 function controlValue(c) {
   const input = $(`c-${c.name}`);
@@ -561,18 +839,38 @@ async function treeRequest(controls, accept, maxFaces, fit = false) {
 }
 
 // ``switched``: a candidate species' tree, not the job's own (its downloads are grown)
-async function startEdit(result, switched = false) {
+async function startEdit(result, switched = false, cand = 0) {
   if (!table) return;
   const count = edit ? edit.count : 0;
-  const mine = { params: result.params, species: result.species, yaw: result.yaw || 0, initial: null, busy: false, again: false, edited: false, switched, count };
+  const mine = { params: result.params, species: result.species, yaw: result.yaw || 0, initial: null, busy: false, again: false, edited: false, switched, count, cand };
   edit = mine;
+  // another tree: its own undo steps
+  treeSteps = [];
+  treeRedo = [];
   const r = await treeRequest({}, "application/json", table.view_faces);
   if (!r.ok || edit !== mine) return;
   const body = await r.json();
   if (edit !== mine) return;
   edit.initial = body.controls;
   for (const c of table.controls) setControl(c, edit.initial[c.name]);
+  edit.committed = controlValues();
   $("edit-panel").hidden = false;
+  // the edits from the address (a reload, a shared link) once the tree they edit is here
+  if (pending && shownJob && pending.job === shownJob.id && pending.cand === cand) {
+    const values = {};
+    for (const c of table.controls) {
+      const v = pending.controls[c.name];
+      if (v === undefined) continue;
+      values[c.name] = c.kind === "toggle" ? v === "true" : c.kind === "choice" ? v : Number(v);
+      if (c.kind !== "toggle" && c.kind !== "choice" && !Number.isFinite(values[c.name])) delete values[c.name];
+    }
+    pending = null;
+    if (Object.keys(values).length) {
+      setControls(values);
+      edit.committed = controlValues();
+      scheduleEdit();
+    }
+  }
   document.body.dataset.edit = "ready";
 }
 
@@ -625,7 +923,7 @@ async function runEdit() {
     } else {
       const buffer = await r.arrayBuffer();
       if (edit !== mine) return;
-      loadModel(buffer, false);
+      loadModel(buffer, "refit"); // a wider or taller tree stays in view
       edit.edited = Object.keys(controls).length > 0;
       edit.count += 1;
       document.body.dataset.edits = String(edit.count);
@@ -641,6 +939,7 @@ async function runEdit() {
       }
       $("edit-status").textContent = [`${Math.round(performance.now() - t0)} ms`, ...notes].join(" · ");
       $("view-note").textContent = edit.edited ? "edited" : "";
+      updateUrl();
     }
   } finally {
     mine.busy = false;
@@ -652,21 +951,27 @@ $("variant").onclick = () => {
   if (!edit || !table) return;
   const seed = table.controls.find((c) => c.name === "seed");
   setControl(seed, Math.floor(Math.random() * seed.max));
+  recordTree(null);
   scheduleEdit();
 };
 $("reset-controls").onclick = () => {
   if (!edit || !edit.initial) return;
   for (const c of table.controls) setControl(c, edit.initial[c.name]);
+  recordTree(null);
   scheduleEdit();
 };
 
 // the downloads of an edited tree or another candidate's: asked for when clicked (full
 // detail for the GLB)
-async function downloadEdited(ev, accept, ext) {
-  if (!edit || !(edit.edited || edit.switched)) return; // the job's own file
+async function downloadEdited(ev, accept, ext, light = false, always = false) {
+  if (!edit || !edit.initial) { if (always) ev.preventDefault(); return; }
+  if (!always && !(edit.edited || edit.switched)) return; // the job's own file
   ev.preventDefault();
-  const name = `tree_${edit.species}${edit.edited ? "_edited" : ""}.${ext}`;
-  const r = await treeRequest(changedControls(), accept, null);
+  const name = `tree_${edit.species}${edit.edited ? "_edited" : ""}${light ? "_light" : ""}.${ext}`;
+  // full detail (at the job's own triangle budget), or the 3D view's light tree
+  const faces = light ? table.view_faces : ((shownJob && shownJob.options) || {}).max_faces ?? null;
+  $("edit-status").textContent = `Preparing ${name}...`;
+  const r = await treeRequest(changedControls(), accept, faces);
   if (!r.ok) { $("edit-status").textContent = `Download failed (${r.status})`; return; }
   const blob = accept === "application/json"
     ? new Blob([JSON.stringify((await r.json()).params, null, 1)], { type: "application/json" })
@@ -676,8 +981,11 @@ async function downloadEdited(ev, accept, ext) {
   a.download = name;
   a.click();
   setTimeout(() => URL.revokeObjectURL(a.href), 10_000);
+  $("edit-status").textContent = "";
 }
 $("dl-glb").addEventListener("click", (ev) => downloadEdited(ev, "model/gltf-binary", "glb"));
+$("dl-glb-light").addEventListener("click", (ev) => downloadEdited(ev, "model/gltf-binary", "glb", true));
+$("dl-obj").addEventListener("click", (ev) => downloadEdited(ev, "application/zip", "obj.zip", false, true));
 $("dl-json").addEventListener("click", (ev) => downloadEdited(ev, "application/json", "json"));
 
 // ---- the 3D view ---------------------------------------------------------------------
@@ -715,6 +1023,8 @@ function setupView() {
   controls = new OrbitControls(camera, renderer.domElement);
   controls.addEventListener("change", () => { render(); showTurn(); });
   controls.addEventListener("start", () => { turnedByHand = true; });
+  // a vertical swipe scrolls the page (a phone); a sideways one turns the tree
+  renderer.domElement.style.touchAction = "pan-y";
   new ResizeObserver(resize).observe(view);
   resize();
 }
@@ -743,10 +1053,28 @@ function frameModel() {
   turnedByHand = false;
   render();
 }
-$("reset-view").onclick = frameModel;
+$("reset-view").onclick = () => frameModel();
+// the tree changed size (an edit): the same direction, near enough to see all of it
+function refitModel() {
+  if (!model) return;
+  if (!turnedByHand) { frameModel(); return; }
+  const box = new THREE.Box3().setFromObject(model);
+  const size = box.getSize(new THREE.Vector3());
+  const centre = box.getCenter(new THREE.Vector3());
+  const dist = (Math.max(size.y, size.x, size.z) / 2 / Math.tan((camera.fov * Math.PI) / 360)) * 1.25;
+  const dir = camera.position.clone().sub(controls.target).normalize();
+  camera.position.copy(centre).addScaledVector(dir, dist);
+  camera.near = dist / 100; camera.far = dist * 10;
+  camera.updateProjectionMatrix();
+  controls.target.copy(centre);
+  controls.update();
+  turnedByHand = true;
+  render();
+}
 $("ground").onchange = () => { if (ground) { ground.visible = $("ground").checked; render(); } };
 
 // ``source``: a URL or the bytes of a GLB (an edit's answer); ``frame``: move the camera
+// (true), keep it (false) or fit the tree again from where it looks ("refit")
 function loadModel(source, frame = true) {
   if (!renderer) setupView();
   document.body.dataset.model = "loading";
@@ -774,7 +1102,9 @@ function loadModel(source, frame = true) {
     ground.scale.setScalar(Math.max(size.x, size.z, size.y * 0.5) * 0.75);
     ground.position.set((box.min.x + box.max.x) / 2, box.min.y - size.y * 0.002, (box.min.z + box.max.z) / 2);
     $("height-readout").textContent = `${size.y.toFixed(size.y < 10 ? 2 : 1)} m`;
-    if (frame) frameModel(); else { render(); showTurn(); }
+    if (frame === "refit") refitModel();
+    else if (frame) frameModel();
+    else { render(); showTurn(); }
     document.body.dataset.meshes = String(meshes);
     document.body.dataset.loads = String(Number(document.body.dataset.loads || 0) + 1);
     document.body.dataset.model = "loaded";
@@ -874,6 +1204,7 @@ function leaveSide(restore) {
   if (!side) return;
   if (restore) { strokes = side.strokes; undone = side.undone; redraw(); }
   side = null;
+  if (restore) savePad();
   $("guide").hidden = true;
   $("guide").removeAttribute("src");
   $("side-bar").hidden = true;
@@ -932,6 +1263,24 @@ function restoreViews(id) {
     const kept = JSON.parse(sessionStorage.getItem(VIEWS_KEY) || "{}")[id];
     if (kept) sentViews.set(id, kept.map((v) => ({ blob: dataBlob(v.png), yaw: v.yaw })));
   } catch { /* none kept */ }
+}
+// a finished job opened by its link in another tab: its drawings from the server (GET
+// /jobs/{id}/drawing.png), each with its turn (the one searched for where none was given)
+async function fetchViews(job) {
+  if (sentViews.has(job.id) || job.state !== "done") return;
+  const yaws = [0, ...((job.options || {}).yaws || [])];
+  const found = (job.result.views || []).map((v) => v.yaw);
+  try {
+    const blobs = await Promise.all(yaws.map(async (_, i) => {
+      const r = await api(`/jobs/${encodeURIComponent(job.id)}/drawing.png?view=${i + 1}`);
+      if (!r.ok) throw new Error(String(r.status));
+      return r.blob();
+    }));
+    const views = blobs.map((blob, i) => ({ blob, yaw: yaws[i] ?? found[i] ?? 0 }));
+    sentViews.set(job.id, views);
+    keepViews(job.id, views);
+    updateSideButton();
+  } catch { /* the drawings are gone: no other side from here */ }
 }
 
 // ---- start ---------------------------------------------------------------------------
