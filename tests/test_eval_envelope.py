@@ -70,3 +70,27 @@ def test_any_size_is_measured_at_256():
 def test_blank_pictures():
     assert not envelope(page()).any()
     assert mask_iou(np.zeros((3, 3), bool), np.zeros((3, 3), bool)) == 1.0
+
+
+def test_the_search_distance_counts_the_envelope_gap(monkeypatch: pytest.MonkeyPatch) -> None:
+    # issue 48: the refinement's distance rewards the outline where the tree stands in
+    # the frame; two crowns alike but for a flat top differ by the envelope term
+    from refine import shape
+
+    flat, round_ = page(), page()
+    outline_box(flat, 30, 150, 60, 196)
+    flat[150:240, 120] = flat[150:240, 136] = 0
+    round_[150:240, 120] = round_[150:240, 136] = 0
+    from PIL import Image, ImageDraw
+
+    im = Image.fromarray(round_)
+    ImageDraw.Draw(im).ellipse([60, 30, 196, 150], outline=0, width=1)
+    round_ = np.asarray(im)
+    a = shape.ShapeTarget.from_image(flat, 128)
+    b = shape.ShapeTarget.from_image(round_, 128)
+    gap = 1.0 - mask_iou(a.envelope, b.envelope)
+    assert gap > 0.05
+    with_term, weight = a.distance(b), shape.ENVELOPE_WEIGHT
+    monkeypatch.setattr(shape, "ENVELOPE_WEIGHT", 0.0)
+    assert with_term == pytest.approx(a.distance(b) + weight * gap)
+    assert a.distance(a) == 0.0
