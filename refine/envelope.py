@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-__all__ = ["close_disk", "envelope_of_ink", "mask_iou", "row_fill"]
+__all__ = ["close_disk", "envelope_of_ink", "mask_iou", "outlines_rgb", "row_fill"]
 
 
 def close_disk(ink: np.ndarray, radius: float) -> np.ndarray:
@@ -46,3 +46,24 @@ def mask_iou(a: np.ndarray, b: np.ndarray) -> float:
     """Intersection over union of two bool masks (1 when both are empty)."""
     union = int(np.count_nonzero(a | b))
     return 1.0 if union == 0 else int(np.count_nonzero(a & b)) / union
+
+
+DRAWING_RED = (220, 30, 30)
+TREE_BLUE = (30, 60, 220)
+
+
+def outlines_rgb(drawing: np.ndarray, tree: np.ndarray, radius: float | None = None) -> np.ndarray:
+    """The tree's sketch faded, with the drawing's envelope outline in red and the tree's
+    in blue (RGB uint8): what a person checks the tree against.  Both sketches uint8 of
+    one size, paper light; ``radius`` of the closing (default 6 px at 256)."""
+    a, b = np.asarray(drawing), np.asarray(tree)
+    if a.shape != b.shape:
+        raise ValueError(f"sketch sizes differ: {a.shape} vs {b.shape}")
+    r = 6 * a.shape[0] / 256 if radius is None else radius
+    faded = 255 - (255 - b.astype(np.float32)) * 0.35
+    rgb = np.repeat(faded[..., None], 3, axis=2).astype(np.uint8)
+    width = max(1, round(a.shape[0] / 128))
+    for ink, colour in ((a < 128, DRAWING_RED), (b < 128, TREE_BLUE)):
+        env = envelope_of_ink(ink, r)
+        rgb[env & ~ndimage.binary_erosion(env, iterations=width, border_value=0)] = colour
+    return rgb

@@ -17,27 +17,16 @@ from pathlib import Path
 import numpy as np
 from docs_png import write_palette_png
 from PIL import Image, ImageDraw
-from scipy import ndimage
 
 from benchmarks.bench_drawings import paper_drawings
-from eval.envelope import envelope, envelope_overlap
+from eval.envelope import envelope_overlap
 from eval.people import people_drawings
+from refine.envelope import outlines_rgb
 from render.sketch import SketchRenderer
 from treesketch import Pipeline
 
 ROOT = Path(__file__).resolve().parents[1]
 CAP = 14  # pixels of caption above each row
-
-
-def outlines(drawing: np.ndarray, tree: np.ndarray) -> np.ndarray:
-    """RGB: the tree's sketch faded, the drawing's envelope outline in red, the tree's in
-    blue (each 2 px wide at 256)."""
-    base = 255 - (255 - np.asarray(tree, np.float32)) * 0.35
-    rgb = np.repeat(base[..., None], 3, axis=2).astype(np.uint8)
-    for env, colour in ((envelope(drawing), (220, 30, 30)), (envelope(tree), (30, 60, 220))):
-        edge = env & ~ndimage.binary_erosion(env, iterations=2, border_value=0)
-        rgb[edge] = colour
-    return rgb
 
 
 def cases(people: int) -> list[tuple[str, np.ndarray]]:
@@ -66,7 +55,7 @@ def main(argv: list[str] | None = None) -> int:
         tree = SketchRenderer(res.tree_mesh).colour(res.yaw, 256, supersample=2)
         panels = [
             np.repeat(np.asarray(res.input_sketch)[..., None], 3, axis=2),
-            outlines(res.input_sketch, res.sketch_after),
+            outlines_rgb(res.input_sketch, res.sketch_after),
             np.asarray(tree, np.uint8),
         ]
         x, y = (k % cols) * 3 * s, (k // cols) * (s + CAP)
