@@ -554,6 +554,8 @@ def part_follow(args: argparse.Namespace) -> dict:
             "first_seconds": res.timings["prepare"] + res.timings["estimate"],
             "refine_seconds": res.timings["refine"],
             "seconds": time.perf_counter() - t,
+            "yaw": res.yaw,
+            "params": res.params.to_dict(),
         }
         records.append(rec)
         for key in ("input_sketch", "sketch_before", "sketch_after"):
