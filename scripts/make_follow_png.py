@@ -105,7 +105,7 @@ def main(argv: list[str] | None = None) -> int:
         for j, p in enumerate(panels):
             im = Image.fromarray(np.asarray(p, np.uint8)).convert("RGB").resize((s, s))
             sheet.paste(im, (x + j * s, y + CAP))
-        label = r["name"].replace("/", " ")
+        label = r["name"].split("-")[0].replace("/", " ")
         draw.text((x + 2, y + 1), f"{label}: {r['species']}", fill=(0, 0, 0))
         draw.text((x + s + 2, y + 1), f"overlap {o0:.2f} -> {o1:.2f}", fill=(0, 0, 160))
         print(f"{label}: {r['species']} overlap {o0:.3f} -> {o1:.3f}", flush=True)
