@@ -528,8 +528,10 @@ def follow_cases(args: argparse.Namespace) -> list[tuple[str, np.ndarray]]:
 
     cases = []
     if args.only in (None, "people"):
-        held = people_drawings("held", ("strokes",), ("tree",))[: args.people]
-        cases += [(f"people/{i:02d}-{d.key}", d.image()) for i, d in enumerate(held)]
+        held = people_drawings("held", ("strokes",), ("tree",))
+        first = args.people_from
+        held = held[first : first + args.people]
+        cases += [(f"people/{first + i:02d}-{d.key}", d.image()) for i, d in enumerate(held)]
     if args.only in (None, "paper"):
         cases += paper_drawings()
     return cases
@@ -618,6 +620,9 @@ def main(argv: list[str] | None = None) -> int:
         "--part", choices=("warning", "refine", "estimate", "follow"), default="warning"
     )
     ap.add_argument("--people", type=int, default=40, help="follow: people's drawings")
+    ap.add_argument(
+        "--people-from", type=int, default=0, help="follow: the first people's drawing's index"
+    )
     ap.add_argument("--only", choices=("people", "paper"), default=None, help="follow: one set")
     ap.add_argument("--budget", type=int, default=None, help="20 for warning, 40 for refine")
     ap.add_argument("--per-species", type=int, default=5)
