@@ -2,22 +2,23 @@
 
 The network's estimate gives a tree of the right kind, but its outline is the species'
 habit: a round crown for a flat one, a low crown base for a lollipop's long stick, a thin
-trunk for a thick one.  Weber-Penn can grow those outlines: the pruning envelope
-(``prune*``: the crown's width up the tree, cut to a curve), the crown base
+trunk for a thick one.  Weber-Penn can grow those outlines: the first-level branches'
+lengths up the trunk (``shape`` 8, the custom shape: ``customShape``), the crown base
 (``baseSize``), the trunk's thickness (``ratio``) and the branches' reach (``length[1]``).
+(The pruning envelope, ``prune*``, fits as well but a pruned tree grows 3-7 times slower:
+RESULTS.md, "The tree follows the drawing".)
 
 :func:`fit_start` reads the drawing's envelope (``refine.envelope``: ink closed, rows
-filled) as a width profile up its height, with its crown base (where the width jumps
-from the trunk's) and its trunk's width, and sets those values so the tree's own
-envelope follows it: the branches made long enough to fill the drawn crown, the pruning
-envelope fitted to the drawn profile, then one correction from the tree's rendered
-outline.  Values are clamped to the parameter table's valid ranges
+filled) as a width profile up its height, with its crown base (going down from the widest
+row, where the width falls under ``TRUNK_FRACTION`` of it) and its trunk's width, and sets
+those values so the tree's own envelope follows it, then corrects them twice from the
+tree's cheap sketch.  Values are clamped to the parameter table's valid ranges
 (``weberpenn.params``), not to the species' ranges: where the drawing asks for more than
-the species allows, the drawing wins as far as the generator grows it.
-``weberpenn.species.project`` keeps these values for a tree whose ``prune`` is on.
+the species allows, the drawing wins as far as the generator grows it; the search keeps
+them (``weberpenn.species.project``'s ``keep=DRAWN_KEYS``).
 
-:func:`choose_start` keeps whichever of the estimate and the fitted start is nearer the
-drawing by the refinement's distance, so the fitted start can only help.
+:func:`choose_start` keeps the fitted start when it is nearer the drawing than the
+estimate by the refinement's distance (by ``START_MARGIN``).
 """
 
 from __future__ import annotations
