@@ -1,7 +1,7 @@
 """The network's readings of people's drawings, kept on disk for fitting and measuring.
 
     .venv/bin/python scripts/people_features.py --out DIR [--fit-per-kind 600] \
-        [--held-per-kind 400] [--checkpoint checkpoints/tsn_lite0.pt]
+        [--held-per-kind 400] [--quickdraw-fit 250] [--checkpoint checkpoints/tsn_lite0.pt]
 
 Reads ``../shared/people_doodles`` (``eval.people``), puts every drawing through the
 pipeline's own reader and preparation, and writes ``DIR/people_<part>.npz`` for the fit and
@@ -69,6 +69,7 @@ def main() -> None:
     ap.add_argument("--checkpoint", default=None)
     ap.add_argument("--fit-per-kind", type=int, default=600)
     ap.add_argument("--held-per-kind", type=int, default=400)
+    ap.add_argument("--quickdraw-fit", type=int, default=250)
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -78,7 +79,10 @@ def main() -> None:
         if path.exists():
             print(f"{path} exists; kept")
             continue
-        read_part(model, people_drawings(part=part, per_kind=n), path)
+        drawings = people_drawings(part=part, sources=("strokes", "mouse224"), per_kind=n)
+        quick = args.quickdraw_fit if part == "fit" else n
+        drawings += people_drawings(part=part, sources=("quickdraw28",), per_kind=quick)
+        read_part(model, drawings, path)
 
 
 if __name__ == "__main__":
