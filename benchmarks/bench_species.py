@@ -474,6 +474,7 @@ def people(args: argparse.Namespace) -> None:
     print(f"\ntrees unwarned: **{1 - warned[trees].mean():.1%}** of {trees.sum()}")
     print(f"other things warned: **{warned[~trees].mean():.1%}** of {(~trees).sum()}")
     print(f"trees read as a palm, bonsai or pine: **{odd.mean():.1%}**")
+    _people_palms(model, args.palms)
     if args.lco:
         lco = TreeDetector.from_dict(dict(np.load(args.lco)))
         left = np.isin(kind, LEFT_OUT_KINDS)
@@ -487,6 +488,31 @@ def people(args: argparse.Namespace) -> None:
             m = kind == k
             if m.any():
                 print(f"- {k}: {np.mean(pl[m] < 0.5):.1%} warned of {m.sum()}")
+
+
+def _people_palms(model: Any, per_form: int) -> None:
+    """Palms in the forms people draw them (benchmark seeds from 0): what each becomes."""
+    from eval.doodles import PALM_FORMS, palm_doodle
+    from treesketch.pipeline import prepare_input
+
+    print("\n| palm form | drawings | palm | warned | read otherwise |")
+    print("|---|---:|---:|---:|---|")
+    total = right = 0
+    for form in PALM_FORMS:
+        imgs = [prepare_input(palm_doodle(form, k)) for k in range(per_form)]
+        _, feats = model.raw_and_features(imgs)
+        clf = model.species_id.classifier
+        sp = np.array(clf.species)[clf.probabilities_many(feats).argmax(axis=1)]
+        warned = model.tree_probabilities(feats) < 0.5
+        other = Counter(s for s in sp if s != "palm").most_common(3)
+        print(
+            f"| {form} | {per_form} | {np.mean(sp == 'palm'):.0%} | {warned.mean():.0%} | "
+            + (", ".join(f"{s} {n}" for s, n in other) or "-")
+            + " |"
+        )
+        total += per_form
+        right += int((sp == "palm").sum())
+    print(f"\npalms in people's forms read as a palm: **{right / total:.1%}** of {total}")
 
 
 PAPER_STRIP = Path(__file__).resolve().parents[2] / "shared" / "reference" / "style_reference.png"
@@ -566,6 +592,7 @@ def main() -> None:
     e.add_argument("--per-kind", type=int, default=None, help="at most this many per kind")
     e.add_argument("--features", default=None, help="scripts/people_features.py's --out")
     e.add_argument("--lco", default=None, help="scripts/fit_people.py's lco_detector.npz")
+    e.add_argument("--palms", type=int, default=50, help="palms per form people draw")
     c = sub.add_parser("calibrate")
     c.add_argument("runs")
     c.add_argument("--png", default=None)
