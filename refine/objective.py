@@ -20,7 +20,6 @@ results by (rounded) point and reusing the last tree's scene when only the yaw m
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from collections.abc import Sequence
@@ -279,9 +278,6 @@ class SearchSpace:
     dims: tuple[species.Unfixed, ...]
     search_yaw: bool = True
     fixed_yaw: float = 0.0
-    # keys held at ``base``'s values whatever the species' (``species.project``'s
-    # ``keep``: the drawn outline of ``refine.start``)
-    keep: tuple[str, ...] = ()
 
     @classmethod
     def create(
@@ -291,7 +287,6 @@ class SearchSpace:
         keys: Sequence[str] | None = None,
         search_yaw: bool = True,
         yaw: float = 0.0,
-        keep: Sequence[str] = (),
     ) -> SearchSpace:
         name = species.canonical(name)
         levels = int(base["levels"])
@@ -309,11 +304,10 @@ class SearchSpace:
             rows = [u for u in rows if u.key in wanted or u.label in wanted]
         return cls(
             name,
-            species.project(name, base, search=True, keep=keep),
+            species.project(name, base, search=True),
             tuple(rows),
             search_yaw,
             float(yaw) % 360.0,
-            tuple(keep),
         )
 
     @property
@@ -340,7 +334,7 @@ class SearchSpace:
                 vec = list(values[u.key])
                 vec[u.index] = v
                 values[u.key] = vec
-        return species.project(self.species, TreeParams(values), search=True, keep=self.keep)
+        return species.project(self.species, TreeParams(values), search=True)
 
     def yaw(self, x: Sequence[float]) -> float:
         if not self.search_yaw:
@@ -348,7 +342,7 @@ class SearchSpace:
         return float(np.clip(x[len(self.dims)], 0.0, 1.0) * 360.0) % 360.0
 
     def from_params(self, params: TreeParams, yaw: float = 0.0) -> np.ndarray:
-        p = species.project(self.species, params, search=True, keep=self.keep).to_dict()
+        p = species.project(self.species, params, search=True).to_dict()
         xs = []
         for u in self.dims:
             v = p[u.key] if u.index is None else p[u.key][u.index]
@@ -361,7 +355,7 @@ class SearchSpace:
         """The same space minus the dimensions whose key (or label) is in ``keys``."""
         drop = set(keys)
         dims = tuple(u for u in self.dims if u.key not in drop and u.label not in drop)
-        return dataclasses.replace(self, dims=dims)
+        return SearchSpace(self.species, self.base, dims, self.search_yaw, self.fixed_yaw)
 
     def live(self, probe: float = 0.25) -> SearchSpace:
         """The same space minus its dead dimensions: those that do not change the grown
@@ -397,7 +391,7 @@ class SearchSpace:
                 if not same(signature(self.to_params(x)), ref):
                     keep.append(u)
                     break
-        return dataclasses.replace(self, dims=tuple(keep))
+        return SearchSpace(self.species, self.base, tuple(keep), self.search_yaw, self.fixed_yaw)
 
 
 # --------------------------------------------------------------------------- objective
