@@ -240,7 +240,10 @@ def test_a_reload_keeps_the_candidate_species_on_show(page: Any, server: str, jo
     assert page.get_attribute("body", "data-shown") == other
     assert page.get_attribute("#candidates .candidate >> nth=1", "aria-pressed") == "true"
     assert page.input_value("#c-crown_width") == "1.3"
-    # the candidate's tree, then its edit: never the job's own tree first
+    # the candidate's tree, then its edit: never the job's own tree first (a model counts
+    # as loaded once three.js has parsed it, which can come after the edit's count)
+    page.wait_for_function("Number(document.body.dataset.loads || 0) >= 2", timeout=30_000)
+    page.wait_for_timeout(500)
     assert page.get_attribute("body", "data-loads") == "2"
 
 
