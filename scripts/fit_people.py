@@ -22,7 +22,8 @@ Fitting sets (the network, its heads and its branch untouched):
   in five, is never read here): their trees and every other kind of thing, one author in
   four of the fit part kept apart for the temperature.
 
-The detector is refitted from scratch on both.  The species classifier is refitted from the
+The detector (five networks of 128 hidden units, their logits averaged; ``--hidden 0``
+the logistic regression) is refitted from scratch on both.  The species classifier is refitted from the
 checkpoint's own (``SpeciesClassifier.refit``: an L2 pull toward its weights keeps what it
 learned from the network's training sketches, not at hand here): code-made trees keep
 their species; a tree a person drew may be any broadleaf or a fir, never a palm, bonsai or
@@ -188,7 +189,10 @@ def main() -> None:
     ap.add_argument("--styled", type=int, default=66)
     ap.add_argument("--per-kind", type=int, default=16, help="code-made other things per kind")
     ap.add_argument("--per-form", type=int, default=15, help="palms in each form people draw")
-    ap.add_argument("--l2", type=float, default=1e-2, help="the detector's L2")
+    ap.add_argument("--l2", type=float, default=1e-2, help="the linear detector's L2")
+    ap.add_argument("--hidden", type=int, default=128, help="detector: hidden units (0: linear)")
+    ap.add_argument("--members", type=int, default=5, help="detector: networks averaged")
+    ap.add_argument("--decay", type=float, default=1e-3, help="detector networks' weight decay")
     ap.add_argument("--pull", type=float, default=1e-2, help="species: pull to the old weights")
     ap.add_argument("--people-weight", type=float, default=1.0)
     ap.add_argument("--out", default=None, help="checkpoint to write (default: --checkpoint)")
@@ -214,18 +218,18 @@ def main() -> None:
     print(f"features ready ({time.perf_counter() - t0:.0f} s): code {len(code_fit['label'])} "
           f"+ {len(code_held['label'])}, people {len(p_fit['kind'])} + {len(p_cal['kind'])}")  # fmt: skip
 
+    shape = {
+        "l2": args.decay if args.hidden else args.l2,
+        "hidden": args.hidden,
+        "members": args.members,
+    }
+    x, y, w = detector_data(code_fit, p_fit, head)
     det = TreeDetector.fit(
-        *detector_data(code_fit, p_fit, head)[:2],
-        held_out=detector_data(code_held, p_cal, head)[:2],
-        l2=args.l2,
-        weights=detector_data(code_fit, p_fit, head)[2],
+        x, y, held_out=detector_data(code_held, p_cal, head)[:2], weights=w, **shape
     )
-    lco = TreeDetector.fit(
-        *detector_data(code_fit, p_fit, head, LEFT_OUT_KINDS)[:2],
-        held_out=detector_data(code_held, p_cal, head, LEFT_OUT_KINDS)[:2],
-        l2=args.l2,
-        weights=detector_data(code_fit, p_fit, head, LEFT_OUT_KINDS)[2],
-    )
+    x, y, w = detector_data(code_fit, p_fit, head, LEFT_OUT_KINDS)
+    held = detector_data(code_held, p_cal, head, LEFT_OUT_KINDS)[:2]
+    lco = TreeDetector.fit(x, y, held_out=held, weights=w, **shape)
     old = loaded.species_id.classifier
     if old is None or old.reads != "features":
         raise SystemExit("the checkpoint's species classifier must read features")
@@ -241,6 +245,7 @@ def main() -> None:
                 "people (fit part)": int(len(p_fit["kind"])),
             },
             "calibration_wrong": calib_rates,
+            "tree_detector": shape,
             "species_pull": args.pull,
             "people_weight": args.people_weight,
             "command": " ".join(sys.argv),

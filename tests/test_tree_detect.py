@@ -100,3 +100,54 @@ def test_weights_move_the_fit_toward_the_drawings_that_weigh_more() -> None:
     assert np.mean(heavy.probabilities(test) < 0.5) > 0.8
     with pytest.raises(ValueError, match="weights"):
         TreeDetector.fit(x, y, weights=np.ones(3))
+
+
+def _ring(seed: int, n: int = 3000) -> tuple[np.ndarray, np.ndarray]:
+    """Trees inside a ring of other things: no hyperplane parts them."""
+    rng = np.random.default_rng(seed)
+    x = rng.normal(size=(n, 4))
+    y = np.hypot(x[:, 0], x[:, 1]) < 1.1
+    return x, y
+
+
+def test_networks_part_what_one_hyperplane_cannot() -> None:
+    linear = TreeDetector.fit(*_ring(0))
+    nets = TreeDetector.fit(*_ring(0), held_out=_ring(1), hidden=16, members=3, l2=1e-3)
+    x, y = _ring(2)
+    assert np.mean((linear.probabilities(x) >= 0.5) == y) < 0.75
+    p = nets.probabilities(x)
+    assert ((p >= 0) & (p <= 1)).all()
+    assert np.mean(p[y] >= 0.5) > 0.85 and np.mean(p[~y] < 0.5) > 0.85
+    assert nets.hidden_weight is not None and nets.hidden_weight.shape == (3, 4, 16)
+    # the same seeds, the same detector
+    again = TreeDetector.fit(*_ring(0), held_out=_ring(1), hidden=16, members=3, l2=1e-3)
+    assert np.allclose(again.probabilities(x), p)
+
+
+def test_networks_round_trip_through_a_checkpoint(tmp_path) -> None:
+    from tsn.checkpoint import load_checkpoint, save_loaded
+    from tsn.predict import DEFAULT_CHECKPOINT
+
+    x, y = _data(0, 120)
+    x = np.hstack([x, np.random.default_rng(1).normal(size=(120, 1275))])
+    nets = TreeDetector.fit(x, y, hidden=8, members=2, l2=1e-3)
+    again = TreeDetector.from_dict(nets.to_dict())
+    assert np.allclose(again.probabilities(x), nets.probabilities(x), atol=1e-5)
+    loaded = load_checkpoint(DEFAULT_CHECKPOINT)
+    back = load_checkpoint(save_loaded(loaded, tmp_path / "t.pt", {}, tree_detector=nets))
+    assert back.tree_detector is not None
+    assert np.allclose(back.tree_detector.probabilities(x), nets.probabilities(x), atol=1e-5)
+
+
+def test_networks_of_mismatched_shapes_are_refused() -> None:
+    nets = TreeDetector.fit(*_ring(0, 100), hidden=4, members=2).to_dict()
+    with pytest.raises(ValueError, match="hidden_weight"):
+        TreeDetector.from_dict({**nets, "hidden_bias": [[0.0] * 3] * 2})
+    with pytest.raises(ValueError, match="hidden_weight"):
+        TreeDetector.from_dict({**nets, "bias": 0.0})
+
+
+def test_probabilities_of_far_out_features_stay_finite() -> None:
+    det = TreeDetector.fit(*_data(0))
+    p = det.probabilities(np.full((2, 5), 1e6) * np.array([[1], [-1]]))
+    assert np.isfinite(p).all() and p[0] > 0.99 and p[1] < 0.01
