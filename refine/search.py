@@ -11,7 +11,7 @@ the time limit or nlopt's tolerances, and always returns the best point seen, so
 after is never above the loss before.
 
 Studies measured to give nothing and removed (their numbers stay in
-``benchmarks/RESULTS.md``, "Options measured and removed"; the code last lived at commit
+``docs/history/results-2026-12-05.md``, "Options measured and removed"; the code last lived at commit
 548efa3): a global CRS2 stage, neighbouring discrete values, a prior towards the start, a
 depth and a depth-extent term, other tree seeds at the start, and scaling the refined tree
 to the estimate's height.
@@ -54,7 +54,7 @@ ALGORITHMS = {"bobyqa": "LN_BOBYQA", "sbplx": "LN_SBPLX", "cobyla": "LN_COBYLA"}
 # the views the start is seen from, every 15 degrees: the axes first, then the diagonals,
 # then the rest, so a start capped by a small budget still sees the whole circle coarsely.
 # The estimate turned to the best of 24 views is nearer the drawn tree in 3D than turned
-# to the best of 8 (benchmarks/RESULTS.md, "Where the mesh error comes from")
+# to the best of 8 (docs/history/results-2026-12-05.md, "Where the mesh error comes from")
 START_YAWS = (
     (0.0, 90.0, 180.0, 270.0, 45.0, 135.0, 225.0, 315.0)
     + (15.0, 105.0, 195.0, 285.0, 60.0, 150.0, 240.0, 330.0)
@@ -65,7 +65,7 @@ START_YAWS = (
 # halves its error there), and a local search does not cross from one sign to the other
 # (through a straight trunk, a worse fit), so after the start view is chosen the start is
 # also tried with the bend at these fractions of its range either way
-# (benchmarks/RESULTS.md, "The start tried with the trunk bent either way")
+# (docs/history/results-2026-12-05.md, "The start tried with the trunk bent either way")
 BEND_FRACTIONS = (-1.0, -0.5, 0.5, 1.0)
 # the bends are also tried from the opposite view only when the local search keeps at
 # least this many times their number of evaluations after them: with less, the local

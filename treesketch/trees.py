@@ -32,7 +32,7 @@ __all__ = [
 ]
 
 # the viewer's default triangle budget (and the live preview's): the heaviest species
-# stays under 5 MB of GLB with its textures (benchmarks/RESULTS.md, "The interactive loop")
+# stays under 5 MB of GLB with its textures (docs/history/results-2026-12-05.md, "The interactive loop")
 VIEW_FACES = 80_000
 # the most triangles one reply's GLB holds (26-31 bytes each: at most 47 MB): every
 # species' tree at full detail fits (the largest, willow, about 0.85 M); a bigger export
