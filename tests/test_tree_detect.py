@@ -102,7 +102,7 @@ def test_weights_move_the_fit_toward_the_drawings_that_weigh_more() -> None:
         TreeDetector.fit(x, y, weights=np.ones(3))
 
 
-def _ring(seed: int, n: int = 3000) -> tuple[np.ndarray, np.ndarray]:
+def _ring(seed: int, n: int = 2000) -> tuple[np.ndarray, np.ndarray]:
     """Trees inside a ring of other things: no hyperplane parts them."""
     rng = np.random.default_rng(seed)
     x = rng.normal(size=(n, 4))
@@ -112,15 +112,15 @@ def _ring(seed: int, n: int = 3000) -> tuple[np.ndarray, np.ndarray]:
 
 def test_networks_part_what_one_hyperplane_cannot() -> None:
     linear = TreeDetector.fit(*_ring(0))
-    nets = TreeDetector.fit(*_ring(0), held_out=_ring(1), hidden=16, members=3, l2=1e-3)
+    nets = TreeDetector.fit(*_ring(0), held_out=_ring(1), hidden=16, members=2, l2=1e-3)
     x, y = _ring(2)
     assert np.mean((linear.probabilities(x) >= 0.5) == y) < 0.75
     p = nets.probabilities(x)
     assert ((p >= 0) & (p <= 1)).all()
     assert np.mean(p[y] >= 0.5) > 0.85 and np.mean(p[~y] < 0.5) > 0.85
-    assert nets.hidden_weight is not None and nets.hidden_weight.shape == (3, 4, 16)
+    assert nets.hidden_weight is not None and nets.hidden_weight.shape == (2, 4, 16)
     # the same seeds, the same detector
-    again = TreeDetector.fit(*_ring(0), held_out=_ring(1), hidden=16, members=3, l2=1e-3)
+    again = TreeDetector.fit(*_ring(0), held_out=_ring(1), hidden=16, members=2, l2=1e-3)
     assert np.allclose(again.probabilities(x), p)
 
 
