@@ -1,7 +1,7 @@
 """The network's readings of people's drawings, kept on disk for fitting and measuring.
 
     .venv/bin/python scripts/people_features.py --out DIR [--fit-per-kind 600] \
-        [--held-per-kind 400] [--quickdraw-fit 250] [--checkpoint checkpoints/tsn_lite0.pt]
+        [--held-per-kind 400] [--quickdraw-fit 2000] [--checkpoint checkpoints/tsn_lite0.pt]
 
 Reads ``../shared/people_doodles`` (``eval.people``), puts every drawing through the
 pipeline's own reader and preparation, and writes ``DIR/people_<part>.npz`` for the fit and
@@ -69,7 +69,7 @@ def main() -> None:
     ap.add_argument("--checkpoint", default=None)
     ap.add_argument("--fit-per-kind", type=int, default=600)
     ap.add_argument("--held-per-kind", type=int, default=400)
-    ap.add_argument("--quickdraw-fit", type=int, default=250)
+    ap.add_argument("--quickdraw-fit", type=int, default=2000)  # all of the fit part
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
