@@ -141,7 +141,11 @@ def test_cancel_stops_within_one_evaluation() -> None:
 
 
 def test_template_estimator() -> None:
-    r = Pipeline("template", RefineSettings(budget=8)).run(gt_sketch("pine", 2))
+    from treesketch.estimators import TemplateEstimator
+
+    assert isinstance(load_estimator("template"), TemplateEstimator)
+    # one tree a species (the default three build 132 sketches: 19 s of the suite)
+    r = Pipeline(TemplateEstimator(seeds=1), RefineSettings(budget=8)).run(gt_sketch("pine", 2))
     assert r.estimator == "template" and r.species in species.SPECIES
     assert r.losses["after"] <= r.losses["before"]
     assert set(r.species_scores) == set(species.SPECIES)
