@@ -178,6 +178,80 @@ def check_cors(cors: tuple[str, ...], token: str | None) -> None:
         )
 
 
+@dataclass(frozen=True)
+class JobDesk:
+    """What the job routes share: a job by id (404 when none), its view, a submission
+    checked and queued."""
+
+    config: ServiceConfig
+    store: JobStore
+    pool: WorkerPool | RayWorkerPool
+
+    async def get(self, job_id: str) -> Job:
+        job = await run_in_threadpool(self.store.get, job_id)
+        if job is None:
+            raise HTTPException(404, f"no job {job_id!r}")
+        return job
+
+    async def view(self, job: Job) -> dict[str, Any]:
+        position = (
+            await run_in_threadpool(self.store.position, job.id) if job.state == "queued" else None
+        )
+        return _view(job, position, self.pool.live(job.id) if job.state == "running" else None)
+
+    async def submit(self, request: Request) -> Job:
+        if self.pool.broken:
+            raise HTTPException(503, f"no worker can start: {self.pool.error}")
+        problem = storage_problem(self.store, self.config.min_free_bytes)
+        if problem:  # before the body is read
+            raise HTTPException(507 if self.store.check() is None else 503, problem)
+        refused: LimitError | None = None
+        drawings: list[bytearray] = []
+        try:
+            fields, drawings = await read_form(
+                request.headers.get("content-type", ""),
+                request.headers.get("content-length"),
+                request.stream(),
+                self.config.limits,
+            )
+            if not drawings:
+                raise LimitError(422, "no sketch: send the image as a file field named 'sketch'")
+            options = parse_options(
+                fields,
+                self.config.limits,
+                self.config.allowed_estimators,
+                self.config.estimator,
+                self.config.default_budget,
+                self.config.default_time_limit,
+                views=len(drawings),
+            )
+            # every drawing, before the job is queued
+            await run_in_threadpool(check_images, drawings, self.config.limits)
+        except LimitError as exc:
+            # a fresh error, raised out here: the caught one's traceback holds the upload's
+            # bytes (and a reference cycle may keep it until a full garbage collection)
+            refused = LimitError(exc.status, str(exc))
+        if refused is not None:
+            for data in drawings:  # read_form's own buffers: free them, whoever holds them
+                data.clear()
+            headers = {"Connection": "close"} if refused.status == 413 else None
+            raise HTTPException(refused.status, str(refused), headers=headers)
+        try:
+            job = await run_in_threadpool(
+                self.store.create, drawings, options.to_dict(), self.config.max_queue
+            )
+        except StorageFull as exc:
+            raise HTTPException(507, str(exc)) from exc
+        if job is None:
+            raise HTTPException(
+                503,
+                f"the queue is full ({self.config.max_queue} jobs waiting); try again later",
+                headers={"Retry-After": str(self.config.retry_after)},
+            )
+        self.pool.wakeup()
+        return job
+
+
 def create_app(config: ServiceConfig) -> FastAPI:
     """The app; its worker pool starts and stops with the app's lifespan, which first takes
     the data folder (``owner.DataOwner``: a second server on it is refused before it
@@ -186,8 +260,25 @@ def create_app(config: ServiceConfig) -> FastAPI:
     check_cors(config.cors, config.token)
     store = JobStore(config.data)
     pool = make_pool(config, store)
-    owner = DataOwner(config.data)
-    redact = RedactTokens()
+    app = FastAPI(
+        title="TreeSketch",
+        description="A sketch of a tree -> a 3D Weber-Penn tree, as jobs with live progress.",
+        lifespan=_lifespan(pool, DataOwner(config.data), RedactTokens()),
+    )
+    app.state.store, app.state.pool, app.state.config = store, pool, config
+    _add_guards(app, config)
+    desk = JobDesk(config, store, pool)
+    # the interactive routes before the jobs' catch-all /jobs/{id}/{name}
+    add_interactive_routes(app, store)
+    add_page_routes(app, desk)
+    add_job_routes(app, desk)
+    add_predict_route(app, desk)
+    _mount_static(app, config)
+    return app
+
+
+def _lifespan(pool: WorkerPool | RayWorkerPool, owner: DataOwner, redact: RedactTokens) -> Any:
+    """The app's lifespan: the data folder taken, the workers started; both given back."""
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
@@ -203,13 +294,11 @@ def create_app(config: ServiceConfig) -> FastAPI:
             logging.getLogger("uvicorn.access").removeFilter(redact)
             owner.release()
 
-    app = FastAPI(
-        title="TreeSketch",
-        description="A sketch of a tree -> a 3D Weber-Penn tree, as jobs with live progress.",
-        lifespan=lifespan,
-    )
-    app.state.store, app.state.pool, app.state.config = store, pool, config
+    return lifespan
 
+
+def _add_guards(app: FastAPI, config: ServiceConfig) -> None:
+    """Who may ask what (``guards.AccessGuard``), and CORS for the origins given."""
     open_paths = ("/", "/health", "/favicon.ico")
 
     @app.get("/favicon.ico", include_in_schema=False)
@@ -235,71 +324,9 @@ def create_app(config: ServiceConfig) -> FastAPI:
             allow_headers=["Authorization", "Content-Type"],
         )
 
-    async def get_job(job_id: str) -> Job:
-        job = await run_in_threadpool(store.get, job_id)
-        if job is None:
-            raise HTTPException(404, f"no job {job_id!r}")
-        return job
 
-    async def view(job: Job) -> dict[str, Any]:
-        position = (
-            await run_in_threadpool(store.position, job.id) if job.state == "queued" else None
-        )
-        return _view(job, position, pool.live(job.id) if job.state == "running" else None)
-
-    async def submit(request: Request) -> Job:
-        if pool.broken:
-            raise HTTPException(503, f"no worker can start: {pool.error}")
-        problem = storage_problem(store, config.min_free_bytes)
-        if problem:  # before the body is read
-            raise HTTPException(507 if store.check() is None else 503, problem)
-        refused: LimitError | None = None
-        drawings: list[bytearray] = []
-        try:
-            fields, drawings = await read_form(
-                request.headers.get("content-type", ""),
-                request.headers.get("content-length"),
-                request.stream(),
-                config.limits,
-            )
-            if not drawings:
-                raise LimitError(422, "no sketch: send the image as a file field named 'sketch'")
-            options = parse_options(
-                fields,
-                config.limits,
-                config.allowed_estimators,
-                config.estimator,
-                config.default_budget,
-                config.default_time_limit,
-                views=len(drawings),
-            )
-            # every drawing, before the job is queued
-            await run_in_threadpool(check_images, drawings, config.limits)
-        except LimitError as exc:
-            # a fresh error, raised out here: the caught one's traceback holds the upload's
-            # bytes (and a reference cycle may keep it until a full garbage collection)
-            refused = LimitError(exc.status, str(exc))
-        if refused is not None:
-            for data in drawings:  # read_form's own buffers: free them, whoever holds them
-                data.clear()
-            headers = {"Connection": "close"} if refused.status == 413 else None
-            raise HTTPException(refused.status, str(refused), headers=headers)
-        try:
-            job = await run_in_threadpool(
-                store.create, drawings, options.to_dict(), config.max_queue
-            )
-        except StorageFull as exc:
-            raise HTTPException(507, str(exc)) from exc
-        if job is None:
-            raise HTTPException(
-                503,
-                f"the queue is full ({config.max_queue} jobs waiting); try again later",
-                headers={"Retry-After": str(config.retry_after)},
-            )
-        pool.wakeup()
-        return job
-
-    add_interactive_routes(app, store)
+def add_page_routes(app: FastAPI, desk: JobDesk) -> None:
+    """The page, the species it offers, the server's health and status."""
 
     @app.get("/", include_in_schema=False)
     async def index() -> Response:
@@ -323,87 +350,91 @@ def create_app(config: ServiceConfig) -> FastAPI:
 
     @app.get("/health")
     async def health() -> dict[str, Any]:
-        workers = pool.status()
-        problems = [f"no worker can start: {pool.error}"] if pool.broken else []
-        storage = storage_problem(store, config.min_free_bytes)
+        workers = desk.pool.status()
+        problems = [f"no worker can start: {desk.pool.error}"] if desk.pool.broken else []
+        storage = storage_problem(desk.store, desk.config.min_free_bytes)
         problems += [storage] if storage else []
         return {
             "status": "error" if problems else "ok",
             "error": "; ".join(problems) or None,
-            "estimator": config.estimator,
+            "estimator": desk.config.estimator,
             "workers": sum(w["alive"] for w in workers),
             "busy": sum(w["job"] is not None for w in workers),
             "storage": {
-                "free_bytes": shutil.disk_usage(store.root).free,
-                "full": bool(storage) and store.check() is None,
-                "database": store.check() or "ok",
+                "free_bytes": shutil.disk_usage(desk.store.root).free,
+                "full": bool(storage) and desk.store.check() is None,
+                "database": desk.store.check() or "ok",
             },
         }
 
     @app.get("/status")
     async def status() -> dict[str, Any]:
-        counts = await run_in_threadpool(store.counts)
+        counts = await run_in_threadpool(desk.store.counts)
         return {
             "jobs": counts,
-            "queue": {"waiting": counts["queued"], "max": config.max_queue},
-            "workers": pool.status(),
-            "workers_replaced": pool.replaced,
-            "worker_error": pool.error,
-            "estimators": list(config.allowed_estimators),
+            "queue": {"waiting": counts["queued"], "max": desk.config.max_queue},
+            "workers": desk.pool.status(),
+            "workers_replaced": desk.pool.replaced,
+            "worker_error": desk.pool.error,
+            "estimators": list(desk.config.allowed_estimators),
             "limits": {
-                "max_upload_bytes": config.limits.max_upload_bytes,
-                "max_body_bytes": config.limits.max_body_bytes,
+                "max_upload_bytes": desk.config.limits.max_upload_bytes,
+                "max_body_bytes": desk.config.limits.max_body_bytes,
                 "max_views": MAX_VIEWS,
-                "max_pixels": config.limits.max_pixels,
-                "max_budget": config.limits.max_budget,
-                "default_budget": config.default_budget,
+                "max_pixels": desk.config.limits.max_pixels,
+                "max_budget": desk.config.limits.max_budget,
+                "default_budget": desk.config.default_budget,
                 # POST /trees (interactive.py, tree_work.py)
                 "tree_reply_faces": REPLY_FACES,
                 "tree_seconds": BIG_SECONDS,
             },
         }
 
+
+def add_job_routes(app: FastAPI, desk: JobDesk) -> None:
+    """Jobs: submit, list, read, cancel, follow (server-sent events), download."""
+
     @app.post("/jobs", status_code=202)
     async def create_job(request: Request) -> JSONResponse:
-        job = await submit(request)
-        body = await view(job)
+        job = await desk.submit(request)
+        body = await desk.view(job)
         return JSONResponse(body, status_code=202, headers={"Location": f"/jobs/{job.id}"})
 
     @app.get("/jobs")
     async def list_jobs(limit: int = 20) -> dict[str, Any]:
         if not 1 <= limit <= 500:
             raise HTTPException(422, f"limit must be in 1..500, got {limit}")
-        jobs = await run_in_threadpool(store.recent, limit)
+        jobs = await run_in_threadpool(desk.store.recent, limit)
         return {"jobs": [_view(j, None, None) for j in jobs]}
 
     @app.get("/jobs/{job_id}")
     async def get_one(job_id: str) -> dict[str, Any]:
-        return await view(await get_job(job_id))
+        return await desk.view(await desk.get(job_id))
 
     @app.delete("/jobs/{job_id}")
     async def cancel(job_id: str) -> JSONResponse:
-        job = await get_job(job_id)
-        if job.state == "queued" and await run_in_threadpool(store.cancel_queued, job_id):
-            return JSONResponse(await view(await get_job(job_id)))
-        if job.state in ("queued", "running") and pool.cancel(job_id):
-            body = await view(job)
+        job = await desk.get(job_id)
+        if job.state == "queued" and await run_in_threadpool(desk.store.cancel_queued, job_id):
+            return JSONResponse(await desk.view(await desk.get(job_id)))
+        if job.state in ("queued", "running") and desk.pool.cancel(job_id):
+            body = await desk.view(job)
             body["cancelling"] = True
             return JSONResponse(body, status_code=202)
-        job = await get_job(job_id)
+        job = await desk.get(job_id)
         if job.is_finished:
             raise HTTPException(409, f"job {job_id} is already {job.state}")
-        return JSONResponse(await view(job), status_code=202)
+        return JSONResponse(await desk.view(job), status_code=202)
 
     @app.get("/jobs/{job_id}/events")
     async def events(job_id: str, request: Request) -> StreamingResponse:
-        await get_job(job_id)
+        await desk.get(job_id)
 
         async def stream() -> AsyncIterator[bytes]:
             last: str | None = None
             yield b"retry: 1000\n\n"
             while True:
-                job = await get_job(job_id)
-                body = await view(job)
+                job = await desk.get(job_id)
+                body = await desk.view(job)
                 kind = job.state if job.is_finished else "progress"
                 text = json.dumps(body)
                 if text != last:
@@ -423,7 +454,7 @@ def create_app(config: ServiceConfig) -> FastAPI:
     async def artefact(job_id: str, name: str) -> Response:
         if name not in ARTEFACTS and name not in VIEW_ARTEFACTS:
             raise HTTPException(404, f"no artefact {name!r}; there are {', '.join(ARTEFACTS)}")
-        job = await get_job(job_id)
+        job = await desk.get(job_id)
         media = ARTEFACTS.get(name) or VIEW_ARTEFACTS[name]
         if name in VIEW_ARTEFACTS and name not in _links(job):
             raise HTTPException(404, f"job {job_id} has {_views(job)} drawing(s): no {name}")
@@ -431,7 +462,7 @@ def create_app(config: ServiceConfig) -> FastAPI:
             raise HTTPException(410, f"job {job_id} has expired; its files were removed")
         if job.state != "done":
             raise HTTPException(409, f"job {job_id} is {job.state}, not done")
-        path = store.result_dir(job_id) / name
+        path = desk.store.result_dir(job_id) / name
         if not path.is_file():
             raise HTTPException(410, f"job {job_id}'s {name} is gone")
         return FileResponse(
@@ -441,19 +472,23 @@ def create_app(config: ServiceConfig) -> FastAPI:
             content_disposition_type="attachment" if not name.endswith(".png") else "inline",
         )
 
+
+def add_predict_route(app: FastAPI, desk: JobDesk) -> None:
+    """``POST /predict``: a job submitted and waited for in one request."""
+
     @app.post("/predict")
     async def predict(request: Request) -> dict[str, Any]:
         """Submit and wait: the job's result, or its error.  If the client goes away the
         job is cancelled."""
-        job = await submit(request)
+        job = await desk.submit(request)
         t0 = time.monotonic()
         while True:
             await asyncio.sleep(EVENT_TICK)
             if await request.is_disconnected():
-                if not await run_in_threadpool(store.cancel_queued, job.id):
-                    pool.cancel(job.id)
+                if not await run_in_threadpool(desk.store.cancel_queued, job.id):
+                    desk.pool.cancel(job.id)
                 raise HTTPException(499, "client disconnected")
-            job = await get_job(job.id)
+            job = await desk.get(job.id)
             if job.is_finished:
                 break
         if job.state == "done":
@@ -469,6 +504,9 @@ def create_app(config: ServiceConfig) -> FastAPI:
         status = 422 if input_error else 500 if job.state == "failed" else 409
         raise HTTPException(status, job.error or f"job {job.state}")
 
+
+def _mount_static(app: FastAPI, config: ServiceConfig) -> None:
+    """The page's files and three.js from npm (served here: the page works offline)."""
     if STATIC.is_dir():
         from fastapi.staticfiles import StaticFiles
 
@@ -476,5 +514,3 @@ def create_app(config: ServiceConfig) -> FastAPI:
         vendor = config.vendor or STATIC / "node_modules"
         if (vendor / "three").is_dir():
             app.mount("/vendor/three", StaticFiles(directory=vendor / "three"), name="three")
-
-    return app
