@@ -4,8 +4,7 @@ tests' (``tests/test_web*.py``) server, browser and page, whose helpers are in
 
 ``make test`` runs the suite on two workers (pytest-xdist, ``-n 2 --dist loadfile``: each
 module on one worker, so its module-scoped fixtures are made once and its tests run in
-order); the modules that start a Ray go to one worker (:func:`pytest_xdist_make_scheduler`)
-and, whatever runs them, take turns (:func:`one_ray_at_a_time`)."""
+order); the modules that start a Ray take turns (:func:`one_ray_at_a_time`)."""
 
 from __future__ import annotations
 
@@ -18,23 +17,6 @@ import pytest
 # the modules that start a Ray of their own (a local cluster, then killed): one at a time,
 # whichever worker runs them (``make test`` runs two)
 RAY_MODULES = {"test_executor_cluster.py", "test_executor_ray.py", "test_service_ray.py"}
-
-
-@pytest.hookimpl(optionalhook=True)
-def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
-    """Under ``--dist loadfile`` the Ray modules go to one worker, one after another: with
-    only the lock, a worker given a Ray module while the other runs one waits idle (up
-    to half a minute of a two-worker suite)."""
-    if config.getoption("dist", None) != "loadfile":
-        return None
-    from xdist.scheduler import LoadFileScheduling
-
-    class RayTogether(LoadFileScheduling):
-        def _split_scope(self, nodeid: str) -> str:
-            module = nodeid.split("::", 1)[0]
-            return "the Ray modules" if module.rsplit("/", 1)[-1] in RAY_MODULES else module
-
-    return RayTogether(config, log)
 
 
 @pytest.fixture(autouse=True, scope="module")
