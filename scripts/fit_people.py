@@ -23,8 +23,8 @@ Fitting sets (the network, its heads and its branch untouched):
   four of the fit part kept apart for the temperature.
 
 The detector (five networks of 128 hidden units, their logits averaged; ``--hidden 0``
-the logistic regression) is refitted from scratch on both.  The species classifier is refitted from the
-checkpoint's own (``SpeciesClassifier.refit``: an L2 pull toward its weights keeps what it
+the logistic regression) is refitted from scratch on both.  The species classifier is
+refitted from the checkpoint's own (``SpeciesClassifier.refit``: an L2 pull toward its weights keeps what it
 learned from the network's training sketches, not at hand here): code-made trees keep
 their species; a tree a person drew may be any broadleaf or a fir, never a palm, bonsai or
 pine (:data:`PEOPLE_TREE`), and the classifier puts it where its features lead.
@@ -32,7 +32,7 @@ pine (:data:`PEOPLE_TREE`), and the classifier puts it where its features lead.
 A second detector is fitted with the kinds of :data:`eval.people.LEFT_OUT_KINDS` (and the
 code-made doodles of those kinds) left out, and measured on people's held drawings of
 those kinds: how "is this a tree?" meets kinds of things it never saw.  It is reported, not
-shipped.  ``benchmarks/bench_people.py`` measures the shipped checkpoint.
+shipped.  ``benchmarks/bench_species.py people`` measures the shipped checkpoint.
 """
 
 from __future__ import annotations

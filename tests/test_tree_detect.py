@@ -151,3 +151,13 @@ def test_probabilities_of_far_out_features_stay_finite() -> None:
     det = TreeDetector.fit(*_data(0))
     p = det.probabilities(np.full((2, 5), 1e6) * np.array([[1], [-1]]))
     assert np.isfinite(p).all() and p[0] > 0.99 and p[1] < 0.01
+
+
+def test_fitting_networks_leaves_the_callers_random_state_alone() -> None:
+    import torch
+
+    torch.manual_seed(123)
+    expected = torch.rand(3)
+    torch.manual_seed(123)
+    TreeDetector.fit(*_ring(0, 200), hidden=4, members=2)
+    assert torch.equal(torch.rand(3), expected)

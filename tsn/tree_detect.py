@@ -10,8 +10,9 @@ things (``eval.doodles`` non-tree doodles), its temperature on held-out ones so 
 probability means what it says.  With ``hidden`` it is instead the mean logit of a few
 small one-hidden-layer networks on the same standardised features: on people's drawings
 (``scripts/fit_people.py``) they warn more of the other things people draw at the same
-rate of trees spared, which one hyperplane in the features cannot.  It lives inside the checkpoint (``tree_detector``),
-since it reads that network's features; ``scripts/fit_tree_detector.py`` fits it.
+rate of trees spared, which one hyperplane in the features cannot.  It lives inside the
+checkpoint (``tree_detector``), since it reads that network's features;
+``scripts/fit_tree_detector.py`` and ``scripts/fit_people.py`` fit it.
 """
 
 from __future__ import annotations
@@ -168,30 +169,40 @@ def _fit_networks(
 
     stacked: list[list[np.ndarray]] = [[], [], [], []]
     for k in range(members):
-        gen = torch.Generator().manual_seed(k)
-        torch.manual_seed(k)  # the layers' initial weights and dropout
-        first, last = torch.nn.Linear(x.shape[1], hidden), torch.nn.Linear(hidden, 1)
-        net = torch.nn.Sequential(
-            torch.nn.Dropout(0.2), first, torch.nn.ReLU(), torch.nn.Dropout(0.3), last
-        )
-        opt = torch.optim.AdamW(net.parameters(), 1e-3, weight_decay=decay)
-        for _ in range(epochs):
-            order = torch.randperm(len(y), generator=gen)
-            for i in range(0, len(y), 256):
-                b = order[i : i + 256]
-                z = net(x[b])[:, 0]
-                loss = torch.nn.functional.binary_cross_entropy_with_logits(z, y[b], weight=w[b])
-                opt.zero_grad()
-                loss.backward()
-                opt.step()
-        with torch.no_grad():
-            for out, t in zip(
-                stacked, (first.weight.T, first.bias, last.weight[0], last.bias[0]), strict=True
-            ):
-                out.append(t.double().numpy().copy())
+        with torch.random.fork_rng(devices=[]):  # the caller's random state left as it was
+            torch.manual_seed(k)  # the layers' initial weights and dropout
+            layers = _fit_one(x, y, w, hidden, decay, epochs, torch.Generator().manual_seed(k))
+        for out, t in zip(stacked, layers, strict=True):
+            out.append(t)
     return (
         np.stack(stacked[0]),
         np.stack(stacked[1]),
         np.stack(stacked[2]),
         np.asarray(stacked[3], np.float64),
     )
+
+
+def _fit_one(
+    x: Any, y: Any, w: Any, hidden: int, decay: float, epochs: int, gen: Any
+) -> tuple[np.ndarray, ...]:
+    """One network's layers ``(W1 (m, h), b1 (h,), w2 (h,), b2 ())``, batches drawn by
+    ``gen``."""
+    import torch
+
+    first, last = torch.nn.Linear(x.shape[1], hidden), torch.nn.Linear(hidden, 1)
+    net = torch.nn.Sequential(
+        torch.nn.Dropout(0.2), first, torch.nn.ReLU(), torch.nn.Dropout(0.3), last
+    )
+    opt = torch.optim.AdamW(net.parameters(), 1e-3, weight_decay=decay)
+    for _ in range(epochs):
+        order = torch.randperm(len(y), generator=gen)
+        for i in range(0, len(y), 256):
+            b = order[i : i + 256]
+            z = net(x[b])[:, 0]
+            loss = torch.nn.functional.binary_cross_entropy_with_logits(z, y[b], weight=w[b])
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+    with torch.no_grad():
+        kept = (first.weight.T, first.bias, last.weight[0], last.bias[0])
+        return tuple(t.double().numpy().copy() for t in kept)
