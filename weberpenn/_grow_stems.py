@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -160,6 +160,315 @@ def _attract_up(v: np.ndarray, att: float, res: int) -> np.ndarray:
     return rot_axis(v, axis_x, -a)
 
 
+@dataclass
+class _LevelRules:
+    """The parameters of one level in the form the segment loop reads them, worked out
+    once per level (``grow_level`` runs up to 64 times per level while pruning)."""
+
+    n: int
+    m: int  # parameter index, min(n, 3)
+    res: int  # segments per stem
+    trunk: bool
+    lv: float  # lengthV
+    seg_splits: float
+    curve_back: float
+    cv1: float  # curveV1
+    cv2: float  # curveV2
+    att_up: float
+    att_out: float
+    angle0: float  # split angle before it is scaled by declination
+    spread: float  # the clones' turn away from their parent
+    branch_step: float  # roll added at each split
+    h_forced: int  # the trunk segment that splits whenever it may
+    k_back: int  # the segment where curveBack starts
+    close_tip: bool  # the last level's stems end in a point
+
+    @classmethod
+    def of(cls, cfg: Cfg, n: int) -> _LevelRules:
+        """The rules of level ``n`` (levels past the fourth reuse the fourth's values)."""
+        m = min(n, 3)
+        res = cfg.curve_res[m]
+        split_ang = cfg.split_angle[m]
+        return cls(
+            n=n,
+            m=m,
+            res=res,
+            trunk=n == 0,
+            lv=cfg.length_v[m],
+            seg_splits=cfg.seg_splits[m],
+            curve_back=cfg.curve_back[m],
+            cv1=cfg.curve_v1[m],
+            cv2=cfg.curve_v2[m],
+            att_up=cfg.attract_up[m],
+            att_out=cfg.attract_out[m],
+            angle0=cfg.cnp1 * (split_ang + cfg.split_angle_v1[m]),
+            spread=cfg.cnp2 * (split_ang + cfg.split_angle_v2[m]),
+            branch_step=cfg.rotate[0] + cfg.rotate_v[0],
+            h_forced=int((res - 1) * cfg.split_height) + 1,
+            k_back=int(res / 2 + 0.5),
+            close_tip=cfg.close_tip and n == cfg.levels - 1,
+        )
+
+    def length_factor(self, key: np.ndarray) -> np.ndarray | float:
+        """A stem's (or clone's) lengthV multiplier, drawn from its own key."""
+        return (1.0 - self.lv) + 2.0 * self.lv * uniform(key, LENGTH) if self.lv > 0.0 else 1.0
+
+
+@dataclass
+class _Growing:
+    """The splines of a level while they grow: one row per spline (clones appended)."""
+
+    pts: np.ndarray  # (N, R+1, 3), filled up to the current segment
+    rad: np.ndarray  # (N, R+1)
+    start: np.ndarray  # (N,) first slot
+    famid: np.ndarray  # (N,) family
+    rad_s: np.ndarray  # (N,)
+    rad_e: np.ndarray  # (N,)
+    curv: np.ndarray  # (N,) curvature per segment
+    sign: np.ndarray  # (N,) sign of the next curveV1/2 bend (alternates)
+    split_last: np.ndarray  # (N,) split at the previous segment
+    r_last: np.ndarray  # (N,) roll of the last split, NaN = none yet
+    dirv: np.ndarray  # (N, 3) last segment's vector
+    offset_len: np.ndarray  # (N,) length along the family before the spline starts
+    parent: np.ndarray  # (N,) local index of the spline a clone split from, -1 = root
+    seg_len: np.ndarray  # (N,)
+    key: np.ndarray  # (N,) uint64 random-stream key
+
+    @classmethod
+    def start_of(cls, fam: Families, rules: _LevelRules, seg_len: np.ndarray) -> _Growing:
+        """Every family's stem, at its first point."""
+        f, res = len(fam.pos), rules.res
+        pts = np.zeros((f, res + 1, 3))
+        pts[:, 0] = fam.pos
+        rad = np.zeros((f, res + 1))
+        rad[:, 0] = fam.rad0
+        return cls(
+            pts=pts,
+            rad=rad,
+            start=np.zeros(f, dtype=np.int64),
+            famid=np.arange(f, dtype=np.int64),
+            rad_s=fam.rad_s.copy(),
+            rad_e=fam.rad_e.copy(),
+            curv=fam.curv.copy(),
+            sign=np.ones(f),
+            split_last=np.zeros(f, dtype=bool),
+            r_last=np.full(f, np.nan),
+            dirv=fam.dir.copy(),
+            offset_len=np.zeros(f),
+            parent=np.full(f, -1, dtype=np.int64),
+            seg_len=seg_len,
+            key=fam.key.copy(),
+        )
+
+    def extend(self, more: _Growing) -> None:
+        """Append ``more`` (new clones) after the existing splines."""
+        for f in fields(self):
+            setattr(self, f.name, np.concatenate([getattr(self, f.name), getattr(more, f.name)]))
+
+
+@dataclass
+class _Segment:
+    """What one segment step shares between the splines and the clones they make."""
+
+    k: int
+    kp: float  # k as a fraction of the stem
+    nsplit: np.ndarray  # (N,) clones each spline makes here
+    frame: np.ndarray  # (N, 3, 3) local frames
+    tf: np.ndarray  # (N,) trunk-crown taper factor (1 off the trunk)
+    cang: np.ndarray  # (N,) bend of this segment
+    cvar: np.ndarray  # (N,) curveV2 bend
+    angle: np.ndarray  # (N,) split angle
+    branch_rot: np.ndarray  # (N,) roll of a split made here
+
+    @property
+    def splits(self) -> np.ndarray:
+        """Which splines split here."""
+        return self.nsplit > 0
+
+
+def _split_counts(cfg: Cfg, r: _LevelRules, g: _Growing, k: int, kp: float) -> np.ndarray:
+    """How many clones each spline makes at segment ``k`` (Sapling's split rule: none
+    below splitHeight on the trunk, baseSplits at its second segment, a forced split at
+    the first segment above splitHeight, otherwise a draw against segSplits)."""
+    sv = r.seg_splits
+    if r.trunk:
+        sv = max(((2.0 * cfg.split_bias) * (kp - 0.5) + 1.0) * sv, 0.0)
+    sval = np.where(g.split_last, sv * sv, sv * 1.33)
+    u = np.mod(uniform(g.key, SPLIT, k) + cfg.r_splits2, 1.0)
+    nsp = len(g.famid)
+    if k == 0 or r.trunk and k < (r.res - 1) * cfg.split_height and k != 1:
+        return np.zeros(nsp, dtype=np.int64)
+    if r.trunk and k == 1:
+        return np.full(nsp, cfg.base_splits, dtype=np.int64)
+    if r.trunk and k == r.h_forced:
+        return (sval > 0.0).astype(np.int64)
+    return (u < sval).astype(np.int64)
+
+
+def _frames(
+    cfg: Cfg, r: _LevelRules, g: _Growing, k: int, kp: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each spline's local frame at segment ``k`` (attractOut turns it towards the
+    outside) and the trunk's crown taper, which shortens steep trunk segments."""
+    if r.trunk:
+        frame = euler_frames_no_roll(g.dirv)
+        dec = declination(frame) / np.pi
+        tf = np.maximum(0.1, 1.0 - dec * dec * cfg.taper_crown * 30.0)
+    else:
+        frame = track_frames(g.dirv)
+        tf = np.ones(len(g.famid))
+    if r.n > 0 and kp > 0.0 and r.att_out > 0.0:
+        tip = g.pts[:, k]
+        d = np.arctan2(tip[:, 0], -tip[:, 1]) + TAU
+        e = euler_compat(frame, d)
+        e[:, 2] = anglemean(e[:, 2], d, kp * r.att_out)
+        frame = euler_to_mat(e)
+    return frame, tf
+
+
+def _split_roll(
+    cfg: Cfg, r: _LevelRules, g: _Growing, frame: np.ndarray, sp: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The split angle (off the trunk, smaller the more a stem leans) and the roll of the
+    splits ``sp`` made here; records the roll, from which a spline's next split turns."""
+    angle = np.full(len(g.famid), r.angle0)
+    if not sp.any():
+        return angle, np.zeros(len(g.famid))
+    if r.n > 0:
+        angle = angle * (np.maximum(1.0 - np.degrees(declination(frame)) / 90.0, 0.0) * 0.67 + 0.33)
+    rl = np.where(np.isnan(g.r_last), cfg.r_last[r.m], g.r_last)
+    branch_rot = rl + r.branch_step
+    g.r_last = np.where(sp, branch_rot, g.r_last)
+    return angle, branch_rot
+
+
+def _segment(
+    cfg: Cfg, r: _LevelRules, g: _Growing, k: int, kp: float, nsplit: np.ndarray
+) -> _Segment:
+    """Work out segment ``k`` for every spline: its frame, bend and split roll.  Applies
+    curveBack from its segment on and advances the splines' alternating bend sign."""
+    if k == r.k_back and r.curve_back != 0.0:
+        g.curv = g.curv + 2.0 * r.curve_back / r.res
+    scurv = np.zeros(len(g.famid)) if (r.trunk and kp <= cfg.split_height) else g.curv
+    cang = scurv + r.cv1 * kp * g.sign
+    cvar = r.cv2 * kp * g.sign
+    g.sign = -g.sign
+    frame, tf = _frames(cfg, r, g, k, kp)
+    angle, branch_rot = _split_roll(cfg, r, g, frame, nsplit > 0)
+    return _Segment(k, kp, nsplit, frame, tf, cang, cvar, angle, branch_rot)
+
+
+def _bent(a: np.ndarray, cvar: np.ndarray) -> np.ndarray:
+    """+Z turned by ``a`` about X and ``cvar`` about Y: a segment's direction in its frame."""
+    v = np.empty((len(a), 3))
+    v[:, 0] = 0.0
+    v[:, 1] = -np.sin(a)
+    v[:, 2] = np.cos(a)
+    return rot_y(v, cvar)
+
+
+def _clones(
+    r: _LevelRules, g: _Growing, s: _Segment, stem_seg: np.ndarray
+) -> tuple[_Growing, np.ndarray, np.ndarray]:
+    """The clones split off at segment ``s.k``, their first point and radii set; with
+    their segment vectors in world space (not yet attracted or scaled) and lengths.
+
+    A clone's key, and so its lengthV draw, comes from its parent's key, the segment and
+    its number among the parent's clones.
+    """
+    k, res, sp, nsplit = s.k, r.res, s.splits, s.nsplit
+    par = np.repeat(np.nonzero(sp)[0], nsplit[sp])
+    first = np.concatenate([[0], np.cumsum(nsplit[sp])[:-1]])
+    idx = np.arange(len(par)) - np.repeat(first, nsplit[sp])
+    ncl = len(par)
+    ckey = derive(g.key[par], CLONE, k * 1024 + idx)
+    lv_c = r.length_factor(ckey) if r.lv > 0.0 else np.ones(ncl)
+    bscale = np.minimum(lv_c * s.tf[par], 1.0)
+    v = _bent(s.angle[par] + s.cang[par], s.cvar[par])
+    if r.trunk:
+        v = rot_z(v, s.branch_rot[par])
+        v = rot_z(v, np.pi - (TAU / (nsplit[par] + 1)) * (idx + 1))
+    else:
+        v = rot_y(v, r.spread)
+    v_cl = apply(s.frame[par], v)
+    stem_l = stem_seg[g.famid[par]] * lv_c
+    c_pts = np.zeros((ncl, res + 1, 3))
+    c_pts[:, k] = g.pts[par, k]
+    c_rad = np.zeros((ncl, res + 1))
+    c_rad[:, k] = (g.rad_s[par] * (1 - k / res) + g.rad_e[par] * (k / res)) * bscale
+    c_rad[:, k + 1] = (g.rad_s[par] * (1 - (k + 1) / res) + g.rad_e[par] * ((k + 1) / res)) * bscale
+    if r.close_tip and k == res - 1:
+        c_rad[:, k + 1] = 0.0
+    clones = _Growing(
+        pts=c_pts,
+        rad=c_rad,
+        start=np.full(ncl, k, dtype=np.int64),
+        famid=g.famid[par],
+        rad_s=g.rad_s[par] * bscale,
+        rad_e=g.rad_e[par] * bscale,
+        curv=g.curv[par],
+        sign=np.ones(ncl),  # a new stem: its first bend (at k + 1) is positive
+        split_last=np.ones(ncl, dtype=bool),
+        r_last=s.branch_rot[par] + np.pi,
+        offset_len=g.offset_len[par] + g.seg_len[par] * (k - g.start[par]),
+        parent=par,
+        seg_len=stem_l,
+        key=ckey,
+        dirv=v_cl,  # replaced by the finished vectors in _grow_segment
+    )
+    return clones, v_cl, stem_l * s.tf[par]
+
+
+def _parent_vectors(r: _LevelRules, s: _Segment) -> np.ndarray:
+    """The splines' own segment vectors in world space (a split turns the parent away
+    from its clones), not yet attracted or scaled."""
+    sp = s.splits
+    v = _bent(np.where(sp, -s.angle + s.cang, s.cang), s.cvar)
+    if sp.any():
+        if r.trunk:
+            v = np.where(sp[:, None], rot_z(v, s.branch_rot), v)
+        else:
+            v = np.where(sp[:, None], rot_y(v, -r.spread), v)
+    return apply(s.frame, v)
+
+
+def _grow_segment(
+    cfg: Cfg, r: _LevelRules, g: _Growing, k: int, stem_seg: np.ndarray, stems_before: int
+) -> None:
+    """Grow every spline by segment ``k``, appending the clones that split off there."""
+    nsp = len(g.famid)
+    kp = k / (r.res - 1) if r.res > 1 else 1.0
+    nsplit = _split_counts(cfg, r, g, k, kp)
+    if nsplit.any():
+        grown = nsp + int(nsplit.sum())
+        check_grow(cfg.params, r.n, stems_before + grown, grown * (r.res + 1))
+    s = _segment(cfg, r, g, k, kp, nsplit)
+    clones = None
+    if s.splits.any():
+        clones, v_cl, len_cl = _clones(r, g, s, stem_seg)
+    v = _parent_vectors(r, s)
+    g.split_last = s.splits
+    tip = g.pts[:, k]  # a view: only column k + 1 of ``pts`` is written below
+    if clones is None:
+        v = _attract_up(v, r.att_up, r.res)
+        v = normalize(v) * (g.seg_len * s.tf)[:, None]
+    else:
+        # the parents' and clones' vectors finish in one batch (row-wise arithmetic: the
+        # same numbers as two separate batches, fewer numpy calls)
+        both = _attract_up(np.concatenate([v, v_cl]), r.att_up, r.res)
+        both = normalize(both) * np.concatenate([g.seg_len * s.tf, len_cl])[:, None]
+        v, v_cl = both[:nsp], both[nsp:]
+        clones.pts[:, k + 1] = clones.pts[:, k] + v_cl
+        clones.dirv = v_cl
+    g.pts[:, k + 1] = tip + v
+    g.rad[:, k + 1] = g.rad_s * (1 - (k + 1) / r.res) + g.rad_e * ((k + 1) / r.res)
+    if r.close_tip and k == r.res - 1:
+        g.rad[:, k + 1] = 0.0
+    g.dirv = v
+    if clones is not None:
+        g.extend(clones)
+
+
 def grow_level(
     cfg: Cfg,
     n: int,
@@ -172,192 +481,17 @@ def grow_level(
     ``stems_before`` stems exist in the tree already; a split that takes the tree past
     :data:`weberpenn.limits.MAX_STEMS` raises :class:`ParamError` before it is made.
     """
-    m = min(n, 3)
-    res = cfg.curve_res[m]
-    trunk = n == 0
-    f = len(fam.pos)
+    rules = _LevelRules.of(cfg, n)
     stem_seg = fam.seg_len * scale  # Sapling's stemsegL (per family)
-    lv = cfg.length_v[m]
-    key = fam.key.copy()
-    seg_len = stem_seg * ((1.0 - lv) + 2.0 * lv * uniform(key, LENGTH) if lv > 0.0 else 1.0)
-
-    pts = np.zeros((f, res + 1, 3))
-    pts[:, 0] = fam.pos
-    rad = np.zeros((f, res + 1))
-    rad[:, 0] = fam.rad0
-    start = np.zeros(f, dtype=np.int64)
-    famid = np.arange(f, dtype=np.int64)
-    rad_s = fam.rad_s.copy()
-    rad_e = fam.rad_e.copy()
-    curv = fam.curv.copy()
-    sign = np.ones(f)
-    split_last = np.zeros(f, dtype=bool)
-    r_last = np.full(f, np.nan)
-    dirv = fam.dir.copy()
-    offset_len = np.zeros(f)
-    parent = np.full(f, -1, dtype=np.int64)
-
-    seg_splits = cfg.seg_splits[m]
-    check_grow(cfg.params, n, stems_before + f, f * (res + 1))
-    cv1, cv2 = cfg.curve_v1[m], cfg.curve_v2[m]
-    att_up = cfg.attract_up[m]
-    att_out = cfg.attract_out[m]
-    split_ang = cfg.split_angle[m]
-    angle0 = cfg.cnp1 * (split_ang + cfg.split_angle_v1[m])
-    spread = cfg.cnp2 * (split_ang + cfg.split_angle_v2[m])
-    branch_step = cfg.rotate[0] + cfg.rotate_v[0]
-    h_forced = int((res - 1) * cfg.split_height) + 1
-    k_back = int(res / 2 + 0.5)
-
-    for k in range(res):
-        nsp = len(famid)
-        kp = k / (res - 1) if res > 1 else 1.0
-        # ---- how many clones each spline makes at this segment
-        sv = seg_splits
-        if trunk:
-            sv = max(((2.0 * cfg.split_bias) * (kp - 0.5) + 1.0) * sv, 0.0)
-        sval = np.where(split_last, sv * sv, sv * 1.33)
-        u = np.mod(uniform(key, SPLIT, k) + cfg.r_splits2, 1.0)
-        if k == 0 or trunk and k < (res - 1) * cfg.split_height and k != 1:
-            nsplit = np.zeros(nsp, dtype=np.int64)
-        elif trunk and k == 1:
-            nsplit = np.full(nsp, cfg.base_splits, dtype=np.int64)
-        elif trunk and k == h_forced:
-            nsplit = (sval > 0.0).astype(np.int64)
-        else:
-            nsplit = (u < sval).astype(np.int64)
-        if nsplit.any():
-            grown = nsp + int(nsplit.sum())
-            check_grow(cfg.params, n, stems_before + grown, grown * (res + 1))
-        if k == k_back and cfg.curve_back[m] != 0.0:
-            curv = curv + 2.0 * cfg.curve_back[m] / res
-
-        # ---- growSpline for all splines at once
-        scurv = np.zeros(nsp) if (trunk and kp <= cfg.split_height) else curv
-        cang = scurv + cv1 * kp * sign
-        cvar = cv2 * kp * sign
-        sign = -sign
-        if trunk:
-            frame = euler_frames_no_roll(dirv)
-            dec = declination(frame) / np.pi
-            tf = np.maximum(0.1, 1.0 - dec * dec * cfg.taper_crown * 30.0)
-        else:
-            frame = track_frames(dirv)
-            tf = np.ones(nsp)
-        tip = pts[:, k]  # a view: only column k + 1 of ``pts`` is written below
-        if n > 0 and kp > 0.0 and att_out > 0.0:
-            d = np.arctan2(tip[:, 0], -tip[:, 1]) + TAU
-            e = euler_compat(frame, d)
-            e[:, 2] = anglemean(e[:, 2], d, kp * att_out)
-            frame = euler_to_mat(e)
-
-        sp = nsplit > 0
-        angle = np.full(nsp, angle0)
-        branch_rot = np.zeros(nsp)
-        new = None
-        if sp.any():
-            if n > 0:
-                angle = angle * (
-                    np.maximum(1.0 - np.degrees(declination(frame)) / 90.0, 0.0) * 0.67 + 0.33
-                )
-            rl = np.where(np.isnan(r_last), cfg.r_last[m], r_last)
-            branch_rot = rl + branch_step
-            r_last = np.where(sp, branch_rot, r_last)
-            par = np.repeat(np.nonzero(sp)[0], nsplit[sp])
-            first = np.concatenate([[0], np.cumsum(nsplit[sp])[:-1]])
-            idx = np.arange(len(par)) - np.repeat(first, nsplit[sp])
-            ncl = len(par)
-            ckey = derive(key[par], CLONE, k * 1024 + idx)
-            lv_c = (1.0 - lv) + 2.0 * lv * uniform(ckey, LENGTH) if lv > 0.0 else np.ones(ncl)
-            bscale = np.minimum(lv_c * tf[par], 1.0)
-            a = angle[par] + cang[par]
-            v = np.empty((ncl, 3))
-            v[:, 0] = 0.0
-            v[:, 1] = -np.sin(a)
-            v[:, 2] = np.cos(a)
-            v = rot_y(v, cvar[par])
-            if trunk:
-                v = rot_z(v, branch_rot[par])
-                v = rot_z(v, np.pi - (TAU / (nsplit[par] + 1)) * (idx + 1))
-            else:
-                v = rot_y(v, spread)
-            # the clones' directions finish below, in one batch with the parents' (row-wise
-            # arithmetic: the same numbers as two separate batches, fewer numpy calls)
-            v_cl = apply(frame[par], v)
-            stem_l = stem_seg[famid[par]] * lv_c
-            len_cl = stem_l * tf[par]
-            c_pts = np.zeros((ncl, res + 1, 3))
-            c_pts[:, k] = tip[par]
-            c_rad = np.zeros((ncl, res + 1))
-            c_rad[:, k] = (rad_s[par] * (1 - k / res) + rad_e[par] * (k / res)) * bscale
-            c_rad[:, k + 1] = (
-                rad_s[par] * (1 - (k + 1) / res) + rad_e[par] * ((k + 1) / res)
-            ) * bscale
-            if cfg.close_tip and k == res - 1 and n == cfg.levels - 1:
-                c_rad[:, k + 1] = 0.0
-            new = dict(
-                pts=c_pts,
-                rad=c_rad,
-                start=np.full(ncl, k, dtype=np.int64),
-                famid=famid[par],
-                rad_s=rad_s[par] * bscale,
-                rad_e=rad_e[par] * bscale,
-                curv=curv[par],
-                sign=np.ones(ncl),  # a new stem: its first bend (at k + 1) is positive
-                split_last=np.ones(ncl, dtype=bool),
-                r_last=branch_rot[par] + np.pi,
-                offset_len=offset_len[par] + seg_len[par] * (k - start[par]),
-                parent=par,
-                seg_len=stem_l,
-                key=ckey,
-            )
-
-        a = np.where(sp, -angle + cang, cang)
-        v = np.empty((nsp, 3))
-        v[:, 0] = 0.0
-        v[:, 1] = -np.sin(a)
-        v[:, 2] = np.cos(a)
-        v = rot_y(v, cvar)
-        if sp.any():
-            if trunk:
-                v = np.where(sp[:, None], rot_z(v, branch_rot), v)
-            else:
-                v = np.where(sp[:, None], rot_y(v, -spread), v)
-        v = apply(frame, v)
-        split_last = sp
-        if new is None:
-            v = _attract_up(v, att_up, res)
-            v = normalize(v) * (seg_len * tf)[:, None]
-        else:
-            both = _attract_up(np.concatenate([v, v_cl]), att_up, res)
-            both = normalize(both) * np.concatenate([seg_len * tf, len_cl])[:, None]
-            v, v_cl = both[:nsp], both[nsp:]
-            new["pts"][:, k + 1] = tip[par] + v_cl
-            new["dirv"] = v_cl
-        pts[:, k + 1] = tip + v
-        rad[:, k + 1] = rad_s * (1 - (k + 1) / res) + rad_e * ((k + 1) / res)
-        if cfg.close_tip and k == res - 1 and n == cfg.levels - 1:
-            rad[:, k + 1] = 0.0
-        dirv = v
-
-        if new is not None:
-            pts = np.concatenate([pts, new["pts"]])
-            rad = np.concatenate([rad, new["rad"]])
-            start = np.concatenate([start, new["start"]])
-            famid = np.concatenate([famid, new["famid"]])
-            rad_s = np.concatenate([rad_s, new["rad_s"]])
-            rad_e = np.concatenate([rad_e, new["rad_e"]])
-            curv = np.concatenate([curv, new["curv"]])
-            sign = np.concatenate([sign, new["sign"]])
-            split_last = np.concatenate([split_last, new["split_last"]])
-            r_last = np.concatenate([r_last, new["r_last"]])
-            dirv = np.concatenate([dirv, new["dirv"]])
-            offset_len = np.concatenate([offset_len, new["offset_len"]])
-            parent = np.concatenate([parent, new["parent"]])
-            seg_len = np.concatenate([seg_len, new["seg_len"]])
-            key = np.concatenate([key, new["key"]])
-
-    return Splines(pts, rad, start, famid, seg_len, rad_s, offset_len, parent, key)
+    seg_len = stem_seg * rules.length_factor(fam.key)
+    g = _Growing.start_of(fam, rules, seg_len)
+    f = len(fam.pos)
+    check_grow(cfg.params, n, stems_before + f, f * (rules.res + 1))
+    for k in range(rules.res):
+        _grow_segment(cfg, rules, g, k, stem_seg, stems_before)
+    return Splines(
+        g.pts, g.rad, g.start, g.famid, g.seg_len, g.rad_s, g.offset_len, g.parent, g.key
+    )
 
 
 # --------------------------------------------------------------------------- ordering
