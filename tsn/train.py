@@ -510,10 +510,9 @@ def carried_species(
     return clf, branch
 
 
-def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any]:
-    """Train (or resume) and return a summary; the best checkpoint is at ``cfg.out``."""
-    cfg.check()
-    t_start = time.perf_counter()
+def _prepare(cfg: TrainConfig) -> tuple[str, Path, Path]:
+    """Threads, device and seed of the run; the dataset folder and the state file, refused
+    when a previous run's state is there and ``resume`` was not asked for."""
     if cfg.threads:
         torch.set_num_threads(int(cfg.threads))
     device = "cuda" if torch.cuda.is_available() else "cpu"
@@ -528,8 +527,26 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
         raise TrainError(
             f"{state_path} exists: pass --resume to continue that run, or remove {work}"
         )
+    return device, data, state_path
 
-    # every style is loaded and cached; the kept ones are picked after caching
+
+@dataclass
+class _Sketches:
+    """The run's sketches: every style of each split (the feature caches hold them all)
+    and the kept styles' indices and subsets."""
+
+    first: Split  # the training split of ``--data``
+    more: list[tuple[Path, Split]]  # the ``--more-data`` datasets
+    val_all: Split
+    keep_trn: np.ndarray  # indices into the training sketches of every dataset
+    keep_val: np.ndarray
+    trn: Split
+    val: Split
+
+
+def _load_sketches(cfg: TrainConfig, data: Path) -> _Sketches:
+    """Every style is loaded (and later cached); the kept ones are picked after caching.
+    A split left with no sketch in the kept styles is refused."""
     first = load_split(data, "train", cfg.max_sketches)
     more = load_more(cfg, data)
     trn_all = Split.concat([first] + [m for _, m in more])
@@ -540,21 +557,23 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
             kept = ", ".join(cfg.styles or ())
             raise TrainError(f"{data}: the {name!r} split has no sketches in the styles {kept}")
     trn, val = trn_all.subset(keep_trn), val_all.subset(keep_val)
-    start = _load_init(cfg) if cfg.init else None
-    # a fine-tune keeps its checkpoint's target scale: the heads already speak it
-    normaliser = start.normaliser if start else encoding.Normaliser.fit(trn.mats)
-    species_id = fit_species_id(trn, normaliser)
-    y_trn = head_targets(normaliser.normalise(trn.mats))
-    y_val_norm = normaliser.normalise(val.mats)
-    y_val = head_targets(y_val_norm)
-    log(
-        f"[train] {len(trn.images)} train ({len(first.images)} from {data}"
-        + "".join(f", {len(m.images)} from {p}" for p, m in more)
-        + f") / {len(val.images)} val sketches"
+    return _Sketches(first, more, val_all, keep_trn, keep_val, trn, val)
+
+
+def _describe(cfg: TrainConfig, data: Path, sk: _Sketches, device: str) -> str:
+    """The log line that says what the run trains on."""
+    return (
+        f"[train] {len(sk.trn.images)} train ({len(sk.first.images)} from {data}"
+        + "".join(f", {len(m.images)} from {p}" for p, m in sk.more)
+        + f") / {len(sk.val.images)} val sketches"
         + (f" in the styles {', '.join(cfg.styles)}" if cfg.styles else "")
         + f", device {device}"
     )
 
+
+def _network(cfg: TrainConfig, start: Loaded | None, device: str) -> tuple[TSN, int]:
+    """The network (``--init``'s or a new one) on ``device`` and its number of frozen
+    stages, refused when ``--cut`` is out of range."""
     try:
         model = (start.model if start else TSN(cfg.backbone, pretrained=cfg.pretrained)).to(device)
     except ModelError as e:
@@ -562,17 +581,214 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
     cut = BACKBONES[cfg.backbone][1] if cfg.cut is None else int(cfg.cut)
     if not 0 <= cut < model.n_stages:
         raise TrainError(f"--cut must be in [0, {model.n_stages - 1}], got {cut}")
+    return model, cut
+
+
+def _features(
+    cfg: TrainConfig,
+    model: TSN,
+    cut: int,
+    sk: _Sketches,
+    device: str,
+    log: Callable[[str], None],
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """The frozen stages' features of the kept sketches: training ones (versions, sketch,
+    ...) from ``--data`` and each ``--more-data`` dataset, clean validation ones."""
     f_trn = torch.cat(
-        [build_cache(model, first, cut, cfg, device, cfg.copies, "train", log)]
+        [build_cache(model, sk.first, cut, cfg, device, cfg.copies, "train", log)]
         + [
             build_cache(model, m, cut, cfg, device, cfg.copies, "train", log, str(p), i)
-            for i, (p, m) in enumerate(more, start=1)
+            for i, (p, m) in enumerate(sk.more, start=1)
         ],
         dim=1,
-    )[:, torch.from_numpy(keep_trn)]
-    f_val = build_cache(model, val_all, cut, cfg, device, 0, "val", log)[0][
-        torch.from_numpy(keep_val)
+    )[:, torch.from_numpy(sk.keep_trn)]
+    f_val = build_cache(model, sk.val_all, cut, cfg, device, 0, "val", log)[0][
+        torch.from_numpy(sk.keep_val)
     ]
+    return f_trn, f_val
+
+
+@dataclass
+class _Progress:
+    """How far a run has got: what ``state.pt`` keeps besides the network and optimiser."""
+
+    rows: list[dict[str, Any]] = field(default_factory=list)  # one per epoch done
+    best: float = -math.inf  # best validation 1-RMSE so far
+    best_epoch: int = 0
+    start_epoch: int = 1  # the next epoch to run
+    elapsed_before: float = 0.0  # training seconds of the runs this one resumes
+
+
+@dataclass
+class _Run:
+    """What every epoch of a run reads and updates: the settings, the network and its
+    optimiser, the cached features and targets, and what the checkpoint records."""
+
+    cfg: TrainConfig
+    device: str
+    model: TSN
+    cut: int
+    opt: torch.optim.Optimizer
+    sched: torch.optim.lr_scheduler.LRScheduler
+    f_trn: torch.Tensor  # (versions, N, ...) training features
+    f_val: torch.Tensor
+    y_trn: dict[str, torch.Tensor]  # normalised targets per head
+    y_val: dict[str, torch.Tensor]
+    y_val_norm: np.ndarray
+    normaliser: encoding.Normaliser
+    species_id: SpeciesIdentifier
+    val: Split
+    start: Loaded | None  # the --init checkpoint
+    carried: tuple[SpeciesClassifier, SpeciesBranch] | None  # see carried_species
+    state_path: Path
+    log: Callable[[str], None]
+
+    @property
+    def n_train(self) -> int:
+        """The number of kept training sketches."""
+        return self.f_trn.shape[1]
+
+    def resume(self) -> _Progress:
+        """The progress of the run this one continues (network, optimiser, schedule and
+        random state restored from ``state.pt``), or a fresh start."""
+        if not (self.cfg.resume and self.state_path.is_file()):
+            return _Progress()
+        st = torch.load(self.state_path, map_location="cpu", weights_only=False)
+        self.model.load_state_dict(st["model"])
+        self.opt.load_state_dict(st["opt"])
+        self.sched.load_state_dict(st["sched"])
+        prog = _Progress(st["rows"], st["best"], st["best_epoch"], st["epoch"] + 1, st["elapsed"])
+        torch.set_rng_state(st["rng"])
+        self.log(f"[train] resumed after epoch {st['epoch']} (best val 1-RMSE {prog.best:.4f})")
+        return prog
+
+    def fit_epoch(self, perm: torch.Tensor, ver: torch.Tensor) -> float:
+        """One pass over the training sketches in the order ``perm``, sketch ``i`` in its
+        cached version ``ver[i]``; returns the mean training loss."""
+        train_mode(self.model, self.cut)
+        n, batch = len(perm), self.cfg.batch
+        total, seen = 0.0, 0
+        for s in range(0, n, batch):
+            idx = perm[s : s + batch]
+            if len(idx) < 2:  # batch norm needs two samples
+                continue
+            x = self.f_trn[ver[idx], idx].to(self.device)
+            tgt = {h: y[idx].to(self.device) for h, y in self.y_trn.items()}
+            loss = loss_fn(_forward(self.model, x, self.cut), tgt, self.cfg.loss)
+            self.opt.zero_grad(set_to_none=True)
+            loss.backward()
+            self.opt.step()
+            total += loss.item() * len(idx)
+            seen += len(idx)
+        return total / max(seen, 1)
+
+    def validate(self) -> tuple[float, dict[str, float], float]:
+        """Validation loss (always the paper's loss, comparable across runs), 1-RMSE per
+        head and overall, and the species identifier's accuracy."""
+        pred = predict_cached(self.model, self.f_val, self.cut, self.device)
+        with torch.no_grad():
+            heads = {h: torch.from_numpy(v).float() for h, v in encoding.split_heads(pred).items()}
+            val_loss = float(loss_fn(heads, self.y_val))
+        s = one_minus_rmse(pred, self.y_val_norm)
+        scores = {**s.heads, "overall": s.overall}
+        sp = self.species_id.identify_many(self.normaliser.denormalise(pred))
+        sp_acc = float(np.mean([a == b for a, b in zip(sp, self.val.species, strict=True)]))
+        return val_loss, scores, sp_acc
+
+    def save_best(
+        self, epoch: int, scores: dict[str, float], sp_acc: float, elapsed: float
+    ) -> None:
+        """Write the checkpoint at ``cfg.out``, with what made it in its ``info``."""
+        cfg = self.cfg
+        info = {
+            "config": {k: v for k, v in asdict(cfg).items() if k != "resume"},
+            "cut": self.cut,
+            "epoch": epoch,
+            "epochs": cfg.epochs,
+            "val": scores,
+            "val_species_acc": sp_acc,
+            "n_train": self.n_train,
+            "n_val": len(self.val.images),
+            "train_seconds": elapsed,
+            "device": self.device,
+            "torch": str(torch.__version__),
+            "threads": torch.get_num_threads(),
+        }
+        if self.carried is not None and self.start is not None:
+            # how the carried parts were made
+            info.update({k: self.start.info[k] for k in CARRIED_INFO if k in self.start.info})
+        save_checkpoint(
+            cfg.out, self.model, cfg.size, self.cut, self.normaliser, self.species_id, info,
+            species_branch=None if self.carried is None else self.carried[1],
+        )  # fmt: skip
+
+    def save_state(self, prog: _Progress, epoch: int, elapsed: float) -> None:
+        """Write ``state.pt`` (what ``resume`` reads), ``log.csv`` and ``loss.png``."""
+        atomic_torch_save(
+            {
+                "model": self.model.state_dict(),
+                "opt": self.opt.state_dict(),
+                "sched": self.sched.state_dict(),
+                "rows": prog.rows,
+                "best": prog.best,
+                "best_epoch": prog.best_epoch,
+                "epoch": epoch,
+                "elapsed": elapsed,
+                "rng": torch.get_rng_state(),
+            },
+            self.state_path,
+        )
+        _write_csv(prog.rows, self.state_path.parent / "log.csv")
+        _plot(prog.rows, self.state_path.parent / "loss.png", self.cfg.loss)
+
+    def run_epoch(self, epoch: int, gen: torch.Generator, prog: _Progress, t_run: float) -> None:
+        """Train one epoch, validate, log it and save what it changed."""
+        t0 = time.perf_counter()
+        n = self.n_train
+        perm = torch.randperm(n, generator=gen)
+        ver = torch.randint(0, self.cfg.copies + 1, (n,), generator=gen)
+        train_loss = self.fit_epoch(perm, ver)
+        self.sched.step()
+        val_loss, scores, sp_acc = self.validate()
+        row = {
+            "epoch": epoch,
+            "train_loss": train_loss,
+            "val_loss": val_loss,
+            **{f"val_{k}": v for k, v in scores.items()},
+            "val_species_acc": sp_acc,
+            "lr": self.opt.param_groups[0]["lr"],
+            "seconds": time.perf_counter() - t0,
+        }
+        prog.rows.append(row)
+        elapsed = prog.elapsed_before + time.perf_counter() - t_run
+        improved = scores["overall"] > prog.best
+        if improved:
+            prog.best, prog.best_epoch = scores["overall"], epoch
+            self.save_best(epoch, scores, sp_acc, elapsed)
+        self.save_state(prog, epoch, elapsed)
+        self.log(
+            f"[train] epoch {epoch}/{self.cfg.epochs} train {train_loss:.4f} val {val_loss:.4f} "
+            f"val 1-RMSE {scores['overall']:.4f} species {sp_acc:.3f} "
+            f"({row['seconds']:.0f} s){' *' if improved else ''}"
+        )
+
+
+def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any]:
+    """Train (or resume) and return a summary; the best checkpoint is at ``cfg.out``."""
+    cfg.check()
+    t_start = time.perf_counter()
+    device, data, state_path = _prepare(cfg)
+    sk = _load_sketches(cfg, data)
+    start = _load_init(cfg) if cfg.init else None
+    # a fine-tune keeps its checkpoint's target scale: the heads already speak it
+    normaliser = start.normaliser if start else encoding.Normaliser.fit(sk.trn.mats)
+    species_id = fit_species_id(sk.trn, normaliser)
+    y_trn = head_targets(normaliser.normalise(sk.trn.mats))
+    y_val_norm = normaliser.normalise(sk.val.mats)
+    log(_describe(cfg, data, sk, device))
+
+    model, cut = _network(cfg, start, device)
+    f_trn, f_val = _features(cfg, model, cut, sk, device, log)
     carried = carried_species(start, cut)
     if carried is not None:
         species_id = species_id.with_classifier(carried[0])
@@ -580,126 +796,50 @@ def train(cfg: TrainConfig, log: Callable[[str], None] = print) -> dict[str, Any
             f"[train] the species branch (stage {carried[1].start} on) and its classifier are"
             f" carried from --init: the stages before {cut} stay frozen"
         )
-    params = set_trainable(model, cut)
-    opt = torch.optim.Adam(params, lr=cfg.lr)
+    opt = torch.optim.Adam(set_trainable(model, cut), lr=cfg.lr)
     sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, T_max=cfg.epochs, eta_min=cfg.lr / 100)
-
-    rows: list[dict[str, Any]] = []
-    best, best_epoch, start_epoch, elapsed_before = -math.inf, 0, 1, 0.0
-    if cfg.resume and state_path.is_file():
-        st = torch.load(state_path, map_location="cpu", weights_only=False)
-        model.load_state_dict(st["model"])
-        opt.load_state_dict(st["opt"])
-        sched.load_state_dict(st["sched"])
-        rows, best, best_epoch = st["rows"], st["best"], st["best_epoch"]
-        start_epoch, elapsed_before = st["epoch"] + 1, st["elapsed"]
-        torch.set_rng_state(st["rng"])
-        log(f"[train] resumed after epoch {st['epoch']} (best val 1-RMSE {best:.4f})")
+    run = _Run(
+        cfg=cfg,
+        device=device,
+        model=model,
+        cut=cut,
+        opt=opt,
+        sched=sched,
+        f_trn=f_trn,
+        f_val=f_val,
+        y_trn=y_trn,
+        y_val=head_targets(y_val_norm),
+        y_val_norm=y_val_norm,
+        normaliser=normaliser,
+        species_id=species_id,
+        val=sk.val,
+        start=start,
+        carried=carried,
+        state_path=state_path,
+        log=log,
+    )
+    prog = run.resume()
     t_run = time.perf_counter()
 
-    n = len(trn.images)
+    n = len(sk.trn.images)
     gen = torch.Generator().manual_seed(cfg.seed)
-    for _ in range(start_epoch - 1):  # same permutations as an uninterrupted run
+    for _ in range(prog.start_epoch - 1):  # same permutations as an uninterrupted run
         torch.randperm(n, generator=gen)
         torch.randint(0, cfg.copies + 1, (n,), generator=gen)
-    for epoch in range(start_epoch, cfg.epochs + 1):
-        t0 = time.perf_counter()
-        train_mode(model, cut)
-        perm = torch.randperm(n, generator=gen)
-        ver = torch.randint(0, cfg.copies + 1, (n,), generator=gen)
-        total, seen = 0.0, 0
-        for s in range(0, n, cfg.batch):
-            idx = perm[s : s + cfg.batch]
-            if len(idx) < 2:  # batch norm needs two samples
-                continue
-            x = f_trn[ver[idx], idx].to(device)
-            tgt = {h: y[idx].to(device) for h, y in y_trn.items()}
-            loss = loss_fn(_forward(model, x, cut), tgt, cfg.loss)
-            opt.zero_grad(set_to_none=True)
-            loss.backward()
-            opt.step()
-            total += loss.item() * len(idx)
-            seen += len(idx)
-        sched.step()
-        pred = predict_cached(model, f_val, cut, device)
-        with torch.no_grad():
-            val_loss = float(
-                loss_fn(  # always the paper's loss, comparable across runs
-                    {h: torch.from_numpy(v).float() for h, v in encoding.split_heads(pred).items()},
-                    y_val,
-                )
-            )
-        s = one_minus_rmse(pred, y_val_norm)
-        scores = {**s.heads, "overall": s.overall}
-        sp = species_id.identify_many(normaliser.denormalise(pred))
-        sp_acc = float(np.mean([a == b for a, b in zip(sp, val.species, strict=True)]))
-        row = {
-            "epoch": epoch,
-            "train_loss": total / max(seen, 1),
-            "val_loss": val_loss,
-            **{f"val_{k}": v for k, v in scores.items()},
-            "val_species_acc": sp_acc,
-            "lr": opt.param_groups[0]["lr"],
-            "seconds": time.perf_counter() - t0,
-        }
-        rows.append(row)
-        elapsed = elapsed_before + time.perf_counter() - t_run
-        improved = scores["overall"] > best
-        if improved:
-            best, best_epoch = scores["overall"], epoch
-            info = {
-                "config": {k: v for k, v in asdict(cfg).items() if k != "resume"},
-                "cut": cut,
-                "epoch": epoch,
-                "epochs": cfg.epochs,
-                "val": scores,
-                "val_species_acc": sp_acc,
-                "n_train": n,
-                "n_val": len(val.images),
-                "train_seconds": elapsed,
-                "device": device,
-                "torch": str(torch.__version__),
-                "threads": torch.get_num_threads(),
-            }
-            if carried is not None and start is not None:  # how the carried parts were made
-                info.update({k: start.info[k] for k in CARRIED_INFO if k in start.info})
-            save_checkpoint(
-                cfg.out, model, cfg.size, cut, normaliser, species_id, info,
-                species_branch=None if carried is None else carried[1],
-            )  # fmt: skip
-        atomic_torch_save(
-            {
-                "model": model.state_dict(),
-                "opt": opt.state_dict(),
-                "sched": sched.state_dict(),
-                "rows": rows,
-                "best": best,
-                "best_epoch": best_epoch,
-                "epoch": epoch,
-                "elapsed": elapsed,
-                "rng": torch.get_rng_state(),
-            },
-            state_path,
-        )
-        _write_csv(rows, work / "log.csv")
-        _plot(rows, work / "loss.png", cfg.loss)
-        log(
-            f"[train] epoch {epoch}/{cfg.epochs} train {row['train_loss']:.4f} val {val_loss:.4f} "
-            f"val 1-RMSE {scores['overall']:.4f} species {sp_acc:.3f} "
-            f"({row['seconds']:.0f} s){' *' if improved else ''}"
-        )
+    for epoch in range(prog.start_epoch, cfg.epochs + 1):
+        run.run_epoch(epoch, gen, prog, t_run)
     classifier_acc = (
-        add_species_classifier(cfg, f_trn[0], f_val, cut, device, trn, val, log)
+        add_species_classifier(cfg, f_trn[0], f_val, cut, device, sk.trn, sk.val, log)
         if carried is None
         else None
     )
     return {
         "val_classifier_species_acc": classifier_acc,
-        "best_val_overall": best,
-        "best_epoch": best_epoch,
-        "epochs": len(rows),
-        "rows": rows,
+        "best_val_overall": prog.best,
+        "best_epoch": prog.best_epoch,
+        "epochs": len(prog.rows),
+        "rows": prog.rows,
         "out": cfg.out,
-        "work": str(work),
+        "work": str(cfg.work_dir),
         "seconds": time.perf_counter() - t_start,
     }
