@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import io
 import math
-from collections.abc import AsyncIterator, Collection, Mapping, Sequence
+from collections.abc import AsyncIterator, Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass
 
 from python_multipart.multipart import MultipartParser, parse_options_header
@@ -79,18 +79,9 @@ class _Part:
     name: str = ""
 
 
-async def read_form(
-    content_type: str,
-    content_length: str | None,
-    stream: AsyncIterator[bytes],
-    limits: Limits,
-    file_field: str = "sketch",
-    max_files: int = MAX_VIEWS,
-) -> tuple[dict[str, list[str]], list[bytearray]]:
-    """(every value of each text field in order, every file's bytes in order) of a
-    multipart body, read chunk by chunk; more than ``max_files`` files is a 422."""
-    cap = limits.max_upload_bytes
-    body_cap = max(cap, limits.max_body_bytes) + FORM_OVERHEAD
+def _multipart_boundary(content_type: str, content_length: str | None, body_cap: int) -> bytes:
+    """The boundary of a multipart/form-data body (415 for any other type); a declared
+    length over ``body_cap`` is refused before a byte is read."""
     mtype, params = parse_options_header(content_type)
     if mtype != b"multipart/form-data" or b"boundary" not in params:
         raise LimitError(
@@ -105,80 +96,119 @@ async def read_form(
             raise LimitError(
                 413, f"the upload ({declared} bytes) is over {body_cap - FORM_OVERHEAD} bytes"
             )
+    return params[b"boundary"]
 
-    parts: list[_Part] = []
-    header: list[bytes] = [b"", b""]
-    ended = [False]
 
-    def on_part_begin() -> None:
-        if len(parts) >= MAX_PARTS:
+class _PartCollector:
+    """python-multipart's callbacks for one form: they keep its parts in memory and
+    raise a LimitError as soon as a part, its headers or the part count goes over."""
+
+    def __init__(self, cap: int, file_field: str, max_files: int) -> None:
+        self.parts: list[_Part] = []
+        self.ended = False  # the closing boundary was read
+        self._cap = cap
+        self._file_field = file_field
+        self._max_files = max_files
+        self._field = b""  # the header being read: its name and value so far
+        self._value = b""
+
+    def callbacks(self) -> dict[str, Callable[..., None]]:
+        """The callbacks, by the names MultipartParser calls them."""
+        return {
+            "on_part_begin": self.on_part_begin,
+            "on_header_field": self.on_header_field,
+            "on_header_value": self.on_header_value,
+            "on_header_end": self.on_header_end,
+            "on_headers_finished": self.on_headers_finished,
+            "on_part_data": self.on_part_data,
+            "on_end": self.on_end,
+        }
+
+    def on_part_begin(self) -> None:
+        if len(self.parts) >= MAX_PARTS:
             raise LimitError(413, f"the form has more than {MAX_PARTS} parts")
-        parts.append(_Part({}, bytearray()))
+        self.parts.append(_Part({}, bytearray()))
 
-    def on_header_field(data: bytes, start: int, end: int) -> None:
-        header[0] += data[start:end]
-        _header_bytes()
+    def on_header_field(self, data: bytes, start: int, end: int) -> None:
+        self._field += data[start:end]
+        self._check_header_bytes()
 
-    def on_header_value(data: bytes, start: int, end: int) -> None:
-        header[1] += data[start:end]
-        _header_bytes()
+    def on_header_value(self, data: bytes, start: int, end: int) -> None:
+        self._value += data[start:end]
+        self._check_header_bytes()
 
-    def _header_bytes() -> None:
+    def _check_header_bytes(self) -> None:
         size = (
-            len(header[0])
-            + len(header[1])
-            + sum(len(k) + len(v) for k, v in parts[-1].headers.items())
+            len(self._field)
+            + len(self._value)
+            + sum(len(k) + len(v) for k, v in self.parts[-1].headers.items())
         )
         if size > HEADER_BYTES:
             raise LimitError(413, f"a part's headers are over {HEADER_BYTES} bytes")
 
-    def on_header_end() -> None:
-        parts[-1].headers[header[0].decode("latin-1").lower()] = header[1].decode("latin-1")
-        header[0], header[1] = b"", b""
+    def on_header_end(self) -> None:
+        name, value = self._field.decode("latin-1"), self._value.decode("latin-1")
+        self.parts[-1].headers[name.lower()] = value
+        self._field, self._value = b"", b""
 
-    def on_headers_finished() -> None:
-        part = parts[-1]
+    def on_headers_finished(self) -> None:
+        part, field = self.parts[-1], self._file_field
         _, disp = parse_options_header(part.headers.get("content-disposition", ""))
         part.name = disp.get(b"name", b"").decode("utf-8", "replace")
         # refused as soon as the part begins: its bytes are never read
-        if part.name == file_field and sum(p.name == file_field for p in parts) > max_files:
+        if part.name == field and sum(p.name == field for p in self.parts) > self._max_files:
             raise LimitError(
                 422,
-                f"at most {max_files} drawings of one tree ('{file_field}' parts) in one job",
+                f"at most {self._max_files} drawings of one tree ('{field}' parts) in one job",
             )
 
-    def on_part_data(data: bytes, start: int, end: int) -> None:
-        part = parts[-1]
+    def on_part_data(self, data: bytes, start: int, end: int) -> None:
+        part = self.parts[-1]
         part.data += data[start:end]
-        is_file = part.name == file_field
-        if len(part.data) > (cap if is_file else FIELD_BYTES):
+        is_file = part.name == self._file_field
+        limit = self._cap if is_file else FIELD_BYTES
+        if len(part.data) > limit:
             what = "the sketch" if is_file else f"the form field {part.name[:40]!r}"
-            raise LimitError(413, f"{what} is over {cap if is_file else FIELD_BYTES} bytes")
+            raise LimitError(413, f"{what} is over {limit} bytes")
 
-    def on_end() -> None:
-        ended[0] = True
+    def on_end(self) -> None:
+        self.ended = True
 
-    parser = MultipartParser(
-        params[b"boundary"],
-        {
-            "on_part_begin": on_part_begin,
-            "on_header_field": on_header_field,
-            "on_header_value": on_header_value,
-            "on_header_end": on_header_end,
-            "on_headers_finished": on_headers_finished,
-            "on_part_data": on_part_data,
-            "on_end": on_end,
-        },
-    )
+    def clear(self) -> None:
+        """Free every part's bytes now (see ``_parse_stream``)."""
+        for part in self.parts:
+            part.data.clear()
 
-    def feed(data: bytearray) -> None:
-        try:
-            parser.write(data)  # type: ignore[arg-type] - a bytearray parses as bytes do
-        except LimitError:
-            raise
-        except Exception as exc:  # noqa: BLE001 - python-multipart's parse errors
-            raise LimitError(400, f"malformed multipart body: {exc}") from exc
+    def form(self) -> tuple[dict[str, list[str]], list[bytearray]]:
+        """(every value of each text field in order, every file's bytes in order)."""
+        fields: dict[str, list[str]] = {}
+        files: list[bytearray] = []
+        for part in self.parts:
+            if part.name == self._file_field:
+                files.append(part.data)  # no copy of up to 10 MB: a bytearray reads as bytes do
+            elif part.name:
+                fields.setdefault(part.name, []).append(
+                    part.data.decode("utf-8", "replace").strip()
+                )
+        return fields, files
 
+
+def _feed(parser: MultipartParser, data: bytearray) -> None:
+    """Parse ``data``; python-multipart's own errors become a 400."""
+    try:
+        parser.write(data)  # type: ignore[arg-type] - a bytearray parses as bytes do
+    except LimitError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - python-multipart's parse errors
+        raise LimitError(400, f"malformed multipart body: {exc}") from exc
+
+
+async def _parse_stream(
+    parser: MultipartParser, stream: AsyncIterator[bytes], body_cap: int
+) -> None:
+    """Feed the body to ``parser`` as it streams in, refusing it once it passes
+    ``body_cap``; parsing runs in the thread pool, a batch at a time (a hop per 64 KB
+    chunk costs more than the parsing of a plain file part)."""
     total = 0
     pending = bytearray()
     chunk = b""
@@ -187,37 +217,47 @@ async def read_form(
             total += len(chunk)
             if total > body_cap:
                 raise LimitError(413, f"the upload is over {body_cap - FORM_OVERHEAD} bytes")
-            # parse in the thread pool, a batch at a time (a hop per 64 KB chunk costs
-            # more than the parsing of a plain file part)
             pending += chunk
             if len(pending) >= PARSE_BATCH:
-                await run_in_threadpool(feed, pending)
+                await run_in_threadpool(_feed, parser, pending)
                 pending.clear()
         if pending:
-            await run_in_threadpool(feed, pending)
+            await run_in_threadpool(_feed, parser, pending)
         parser.finalize()
-        if not ended[0]:
-            raise LimitError(
-                400, "the upload was cut off: its closing multipart boundary is missing"
-            )
     except BaseException:
         # the error's traceback keeps these frames, and a reference cycle on the way up may
         # keep the traceback until a full garbage collection: free the bytes now, or a
         # stream of refused uploads piles them up (100 MB in 20 s, bench_hostile.py)
         pending.clear()
-        for part in parts:
-            part.data.clear()
         chunk = b""
         raise
 
-    fields: dict[str, list[str]] = {}
-    files: list[bytearray] = []
-    for part in parts:
-        if part.name == file_field:
-            files.append(part.data)  # no copy of up to 10 MB: a bytearray reads as bytes do
-        elif part.name:
-            fields.setdefault(part.name, []).append(part.data.decode("utf-8", "replace").strip())
-    return fields, files
+
+async def read_form(
+    content_type: str,
+    content_length: str | None,
+    stream: AsyncIterator[bytes],
+    limits: Limits,
+    file_field: str = "sketch",
+    max_files: int = MAX_VIEWS,
+) -> tuple[dict[str, list[str]], list[bytearray]]:
+    """(every value of each text field in order, every file's bytes in order) of a
+    multipart body, read chunk by chunk; more than ``max_files`` files is a 422."""
+    cap = limits.max_upload_bytes
+    body_cap = max(cap, limits.max_body_bytes) + FORM_OVERHEAD
+    boundary = _multipart_boundary(content_type, content_length, body_cap)
+    collector = _PartCollector(cap, file_field, max_files)
+    parser = MultipartParser(boundary, collector.callbacks())
+    try:
+        await _parse_stream(parser, stream, body_cap)
+        if not collector.ended:
+            raise LimitError(
+                400, "the upload was cut off: its closing multipart boundary is missing"
+            )
+    except BaseException:
+        collector.clear()  # as _parse_stream frees its own buffers
+        raise
+    return collector.form()
 
 
 def check_image(data: bytes, limits: Limits) -> tuple[int, int]:
