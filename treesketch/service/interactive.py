@@ -227,10 +227,18 @@ def example_files(folder: Path = EXAMPLES) -> dict[str, Path]:
 
 
 def add_interactive_routes(app: FastAPI, store: JobStore) -> None:
-    """Add the routes of the module text to ``app``."""
+    """Add the routes of the module text to ``app``, in this order (before the app's own
+    ``/jobs/{id}/{artefact}``, which would take their names)."""
+    # tree edits and outlines share one gate: both are cheap work for the thread pool
     gate = Gate(EDITS_AT_ONCE, EDITS_WAITING, "tree edits and outlines")
     big_gate = Gate(BIG_AT_ONCE, BIG_WAITING, "large trees")
-    replies = store.root / "trees"  # big replies, unlinked as soon as they are opened
+    _add_help_routes(app)
+    _add_trees_route(app, gate, big_gate, store.root / "trees")
+    _add_job_picture_routes(app, store, gate)
+
+
+def _add_help_routes(app: FastAPI) -> None:
+    """The page's fixed material: the example drawings, the controls and their picture."""
 
     @app.get("/examples")
     async def examples() -> dict[str, Any]:
@@ -253,6 +261,12 @@ def add_interactive_routes(app: FastAPI, store: JobStore) -> None:
     @app.get("/controls")
     async def controls() -> dict[str, Any]:
         return await run_in_threadpool(controls_table)
+
+
+def _add_trees_route(app: FastAPI, gate: Gate, big_gate: Gate, replies: Path) -> None:
+    """``POST /trees``: a cheap tree grown in the thread pool behind ``gate``, an
+    expensive one in a child process behind ``big_gate``; a big reply is written to
+    ``replies`` (unlinked as soon as it is opened) and streamed from there."""
 
     async def grow_cheap(body: Any, want_glb: bool, fn: Any) -> tuple[Any, dict[str, str]]:
         async with gate.enter():
@@ -305,6 +319,11 @@ def add_interactive_routes(app: FastAPI, store: JobStore) -> None:
         if isinstance(answer, bytes):
             return Response(answer, media_type=media, headers=headers)
         return JSONResponse(answer)
+
+
+def _add_job_picture_routes(app: FastAPI, store: JobStore, gate: Gate) -> None:
+    """A job's pictures: its tree's outline from another side (drawn behind ``gate``),
+    the drawing it was sent, its current best tree while it runs."""
 
     # registered before the app's ``/jobs/{id}/{artefact}``, which would take the name
     @app.get("/jobs/{job_id}/outline.png")
