@@ -4,13 +4,18 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import typer
 
 from refine.search import DEFAULT_BUDGET
 
 from .cli_common import fail
+
+if TYPE_CHECKING:
+    from fastapi import FastAPI
+
+    from .service import ServiceConfig
 
 LOCAL_HOSTS = ("127.0.0.1", "localhost", "::1")
 ANY_ADDRESS = ("0.0.0.0", "::", "")
@@ -86,44 +91,11 @@ def serve_command(
     `curl -F sketch=@examples/sketch_maple.png -F budget=20 localhost:8000/jobs`.
     On a Ray cluster: `treesketch serve --executor ray --address HEAD_IP:6379`.
     """
-    import uvicorn
-
-    from .service import ServiceConfig, create_app
-    from .service.owner import DataOwner
+    from .service import ServiceConfig
     from .service.pool import default_workers
-    from .service.store import StoreError
 
-    executor = executor.strip().lower()
-    if executor not in ("local", "ray"):
-        raise typer.BadParameter(f"choose local or ray, got {executor!r}", param_hint="--executor")
-    if address is not None and executor != "ray":
-        raise typer.BadParameter(
-            "is for the ray executor (add --executor ray)", param_hint="--address"
-        )
-
-    from .service.app import check_cors
-
-    try:
-        check_cors(tuple(cors or ()), token or None)  # before anything starts
-    except ValueError as exc:
-        fail(str(exc))
-    if cors and not token:
-        typer.echo(
-            f"warning: without --token, pages at {', '.join(cors)} can read every job here",
-            err=True,
-        )
-    if host not in LOCAL_HOSTS:
-        typer.echo(
-            f"warning: listening on {host}: other machines can reach this service"
-            + ("" if token else "; set --token (or TREESKETCH_TOKEN) to require a token"),
-            err=True,
-        )
-    hosts = served_names(host, allow_host or [])
-    if hosts == ("*",):
-        typer.echo(
-            "warning: the Host check is off (every address); name this server with --allow-host",
-            err=True,
-        )
+    executor = _checked_executor(executor, address)
+    hosts = _checked_exposure(host, token, cors or [], allow_host or [])
     config = ServiceConfig(
         data=data or default_data_dir(),
         # on Ray, default to every CPU of the cluster (the pool counts them)
@@ -139,27 +111,90 @@ def serve_command(
         executor=executor,
         address=address,
     )
-
-    def make_app() -> Any:
-        """The app, or a plain error (exit 2) when the data folder cannot be used: another
-        server owns it (refused before any job is touched), it is no folder, or its
-        database cannot be read."""
-        try:
-            DataOwner(config.data).probe()
-            return create_app(config)
-        except StoreError as exc:
-            fail(str(exc))
-
     if executor == "local":
-        app = make_app()
-        typer.echo(f"data: {config.data}; workers: {config.workers}; estimator: {estimator}")
-        uvicorn.run(app, host=host, port=port, log_level="info")
-        return
-    app = make_app()  # before Ray starts
+        _serve_local(config, host, port)
+    else:
+        _serve_on_ray(config, host, port, workers)
+
+
+def _checked_executor(executor: str, address: str | None) -> str:
+    """``--executor`` normalised ('local' or 'ray'); ``--address`` only goes with ray."""
+    executor = executor.strip().lower()
+    if executor not in ("local", "ray"):
+        raise typer.BadParameter(f"choose local or ray, got {executor!r}", param_hint="--executor")
+    if address is not None and executor != "ray":
+        raise typer.BadParameter(
+            "is for the ray executor (add --executor ray)", param_hint="--address"
+        )
+    return executor
+
+
+def _checked_exposure(
+    host: str, token: str | None, cors: list[str], allow_host: list[str]
+) -> tuple[str, ...]:
+    """The names the server answers to; refuses CORS settings that would expose jobs
+    (before anything starts) and warns of what makes the service reachable from
+    elsewhere without a token or a Host check."""
+    from .service.app import check_cors
+
+    try:
+        check_cors(tuple(cors), token or None)
+    except ValueError as exc:
+        fail(str(exc))
+    if cors and not token:
+        typer.echo(
+            f"warning: without --token, pages at {', '.join(cors)} can read every job here",
+            err=True,
+        )
+    if host not in LOCAL_HOSTS:
+        typer.echo(
+            f"warning: listening on {host}: other machines can reach this service"
+            + ("" if token else "; set --token (or TREESKETCH_TOKEN) to require a token"),
+            err=True,
+        )
+    hosts = served_names(host, allow_host)
+    if hosts == ("*",):
+        typer.echo(
+            "warning: the Host check is off (every address); name this server with --allow-host",
+            err=True,
+        )
+    return hosts
+
+
+def _make_app(config: ServiceConfig) -> FastAPI:
+    """The app, or a plain error (exit 2) when the data folder cannot be used: another
+    server owns it (refused before any job is touched), it is no folder, or its
+    database cannot be read."""
+    from .service import create_app
+    from .service.owner import DataOwner
+    from .service.store import StoreError
+
+    try:
+        DataOwner(config.data).probe()
+        return create_app(config)
+    except StoreError as exc:
+        fail(str(exc))
+
+
+def _serve_local(config: ServiceConfig, host: str, port: int) -> None:
+    """Serve with worker processes on this machine."""
+    import uvicorn
+
+    app = _make_app(config)
+    typer.echo(f"data: {config.data}; workers: {config.workers}; estimator: {config.estimator}")
+    uvicorn.run(app, host=host, port=port, log_level="info")
+
+
+def _serve_on_ray(config: ServiceConfig, host: str, port: int, workers: int | None) -> None:
+    """Serve with Ray actors: connect first, so a cluster nobody answers at is a plain
+    error, not a failed start-up; the pool then uses this Ray, and a Ray started here
+    is ended with the server."""
+    import uvicorn
+
+    app = _make_app(config)  # before Ray starts
     from .executor import ExecutorError, start_ray
 
-    # connect before serving, so a cluster nobody answers at is a plain error, not a
-    # failed start-up; the pool then uses this Ray and we end it
+    address = config.address
     try:
         owns = start_ray(address, workers if address is None else None)
     except ExecutorError as exc:
@@ -171,7 +206,8 @@ def serve_command(
     where = address or "a local Ray"
     count = workers or "one per CPU of the cluster"
     typer.echo(
-        f"data: {config.data}; workers: {count} Ray actors on {where}; estimator: {estimator}"
+        f"data: {config.data}; workers: {count} Ray actors on {where}; "
+        f"estimator: {config.estimator}"
     )
     try:
         uvicorn.run(app, host=host, port=port, log_level="info")
