@@ -271,7 +271,6 @@ class _Segment:
     """What one segment step shares between the splines and the clones they make."""
 
     k: int
-    kp: float  # k as a fraction of the stem
     nsplit: np.ndarray  # (N,) clones each spline makes here
     frame: np.ndarray  # (N, 3, 3) local frames
     tf: np.ndarray  # (N,) trunk-crown taper factor (1 off the trunk)
@@ -355,7 +354,7 @@ def _segment(
     g.sign = -g.sign
     frame, tf = _frames(cfg, r, g, k, kp)
     angle, branch_rot = _split_roll(cfg, r, g, frame, nsplit > 0)
-    return _Segment(k, kp, nsplit, frame, tf, cang, cvar, angle, branch_rot)
+    return _Segment(k, nsplit, frame, tf, cang, cvar, angle, branch_rot)
 
 
 def _bent(a: np.ndarray, cvar: np.ndarray) -> np.ndarray:
