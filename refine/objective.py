@@ -20,6 +20,7 @@ results by (rounded) point and reusing the last tree's scene when only the yaw m
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Sequence
@@ -278,6 +279,9 @@ class SearchSpace:
     dims: tuple[species.Unfixed, ...]
     search_yaw: bool = True
     fixed_yaw: float = 0.0
+    # keys held at ``base``'s values whatever the species' (``species.project``'s
+    # ``keep``: the drawn outline of ``refine.start``)
+    keep: tuple[str, ...] = ()
 
     @classmethod
     def create(
@@ -287,6 +291,7 @@ class SearchSpace:
         keys: Sequence[str] | None = None,
         search_yaw: bool = True,
         yaw: float = 0.0,
+        keep: Sequence[str] = (),
     ) -> SearchSpace:
         name = species.canonical(name)
         levels = int(base["levels"])
@@ -304,10 +309,11 @@ class SearchSpace:
             rows = [u for u in rows if u.key in wanted or u.label in wanted]
         return cls(
             name,
-            species.project(name, base, search=True),
+            species.project(name, base, search=True, keep=keep),
             tuple(rows),
             search_yaw,
             float(yaw) % 360.0,
+            tuple(keep),
         )
 
     @property
@@ -334,7 +340,7 @@ class SearchSpace:
                 vec = list(values[u.key])
                 vec[u.index] = v
                 values[u.key] = vec
-        return species.project(self.species, TreeParams(values), search=True)
+        return species.project(self.species, TreeParams(values), search=True, keep=self.keep)
 
     def yaw(self, x: Sequence[float]) -> float:
         if not self.search_yaw:
@@ -342,7 +348,7 @@ class SearchSpace:
         return float(np.clip(x[len(self.dims)], 0.0, 1.0) * 360.0) % 360.0
 
     def from_params(self, params: TreeParams, yaw: float = 0.0) -> np.ndarray:
-        p = species.project(self.species, params, search=True).to_dict()
+        p = species.project(self.species, params, search=True, keep=self.keep).to_dict()
         xs = []
         for u in self.dims:
             v = p[u.key] if u.index is None else p[u.key][u.index]
@@ -355,7 +361,7 @@ class SearchSpace:
         """The same space minus the dimensions whose key (or label) is in ``keys``."""
         drop = set(keys)
         dims = tuple(u for u in self.dims if u.key not in drop and u.label not in drop)
-        return SearchSpace(self.species, self.base, dims, self.search_yaw, self.fixed_yaw)
+        return dataclasses.replace(self, dims=dims)
 
     def live(self, probe: float = 0.25) -> SearchSpace:
         """The same space minus its dead dimensions: those that do not change the grown
@@ -391,7 +397,7 @@ class SearchSpace:
                 if not same(signature(self.to_params(x)), ref):
                     keep.append(u)
                     break
-        return SearchSpace(self.species, self.base, tuple(keep), self.search_yaw, self.fixed_yaw)
+        return dataclasses.replace(self, dims=tuple(keep))
 
 
 # --------------------------------------------------------------------------- objective

@@ -54,6 +54,7 @@ from typing import Any, Protocol
 import numpy as np
 from scipy import ndimage
 
+from .envelope import envelope_of_ink, mask_iou
 from .prepare import prepare_sketch
 
 __all__ = [
@@ -86,6 +87,12 @@ _DARK = 0.5
 # hand-made shape distance: chosen on the benchmark's development pairs and the style
 # drawings' refinement (RESULTS.md)
 EMBED_WEIGHT = 4.0
+# one unit of envelope gap (one minus the overlap of the two framed sketches' envelopes,
+# ``refine.envelope``: the outline row by row, where the tree stands) weighs as this much
+# shape distance (issue 48: the silhouette in the search; RESULTS.md, "The tree follows
+# the drawing")
+ENVELOPE_WEIGHT = 2.0
+ENVELOPE_CLOSE = 6 / 256  # of the side: the disk the envelope closes the ink with
 
 
 class Embedder(Protocol):
@@ -225,6 +232,12 @@ class ShapeTarget:
         centre = (filled[trunk_rows] * cols).sum(axis=1) / width[trunk_rows]
         return np.stack([trunk_rows, centre], axis=1)
 
+    @cached_property
+    def envelope(self) -> np.ndarray:
+        """The sketch's envelope as framed (``refine.envelope``; not height-framed: where
+        the tree stands in the frame counts)."""
+        return envelope_of_ink(self.image < _DARK, ENVELOPE_CLOSE * self.size)
+
     @property
     def stem(self) -> float:
         """The trunk's height as a fraction of the drawing's height (0 when blank)."""
@@ -269,6 +282,7 @@ def target_shape_distance(a: ShapeTarget, b: ShapeTarget) -> float:
     if (a.embedding is None) != (b.embedding is None):
         raise ValueError("one sketch has a learned embedding and the other has none")
     d = pyramid_distance(a, b, _level_distance)
+    d += ENVELOPE_WEIGHT * (1.0 - mask_iou(a.envelope, b.envelope))
     if a.embedding is not None and b.embedding is not None:
         d += EMBED_WEIGHT * embedding_distance(a.embedding, b.embedding)
     return d
