@@ -35,7 +35,7 @@ from weberpenn import TreeParams, build_mesh, grow, species
 from weberpenn.params import SPECS
 
 from .prepare import prepare_sketch
-from .shape import ShapeTarget
+from .shape import ShapeTarget, outline_gap
 
 __all__ = [
     "METRICS",
@@ -48,9 +48,15 @@ __all__ = [
     "make_target",
     "metric_distance",
     "prepare_sketch",
+    "search_distance",
     "sketch_distance",
 ]
 
+# one unit of outline gap (``refine.shape.outline_gap``: the envelopes' overlap, the
+# outline row by row and where the tree stands) weighs as this much shape distance in the
+# search (issue 48: the silhouette in the search; RESULTS.md, "The tree follows the
+# drawing")
+ENVELOPE_WEIGHT = 2.0
 _DARK = 0.5  # a pixel darker than this (fraction of white) is a line pixel
 _EMPTY_PENALTY = 1.0
 _FILL_DENSITY = 0.15
@@ -206,6 +212,17 @@ def metric_distance(
     )
 
 
+def search_distance(target: Any, candidate: Any) -> float:
+    """The distance the refinement minimises from a prepared drawing ``target`` to a
+    prepared candidate (both from :func:`make_target` at one size): the metric's own
+    distance, plus ``ENVELOPE_WEIGHT`` times their outline gap with the shape metric (the
+    tree's outline follows the drawn one, not only its lines)."""
+    d = target.distance(candidate)
+    if isinstance(target, ShapeTarget) and isinstance(candidate, ShapeTarget):
+        d += ENVELOPE_WEIGHT * outline_gap(target, candidate)
+    return d
+
+
 @dataclass(frozen=True)
 class PreparedDrawing:
     """The input drawing as every comparison of one run sees it, built once.
@@ -246,8 +263,9 @@ class PreparedDrawing:
 
     def distance(self, sketch: Any) -> float:
         """The search's distance from this drawing to another sketch (framed alike)."""
-        return self.target.distance(
-            make_target(framed(sketch, self.size), self.size, self.metric, self.embedder)
+        return search_distance(
+            self.target,
+            make_target(framed(sketch, self.size), self.size, self.metric, self.embedder),
         )
 
 
@@ -477,8 +495,8 @@ class SketchObjective:
             cand = make_target(framed(img, size), size, self.metric, self.embedder)
         except SketchError:
             blank = np.full((size, size), 255, np.uint8)
-            return target.distance(make_target(blank, size, self.metric, self.embedder))
-        return target.distance(cand)
+            return search_distance(target, make_target(blank, size, self.metric, self.embedder))
+        return search_distance(target, cand)
 
     def view_losses_at(self, x: Sequence[float]) -> tuple[float, ...]:
         """The sketch distance of every view (the first, then the others) at ``x``."""

@@ -67,6 +67,7 @@ __all__ = [
     "filled_shape",
     "ink_pyramid",
     "line_distance",
+    "outline_gap",
     "pyramid_distance",
     "shape_distance",
 ]
@@ -87,11 +88,6 @@ _DARK = 0.5
 # hand-made shape distance: chosen on the benchmark's development pairs and the style
 # drawings' refinement (RESULTS.md)
 EMBED_WEIGHT = 4.0
-# one unit of envelope gap (one minus the overlap of the two framed sketches' envelopes,
-# ``refine.envelope``: the outline row by row, where the tree stands) weighs as this much
-# shape distance (issue 48: the silhouette in the search; RESULTS.md, "The tree follows
-# the drawing")
-ENVELOPE_WEIGHT = 2.0
 ENVELOPE_CLOSE = 6 / 256  # of the side: the disk the envelope closes the ink with
 
 
@@ -282,10 +278,20 @@ def target_shape_distance(a: ShapeTarget, b: ShapeTarget) -> float:
     if (a.embedding is None) != (b.embedding is None):
         raise ValueError("one sketch has a learned embedding and the other has none")
     d = pyramid_distance(a, b, _level_distance)
-    d += ENVELOPE_WEIGHT * (1.0 - mask_iou(a.envelope, b.envelope))
     if a.embedding is not None and b.embedding is not None:
         d += EMBED_WEIGHT * embedding_distance(a.embedding, b.embedding)
     return d
+
+
+def outline_gap(a: ShapeTarget, b: ShapeTarget) -> float:
+    """One minus the overlap of two framed sketches' envelopes (``refine.envelope``): how
+    far one's outline row by row, and where it stands in the frame, is from the other's.
+    The search adds it to the shape distance (``refine.objective.search_distance``); the
+    shape distance itself stays blind to it, since an envelope moves with line width and
+    drawing style where the shape distance must not."""
+    if a.image.shape != b.image.shape:
+        raise ValueError(f"sketch sizes differ: {a.image.shape} vs {b.image.shape}")
+    return 1.0 - mask_iou(a.envelope, b.envelope)
 
 
 def embedding_distance(a: np.ndarray, b: np.ndarray) -> float:

@@ -75,7 +75,7 @@ def test_blank_pictures():
 def test_the_search_distance_counts_the_envelope_gap(monkeypatch: pytest.MonkeyPatch) -> None:
     # issue 48: the refinement's distance rewards the outline where the tree stands in
     # the frame; two crowns alike but for a flat top differ by the envelope term
-    from refine import shape
+    from refine import objective, shape
 
     flat, round_ = page(), page()
     outline_box(flat, 30, 150, 60, 196)
@@ -89,8 +89,10 @@ def test_the_search_distance_counts_the_envelope_gap(monkeypatch: pytest.MonkeyP
     a = shape.ShapeTarget.from_image(flat, 128)
     b = shape.ShapeTarget.from_image(round_, 128)
     gap = 1.0 - mask_iou(a.envelope, b.envelope)
-    assert gap > 0.05
-    with_term, weight = a.distance(b), shape.ENVELOPE_WEIGHT
-    monkeypatch.setattr(shape, "ENVELOPE_WEIGHT", 0.0)
-    assert with_term == pytest.approx(a.distance(b) + weight * gap)
-    assert a.distance(a) == 0.0
+    assert gap > 0.05 and shape.outline_gap(a, b) == pytest.approx(gap)
+    # the search adds the gap; the shape distance itself stays without it (style-blind)
+    searched = objective.search_distance(a, b)
+    assert searched == pytest.approx(a.distance(b) + objective.ENVELOPE_WEIGHT * gap)
+    monkeypatch.setattr(objective, "ENVELOPE_WEIGHT", 0.0)
+    assert objective.search_distance(a, b) == pytest.approx(a.distance(b))
+    assert objective.search_distance(a, a) == 0.0
