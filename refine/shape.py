@@ -54,6 +54,8 @@ from typing import Any, Protocol
 import numpy as np
 from scipy import ndimage
 
+from render.reader import trunk_axis
+
 from .envelope import envelope_of_ink, mask_iou
 from .prepare import prepare_sketch
 
@@ -128,9 +130,7 @@ def _frame_by_height(ink: np.ndarray) -> np.ndarray:
     ys = np.flatnonzero(ink.any(axis=1))
     xs = np.flatnonzero(ink.any(axis=0))
     top, bottom, left, right = ys[0], ys[-1], xs[0], xs[-1]
-    base = ink[max(top, bottom - max(2, (bottom - top) // 40)) : bottom + 1]
-    bx = np.flatnonzero(base.any(axis=0))
-    axis = (bx[0] + bx[-1] + 1) / 2.0
+    axis = trunk_axis(ink)
     half = max(axis - left, right + 1 - axis, 0.5)
     scale = min((FRAME_BOTTOM - FRAME_EDGE) * side / (bottom - top + 1), 0.5 * side / half)
     rows = (np.arange(side) + 0.5 - FRAME_BOTTOM * side) / scale + bottom + 0.5
