@@ -15,8 +15,11 @@ drawing and the returned tree's sketch (``Result.input_sketch``, ``sketch_before
 ``sketch_after``), at the pipeline's default settings (``--budget`` 40, ``--set``), on the
 first ``--people`` held-out people's tree drawings (``eval.people``, strokes) and the
 paper's ten (its five drawings as published and as light pencil on grey paper, as
-``bench_species.py paper`` makes them); ``--only people`` or ``paper`` for one set.  The
-sketches are kept beside the ``--json`` (``.npz``) for ``--follow-png``.
+``bench_species.py paper`` makes them) and, with ``--pairs N``, N code-made trees per
+species drawn in the doodle style from two sides 90 degrees apart (seeds
+``--first-seed``+), refined with both drawings: each view's overlap (does a narrow side
+stay narrow?); ``--only people``, ``paper`` or ``pairs`` for one set.  The sketches are
+kept beside the ``--json`` (``.npz``).
 
 ``warning``: 50 pictures that are not trees, made by code (noise of several densities,
 circles, ellipses, squares, a house, a face, text in PIL's default font, random strokes, a
@@ -89,14 +92,18 @@ def machine() -> str:
 
 
 def tree_drawings(
-    first_seed: int, per_species: int, side: bool = False, only: Sequence[str] | None = None
+    first_seed: int,
+    per_species: int,
+    side: bool = False,
+    only: Sequence[str] | None = None,
+    style: str | None = None,
 ) -> list[dict]:
     """Held-out-style drawings: per species ``per_species`` trees (seeds ``first_seed``+),
     each drawn in a style other than "sg" at a random yaw.  Dicts with the drawing, the
     ground-truth params, species, style and view yaw; ``side``: also ``"side"``, the same
     tree drawn in the same style from 90 degrees further round (drawn after the first, so
     the first drawing is the same with or without it).  ``only``: those species' drawings
-    alone, each the same as in the whole set."""
+    alone, each the same as in the whole set; ``style``: every drawing in that style."""
     out = []
     for si, name in enumerate(species.SPECIES):
         if only is not None and name not in only:
@@ -104,18 +111,18 @@ def tree_drawings(
         for k in range(per_species):
             seed = first_seed + k
             rng = np.random.default_rng([seed, si])
-            style = HELD_OUT_STYLES[(k + si) % len(HELD_OUT_STYLES)]
+            drawn = style or HELD_OUT_STYLES[(k + si) % len(HELD_OUT_STYLES)]
             yaw = float(rng.uniform(0.0, 360.0))
             gt = species.sample(name, seed=seed)
             renderer = SketchRenderer(build_mesh(grow(gt)), species=name)
-            img = draw(style, Silhouettes.from_parts(renderer.parts(yaw, SIZE)), rng, SIZE)
+            img = draw(drawn, Silhouettes.from_parts(renderer.parts(yaw, SIZE)), rng, SIZE)
             out.append(
-                {"name": f"{name}{seed}", "species": name, "seed": seed, "style": style,
+                {"name": f"{name}{seed}", "species": name, "seed": seed, "style": drawn,
                  "yaw": yaw, "params": gt, "image": img}
             )  # fmt: skip
             if side:
                 parts = renderer.parts((yaw + 90.0) % 360.0, SIZE)
-                out[-1]["side"] = draw(style, Silhouettes.from_parts(parts), rng, SIZE)
+                out[-1]["side"] = draw(drawn, Silhouettes.from_parts(parts), rng, SIZE)
     return out
 
 
@@ -499,8 +506,10 @@ def paper_drawings() -> list[tuple[str, np.ndarray]]:
     return out
 
 
-def follow_cases(args: argparse.Namespace) -> list[tuple[str, np.ndarray]]:
-    """The ``follow`` part's drawings: (name, image), people's first, then the paper's."""
+def follow_cases(args: argparse.Namespace) -> list[tuple[str, Any]]:
+    """The ``follow`` part's drawings: (name, what the pipeline reads), people's first,
+    then the paper's, then ``--pairs`` code-made trees per species drawn in the doodle
+    style from two sides 90 degrees apart (``[front, (side, 90.0)]``)."""
     from eval.people import people_drawings
 
     cases = []
@@ -511,6 +520,9 @@ def follow_cases(args: argparse.Namespace) -> list[tuple[str, np.ndarray]]:
         cases += [(f"people/{first + i:02d}-{d.key}", d.image()) for i, d in enumerate(held)]
     if args.only in (None, "paper"):
         cases += paper_drawings()
+    if args.only in (None, "pairs") and args.pairs > 0:
+        for d in tree_drawings(args.first_seed, args.pairs, side=True, style="doodle"):
+            cases.append((f"pairs/{d['name']}", [d["image"], (d["side"], 90.0)]))
     return cases
 
 
@@ -523,11 +535,16 @@ def part_follow(args: argparse.Namespace) -> dict:
     for name, img in follow_cases(args):
         t = time.perf_counter()
         res = pipe.run(img)
+        views = res.views or (res,)  # each drawn view's sketches (one view: the result's)
+        before = [envelope_overlap(v.input_sketch, v.sketch_before) for v in views]
+        after = [envelope_overlap(v.input_sketch, v.sketch_after) for v in views]
         rec = {
             "name": name,
             "species": res.species,
-            "overlap_before": envelope_overlap(res.input_sketch, res.sketch_before),
-            "overlap_after": envelope_overlap(res.input_sketch, res.sketch_after),
+            "overlap_before": before[0],
+            "overlap_after": after[0],
+            "view_overlaps_before": before,
+            "view_overlaps_after": after,
             "loss_before": res.losses["before"],
             "loss_after": res.losses["after"],
             "first_seconds": res.timings["prepare"] + res.timings["estimate"],
@@ -539,6 +556,8 @@ def part_follow(args: argparse.Namespace) -> dict:
         records.append(rec)
         for key in ("input_sketch", "sketch_before", "sketch_after"):
             sketches[f"{name}/{key}"] = np.asarray(getattr(res, key))
+            for i, v in enumerate(views[1:], 2):
+                sketches[f"{name}/view{i}/{key}"] = np.asarray(getattr(v, key))
         print(
             f"{name:>24} {rec['species']:>7} overlap {rec['overlap_before']:.3f} -> "
             f"{rec['overlap_after']:.3f} loss {rec['loss_before']:.3f} -> "
@@ -558,7 +577,7 @@ def follow_summary(records: list[dict]) -> dict:
     the returned tree, the share of drawings whose overlap the refinement raised, and the
     median seconds (first tree, refinement, whole run)."""
     out = {}
-    for group in ("people", "paper"):
+    for group in ("people", "paper", "pairs"):
         rs = [r for r in records if r["name"].startswith(group + "/")]
         if not rs:
             continue
@@ -571,6 +590,15 @@ def follow_summary(records: list[dict]) -> dict:
             "overlap_before": med("overlap_before"),
             "overlap_after": med("overlap_after"),
             "raised": sum(r["overlap_after"] > r["overlap_before"] for r in rs) / len(rs),
+            # every drawn view's overlap (two-drawing pairs: the side's too)
+            "view_overlaps_after": [
+                float(
+                    statistics.median(
+                        r.get("view_overlaps_after", [r["overlap_after"]])[i] for r in rs
+                    )
+                )
+                for i in range(len(rs[0].get("view_overlaps_after", [0])))
+            ],
             "loss_before": med("loss_before"),
             "loss_after": med("loss_after"),
             "first_seconds": med("first_seconds"),
@@ -600,7 +628,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--people-from", type=int, default=0, help="follow: the first people's drawing's index"
     )
-    ap.add_argument("--only", choices=("people", "paper"), default=None, help="follow: one set")
+    ap.add_argument(
+        "--only", choices=("people", "paper", "pairs"), default=None, help="follow: one set"
+    )
+    ap.add_argument(
+        "--pairs", type=int, default=0, help="follow: two-drawing doodle pairs per species"
+    )
     ap.add_argument("--budget", type=int, default=None, help="20 for warning, 40 for refine")
     ap.add_argument("--per-species", type=int, default=5)
     ap.add_argument(
