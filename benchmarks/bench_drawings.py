@@ -6,6 +6,20 @@
         --json /work/data/bench_drawings_refine.json
     .venv/bin/python benchmarks/bench_drawings.py --part estimate
     .venv/bin/python benchmarks/bench_drawings.py --markdown FILE.json
+    nice -n 5 .venv/bin/python benchmarks/bench_drawings.py --part follow --people 40 \\
+        --json /tmp/follow.json
+
+``follow`` (issue 48): does the tree follow the drawing's outline?  The envelope overlap
+(``eval.envelope``) of the prepared drawing and the first estimate's sketch, and of the
+drawing and the returned tree's sketch (``Result.input_sketch``, ``sketch_before``,
+``sketch_after``), at the pipeline's default settings (``--budget`` 40, ``--set``), on the
+first ``--people`` held-out people's tree drawings (``eval.people``, strokes) and the
+paper's ten (its five drawings as published and as light pencil on grey paper, as
+``bench_species.py paper`` makes them) and, with ``--pairs N``, N code-made trees per
+species drawn in the doodle style from two sides 90 degrees apart (seeds
+``--first-seed``+), refined with both drawings: each view's overlap (does a narrow side
+stay narrow?); ``--only people``, ``paper`` or ``pairs`` for one set.  The sketches are
+kept beside the ``--json`` (``.npz``).
 
 ``warning``: 50 pictures that are not trees, made by code (noise of several densities,
 circles, ellipses, squares, a house, a face, text in PIL's default font, random strokes, a
@@ -37,7 +51,6 @@ after one warm-up.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import math
 import os
@@ -51,6 +64,7 @@ from typing import Any
 
 import numpy as np
 
+from benchmarks.lib.settings import setting
 from eval.pictures import non_trees
 from render.sketch import SketchRenderer
 from render.styles import Silhouettes, draw
@@ -78,14 +92,18 @@ def machine() -> str:
 
 
 def tree_drawings(
-    first_seed: int, per_species: int, side: bool = False, only: Sequence[str] | None = None
+    first_seed: int,
+    per_species: int,
+    side: bool = False,
+    only: Sequence[str] | None = None,
+    style: str | None = None,
 ) -> list[dict]:
     """Held-out-style drawings: per species ``per_species`` trees (seeds ``first_seed``+),
     each drawn in a style other than "sg" at a random yaw.  Dicts with the drawing, the
     ground-truth params, species, style and view yaw; ``side``: also ``"side"``, the same
     tree drawn in the same style from 90 degrees further round (drawn after the first, so
     the first drawing is the same with or without it).  ``only``: those species' drawings
-    alone, each the same as in the whole set."""
+    alone, each the same as in the whole set; ``style``: every drawing in that style."""
     out = []
     for si, name in enumerate(species.SPECIES):
         if only is not None and name not in only:
@@ -93,18 +111,18 @@ def tree_drawings(
         for k in range(per_species):
             seed = first_seed + k
             rng = np.random.default_rng([seed, si])
-            style = HELD_OUT_STYLES[(k + si) % len(HELD_OUT_STYLES)]
+            drawn = style or HELD_OUT_STYLES[(k + si) % len(HELD_OUT_STYLES)]
             yaw = float(rng.uniform(0.0, 360.0))
             gt = species.sample(name, seed=seed)
             renderer = SketchRenderer(build_mesh(grow(gt)), species=name)
-            img = draw(style, Silhouettes.from_parts(renderer.parts(yaw, SIZE)), rng, SIZE)
+            img = draw(drawn, Silhouettes.from_parts(renderer.parts(yaw, SIZE)), rng, SIZE)
             out.append(
-                {"name": f"{name}{seed}", "species": name, "seed": seed, "style": style,
+                {"name": f"{name}{seed}", "species": name, "seed": seed, "style": drawn,
                  "yaw": yaw, "params": gt, "image": img}
             )  # fmt: skip
             if side:
                 parts = renderer.parts((yaw + 90.0) % 360.0, SIZE)
-                out[-1]["side"] = draw(style, Silhouettes.from_parts(parts), rng, SIZE)
+                out[-1]["side"] = draw(drawn, Silhouettes.from_parts(parts), rng, SIZE)
     return out
 
 
@@ -222,29 +240,6 @@ def settings(args: argparse.Namespace, **more: Any) -> RefineSettings:
         embedding=args.embedding,
         **(dict(args.set) | more),
     ).validate()
-
-
-def setting(text: str) -> tuple[str, Any]:
-    """``--set KEY=VALUE``: one RefineSettings field, VALUE read as its default's type."""
-    key, sep, value = text.partition("=")
-    fields = {f.name: f for f in dataclasses.fields(RefineSettings)}
-    if not sep or key not in fields:
-        raise argparse.ArgumentTypeError(
-            f"{text!r}: expected KEY=VALUE with KEY one of {', '.join(fields)}"
-        )
-    kind = type(getattr(RefineSettings(), key))
-    if kind is bool:
-        if value.lower() not in ("true", "false"):
-            raise argparse.ArgumentTypeError(f"{key} takes true or false, got {value!r}")
-        return key, value.lower() == "true"
-    if kind is tuple:  # e.g. hold=scaleV,rSplits2 (empty: none)
-        return key, tuple(v.strip() for v in value.split(",") if v.strip())
-    if kind not in (int, float, str):
-        raise argparse.ArgumentTypeError(f"{key} cannot be set from the command line")
-    try:
-        return key, kind(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{key} takes a {kind.__name__}, got {value!r}") from None
 
 
 def part_warning(args: argparse.Namespace) -> dict:
@@ -491,6 +486,128 @@ def markdown(doc: dict) -> str:
     return "\n".join(lines)
 
 
+def paper_drawings() -> list[tuple[str, np.ndarray]]:
+    """The paper's five drawings as published and as light pencil on grey paper (the
+    "ten drawings"; made as ``bench_species.py paper`` makes them, same seed)."""
+    from PIL import Image
+
+    from benchmarks.bench_species import PAPER_SPECIES, PAPER_STRIP, cut_at_blank_columns
+
+    page = np.asarray(Image.open(PAPER_STRIP).convert("L"))
+    rng = np.random.default_rng(0)
+    out = []
+    for name, img in zip(
+        PAPER_SPECIES, cut_at_blank_columns(page, len(PAPER_SPECIES)), strict=True
+    ):
+        h, w = img.shape
+        light = np.linspace(150.0, 205.0, w)[None, :] - 0.4 * (255.0 - img)
+        grey = np.clip(light + rng.normal(0.0, 4.0, (h, w)), 0, 255).astype(np.uint8)
+        out += [(f"paper/{name}", img), (f"paper/{name}-pencil", grey)]
+    return out
+
+
+def follow_cases(args: argparse.Namespace) -> list[tuple[str, Any]]:
+    """The ``follow`` part's drawings: (name, what the pipeline reads), people's first,
+    then the paper's, then ``--pairs`` code-made trees per species drawn in the doodle
+    style from two sides 90 degrees apart (``[front, (side, 90.0)]``)."""
+    from eval.people import people_drawings
+
+    cases = []
+    if args.only in (None, "people"):
+        held = people_drawings("held", ("strokes",), ("tree",))
+        first = args.people_from
+        held = held[first : first + args.people]
+        cases += [(f"people/{first + i:02d}-{d.key}", d.image()) for i, d in enumerate(held)]
+    if args.only in (None, "paper"):
+        cases += paper_drawings()
+    if args.only in (None, "pairs") and args.pairs > 0:
+        for d in tree_drawings(args.first_seed, args.pairs, side=True, style="doodle"):
+            cases.append((f"pairs/{d['name']}", [d["image"], (d["side"], 90.0)]))
+    return cases
+
+
+def part_follow(args: argparse.Namespace) -> dict:
+    from eval.envelope import envelope_overlap
+
+    pipe = Pipeline("tsn", settings(args))
+    records: list[dict] = []
+    sketches: dict[str, np.ndarray] = {}
+    for name, img in follow_cases(args):
+        t = time.perf_counter()
+        res = pipe.run(img)
+        views = res.views or (res,)  # each drawn view's sketches (one view: the result's)
+        before = [envelope_overlap(v.input_sketch, v.sketch_before) for v in views]
+        after = [envelope_overlap(v.input_sketch, v.sketch_after) for v in views]
+        rec = {
+            "name": name,
+            "species": res.species,
+            "overlap_before": before[0],
+            "overlap_after": after[0],
+            "view_overlaps_before": before,
+            "view_overlaps_after": after,
+            "loss_before": res.losses["before"],
+            "loss_after": res.losses["after"],
+            "first_seconds": res.timings["prepare"] + res.timings["estimate"],
+            "refine_seconds": res.timings["refine"],
+            "seconds": time.perf_counter() - t,
+            "yaw": res.yaw,
+            "params": res.params.to_dict(),
+        }
+        records.append(rec)
+        for key in ("input_sketch", "sketch_before", "sketch_after"):
+            sketches[f"{name}/{key}"] = np.asarray(getattr(res, key))
+            for i, v in enumerate(views[1:], 2):
+                sketches[f"{name}/view{i}/{key}"] = np.asarray(getattr(v, key))
+        print(
+            f"{name:>24} {rec['species']:>7} overlap {rec['overlap_before']:.3f} -> "
+            f"{rec['overlap_after']:.3f} loss {rec['loss_before']:.3f} -> "
+            f"{rec['loss_after']:.3f} {rec['seconds']:.1f}s",
+            flush=True,
+        )
+        if args.json is not None:
+            partial = {"part": "follow", "records": records, "summary": follow_summary(records)}
+            atomic_write(args.json, json.dumps(partial | {"machine": machine()}, indent=1))
+            with atomic_target(args.json.with_suffix(".npz")) as tmp, open(tmp, "wb") as fh:
+                np.savez_compressed(fh, **sketches)
+    return {"records": records, "summary": follow_summary(records)}
+
+
+def follow_summary(records: list[dict]) -> dict:
+    """Per set (people's, the paper's): the median overlap of the first estimate and of
+    the returned tree, the share of drawings whose overlap the refinement raised, and the
+    median seconds (first tree, refinement, whole run)."""
+    out = {}
+    for group in ("people", "paper", "pairs"):
+        rs = [r for r in records if r["name"].startswith(group + "/")]
+        if not rs:
+            continue
+
+        def med(key: str, rs: list[dict] = rs) -> float:
+            return float(statistics.median(r[key] for r in rs))
+
+        out[group] = {
+            "n": len(rs),
+            "overlap_before": med("overlap_before"),
+            "overlap_after": med("overlap_after"),
+            "raised": sum(r["overlap_after"] > r["overlap_before"] for r in rs) / len(rs),
+            # every drawn view's overlap (two-drawing pairs: the side's too)
+            "view_overlaps_after": [
+                float(
+                    statistics.median(
+                        r.get("view_overlaps_after", [r["overlap_after"]])[i] for r in rs
+                    )
+                )
+                for i in range(len(rs[0].get("view_overlaps_after", [0])))
+            ],
+            "loss_before": med("loss_before"),
+            "loss_after": med("loss_after"),
+            "first_seconds": med("first_seconds"),
+            "refine_seconds": med("refine_seconds"),
+            "seconds": med("seconds"),
+        }
+    return out
+
+
 def species_list(text: str) -> tuple[str, ...]:
     """``--species``: comma-separated species names (``weberpenn.species.canonical``)."""
     try:
@@ -504,7 +621,19 @@ def species_list(text: str) -> tuple[str, ...]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--part", choices=("warning", "refine", "estimate"), default="warning")
+    ap.add_argument(
+        "--part", choices=("warning", "refine", "estimate", "follow"), default="warning"
+    )
+    ap.add_argument("--people", type=int, default=40, help="follow: people's drawings")
+    ap.add_argument(
+        "--people-from", type=int, default=0, help="follow: the first people's drawing's index"
+    )
+    ap.add_argument(
+        "--only", choices=("people", "paper", "pairs"), default=None, help="follow: one set"
+    )
+    ap.add_argument(
+        "--pairs", type=int, default=0, help="follow: two-drawing doodle pairs per species"
+    )
     ap.add_argument("--budget", type=int, default=None, help="20 for warning, 40 for refine")
     ap.add_argument("--per-species", type=int, default=5)
     ap.add_argument(
@@ -557,12 +686,17 @@ def main(argv: list[str] | None = None) -> int:
         print(markdown(json.loads(args.rescore.read_text())))
         return 0
     if args.budget is None:
-        args.budget = 20 if args.part == "warning" else 40
+        args.budget = 20 if args.part == "warning" else 40  # follow: the default, 40
     try:
         settings(args)
     except ValueError as exc:
         ap.error(str(exc))
-    run = {"warning": part_warning, "refine": part_refine, "estimate": part_estimate}[args.part]
+    run = {
+        "warning": part_warning,
+        "refine": part_refine,
+        "estimate": part_estimate,
+        "follow": part_follow,
+    }[args.part]
     t = time.perf_counter()
     doc = {"part": args.part, "args": {k: str(v) for k, v in vars(args).items()}}
     doc |= run(args)

@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from benchmarks.lib.settings import setting
 from eval.hausdorff import (
     DEFAULT_SAMPLES,
     FAMILY,
@@ -376,6 +377,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--time-limit", type=float, default=RefineSettings().time_limit)
     ap.add_argument("--samples", type=int, default=DEFAULT_SAMPLES)
     ap.add_argument(
+        "--set",
+        type=setting,
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a RefineSettings field (repeatable), e.g. fit_start=false",
+    )
+    ap.add_argument(
         "--known-yaw",
         action="store_true",
         help="keep the view at the front, the sketch's true view (an oracle): no yaw search",
@@ -398,6 +407,7 @@ def main(argv: list[str] | None = None) -> int:
             budget=args.budget,
             time_limit=args.time_limit,
             search_yaw=not args.known_yaw,
+            **dict(args.set),
         ).validate()
     except ValueError as e:
         ap.error(str(e))

@@ -519,7 +519,7 @@ PAPER_STRIP = Path(__file__).resolve().parents[2] / "shared" / "reference" / "st
 PAPER_SPECIES = ("maple", "palm", "pine", "cherry", "bonsai")  # the figure, left to right
 
 
-def _cut_at_blank_columns(page: np.ndarray, n: int, gap: int = 3) -> list[np.ndarray]:
+def cut_at_blank_columns(page: np.ndarray, n: int, gap: int = 3) -> list[np.ndarray]:
     """The ``n`` drawings of a strip, cut in the middle of the ``n - 1`` widest runs of at
     least ``gap`` blank columns."""
     inked = np.flatnonzero((page < 128).any(axis=0))
@@ -537,7 +537,7 @@ def paper(args: argparse.Namespace) -> None:
     from treesketch import Pipeline
 
     page = np.asarray(Image.open(args.strip).convert("L"))
-    drawings = _cut_at_blank_columns(page, len(PAPER_SPECIES))
+    drawings = cut_at_blank_columns(page, len(PAPER_SPECIES))
     rng = np.random.default_rng(0)
     pipe = Pipeline(args.checkpoint or "tsn")
     print(f"## Species of the paper's drawings ({args.strip.name}), {_stamp()}\n")

@@ -20,6 +20,7 @@ results by (rounded) point and reusing the last tree's scene when only the yaw m
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Sequence
@@ -34,7 +35,7 @@ from weberpenn import TreeParams, build_mesh, grow, species
 from weberpenn.params import SPECS
 
 from .prepare import prepare_sketch
-from .shape import ShapeTarget
+from .shape import ShapeTarget, outline_gap
 
 __all__ = [
     "METRICS",
@@ -47,9 +48,15 @@ __all__ = [
     "make_target",
     "metric_distance",
     "prepare_sketch",
+    "search_distance",
     "sketch_distance",
 ]
 
+# one unit of outline gap (``refine.shape.outline_gap``: the envelopes' overlap, the
+# outline row by row and where the tree stands) weighs as this much shape distance in the
+# search (issue 48: the silhouette in the search; RESULTS.md, "The tree follows the
+# drawing")
+ENVELOPE_WEIGHT = 2.0
 _DARK = 0.5  # a pixel darker than this (fraction of white) is a line pixel
 _EMPTY_PENALTY = 1.0
 _FILL_DENSITY = 0.15
@@ -205,6 +212,17 @@ def metric_distance(
     )
 
 
+def search_distance(target: Any, candidate: Any) -> float:
+    """The distance the refinement minimises from a prepared drawing ``target`` to a
+    prepared candidate (both from :func:`make_target` at one size): the metric's own
+    distance, plus ``ENVELOPE_WEIGHT`` times their outline gap with the shape metric (the
+    tree's outline follows the drawn one, not only its lines)."""
+    d = target.distance(candidate)
+    if isinstance(target, ShapeTarget) and isinstance(candidate, ShapeTarget):
+        d += ENVELOPE_WEIGHT * outline_gap(target, candidate)
+    return d
+
+
 @dataclass(frozen=True)
 class PreparedDrawing:
     """The input drawing as every comparison of one run sees it, built once.
@@ -245,8 +263,9 @@ class PreparedDrawing:
 
     def distance(self, sketch: Any) -> float:
         """The search's distance from this drawing to another sketch (framed alike)."""
-        return self.target.distance(
-            make_target(framed(sketch, self.size), self.size, self.metric, self.embedder)
+        return search_distance(
+            self.target,
+            make_target(framed(sketch, self.size), self.size, self.metric, self.embedder),
         )
 
 
@@ -278,6 +297,9 @@ class SearchSpace:
     dims: tuple[species.Unfixed, ...]
     search_yaw: bool = True
     fixed_yaw: float = 0.0
+    # keys held at ``base``'s values whatever the species' (``species.project``'s
+    # ``keep``: the drawn outline of ``refine.start``)
+    keep: tuple[str, ...] = ()
 
     @classmethod
     def create(
@@ -287,6 +309,7 @@ class SearchSpace:
         keys: Sequence[str] | None = None,
         search_yaw: bool = True,
         yaw: float = 0.0,
+        keep: Sequence[str] = (),
     ) -> SearchSpace:
         name = species.canonical(name)
         levels = int(base["levels"])
@@ -304,10 +327,11 @@ class SearchSpace:
             rows = [u for u in rows if u.key in wanted or u.label in wanted]
         return cls(
             name,
-            species.project(name, base, search=True),
+            species.project(name, base, search=True, keep=keep),
             tuple(rows),
             search_yaw,
             float(yaw) % 360.0,
+            tuple(keep),
         )
 
     @property
@@ -334,7 +358,7 @@ class SearchSpace:
                 vec = list(values[u.key])
                 vec[u.index] = v
                 values[u.key] = vec
-        return species.project(self.species, TreeParams(values), search=True)
+        return species.project(self.species, TreeParams(values), search=True, keep=self.keep)
 
     def yaw(self, x: Sequence[float]) -> float:
         if not self.search_yaw:
@@ -342,7 +366,7 @@ class SearchSpace:
         return float(np.clip(x[len(self.dims)], 0.0, 1.0) * 360.0) % 360.0
 
     def from_params(self, params: TreeParams, yaw: float = 0.0) -> np.ndarray:
-        p = species.project(self.species, params, search=True).to_dict()
+        p = species.project(self.species, params, search=True, keep=self.keep).to_dict()
         xs = []
         for u in self.dims:
             v = p[u.key] if u.index is None else p[u.key][u.index]
@@ -355,7 +379,7 @@ class SearchSpace:
         """The same space minus the dimensions whose key (or label) is in ``keys``."""
         drop = set(keys)
         dims = tuple(u for u in self.dims if u.key not in drop and u.label not in drop)
-        return SearchSpace(self.species, self.base, dims, self.search_yaw, self.fixed_yaw)
+        return dataclasses.replace(self, dims=dims)
 
     def live(self, probe: float = 0.25) -> SearchSpace:
         """The same space minus its dead dimensions: those that do not change the grown
@@ -391,7 +415,7 @@ class SearchSpace:
                 if not same(signature(self.to_params(x)), ref):
                     keep.append(u)
                     break
-        return SearchSpace(self.species, self.base, tuple(keep), self.search_yaw, self.fixed_yaw)
+        return dataclasses.replace(self, dims=tuple(keep))
 
 
 # --------------------------------------------------------------------------- objective
@@ -471,8 +495,8 @@ class SketchObjective:
             cand = make_target(framed(img, size), size, self.metric, self.embedder)
         except SketchError:
             blank = np.full((size, size), 255, np.uint8)
-            return target.distance(make_target(blank, size, self.metric, self.embedder))
-        return target.distance(cand)
+            return search_distance(target, make_target(blank, size, self.metric, self.embedder))
+        return search_distance(target, cand)
 
     def view_losses_at(self, x: Sequence[float]) -> tuple[float, ...]:
         """The sketch distance of every view (the first, then the others) at ``x``."""

@@ -33,6 +33,7 @@ from weberpenn import TreeParams, species
 from weberpenn.params import SPECS
 
 from .objective import METRICS, OtherView, PreparedDrawing, SearchSpace, SketchObjective
+from .start import choose_start
 
 __all__ = [
     "ALGORITHMS",
@@ -223,6 +224,8 @@ class RefineSettings:
     metric: str = "shape"
     fast_sketch: bool = True
     embedding: str = "shipped"
+    # start from the drawn outline (``refine.start``) when it is nearer than the estimate
+    fit_start: bool = True
 
     def replace(self, **changes: Any) -> RefineSettings:
         return dataclasses.replace(self, **changes).validate()
@@ -254,8 +257,9 @@ class RefineSettings:
             raise ValueError(
                 f"metric must be one of {', '.join(METRICS)}, got {_shown(self.metric)}"
             )
-        if not isinstance(self.fast_sketch, bool):
-            raise ValueError(f"fast_sketch must be True or False, got {self.fast_sketch!r}")
+        for flag in ("fast_sketch", "fit_start"):
+            if not isinstance(getattr(self, flag), bool):
+                raise ValueError(f"{flag} must be True or False, got {getattr(self, flag)!r}")
         e = self.embedding
         if not isinstance(e, str) or not (e in EMBEDDINGS or Path(e).is_file()):
             raise ValueError(
@@ -327,8 +331,15 @@ def refine(
     if yaw is None and not cfg.search_yaw:
         yaw = 0.0
 
+    keep: tuple[str, ...] = ()
+    # the drawn outline, when it fits better than the estimate's; not for a species whose
+    # trunk bends freely (palm, bonsai): there the bends tried at the start find the
+    # drawn trunk, and a start fitted to a bent trunk's outline leads them astray
+    # (tests/test_refine_search.py, the trunk bent the other way)
+    if cfg.fit_start and _species.TRUNK_BEND[0][0] not in _bending_keys(name):
+        initial_params, keep = choose_start(drawing, initial_params, name, yaw or 0.0)
     space = SearchSpace.create(
-        name, initial_params, cfg.keys, search_yaw=yaw is None, yaw=yaw or 0.0
+        name, initial_params, cfg.keys, search_yaw=yaw is None, yaw=yaw or 0.0, keep=keep
     )
     space = space.without([str(k) for k in cfg.hold])
     # liveness is judged at the start's values: a value that does not change this tree
@@ -558,6 +569,12 @@ def _result(
         view_losses_before=view_before,
         view_losses_after=view_after,
     )
+
+
+def _bending_keys(name: str) -> set[str]:
+    """The keys of the species' free values that bend the trunk (``species.TRUNK_BEND``)."""
+    rows = list(species.unfixed(name)) + list(species.search_freedoms(name))
+    return {u.key for u in rows if (u.key, u.index) in species.TRUNK_BEND and u.free}
 
 
 def bend_starts(space: SearchSpace, x: np.ndarray) -> list[np.ndarray]:

@@ -54,6 +54,9 @@ from typing import Any, Protocol
 import numpy as np
 from scipy import ndimage
 
+from render.reader import trunk_axis
+
+from .envelope import envelope_of_ink, mask_iou
 from .prepare import prepare_sketch
 
 __all__ = [
@@ -66,6 +69,7 @@ __all__ = [
     "filled_shape",
     "ink_pyramid",
     "line_distance",
+    "outline_gap",
     "pyramid_distance",
     "shape_distance",
 ]
@@ -86,6 +90,7 @@ _DARK = 0.5
 # hand-made shape distance: chosen on the benchmark's development pairs and the style
 # drawings' refinement (RESULTS.md)
 EMBED_WEIGHT = 4.0
+ENVELOPE_CLOSE = 6 / 256  # of the side: the disk the envelope closes the ink with
 
 
 class Embedder(Protocol):
@@ -125,9 +130,7 @@ def _frame_by_height(ink: np.ndarray) -> np.ndarray:
     ys = np.flatnonzero(ink.any(axis=1))
     xs = np.flatnonzero(ink.any(axis=0))
     top, bottom, left, right = ys[0], ys[-1], xs[0], xs[-1]
-    base = ink[max(top, bottom - max(2, (bottom - top) // 40)) : bottom + 1]
-    bx = np.flatnonzero(base.any(axis=0))
-    axis = (bx[0] + bx[-1] + 1) / 2.0
+    axis = trunk_axis(ink)
     half = max(axis - left, right + 1 - axis, 0.5)
     scale = min((FRAME_BOTTOM - FRAME_EDGE) * side / (bottom - top + 1), 0.5 * side / half)
     rows = (np.arange(side) + 0.5 - FRAME_BOTTOM * side) / scale + bottom + 0.5
@@ -225,6 +228,12 @@ class ShapeTarget:
         centre = (filled[trunk_rows] * cols).sum(axis=1) / width[trunk_rows]
         return np.stack([trunk_rows, centre], axis=1)
 
+    @cached_property
+    def envelope(self) -> np.ndarray:
+        """The sketch's envelope as framed (``refine.envelope``; not height-framed: where
+        the tree stands in the frame counts)."""
+        return envelope_of_ink(self.image < _DARK, ENVELOPE_CLOSE * self.size)
+
     @property
     def stem(self) -> float:
         """The trunk's height as a fraction of the drawing's height (0 when blank)."""
@@ -272,6 +281,17 @@ def target_shape_distance(a: ShapeTarget, b: ShapeTarget) -> float:
     if a.embedding is not None and b.embedding is not None:
         d += EMBED_WEIGHT * embedding_distance(a.embedding, b.embedding)
     return d
+
+
+def outline_gap(a: ShapeTarget, b: ShapeTarget) -> float:
+    """One minus the overlap of two framed sketches' envelopes (``refine.envelope``): how
+    far one's outline row by row, and where it stands in the frame, is from the other's.
+    The search adds it to the shape distance (``refine.objective.search_distance``); the
+    shape distance itself stays blind to it, since an envelope moves with line width and
+    drawing style where the shape distance must not."""
+    if a.image.shape != b.image.shape:
+        raise ValueError(f"sketch sizes differ: {a.image.shape} vs {b.image.shape}")
+    return 1.0 - mask_iou(a.envelope, b.envelope)
 
 
 def embedding_distance(a: np.ndarray, b: np.ndarray) -> float:

@@ -50,6 +50,7 @@ __all__ = [
     "ink_mask",
     "read_sketch",
     "tree_ink",
+    "trunk_axis",
 ]
 
 MAX_BYTES = 10 * 1024 * 1024  # an encoded sketch larger than this is refused unread
@@ -801,14 +802,66 @@ def _drop_ruled_lines(ink: np.ndarray) -> np.ndarray:
     return out
 
 
+# a trunk drawn as two lines, one ending lower than the other: its partner is looked for
+# up to this much of the drawing's height above the lowest ink, at most PARTNER_REACH of
+# the height beside it; a base narrower than SINGLE_LINE of the height is one line
+PARTNER_RISE = 0.15
+PARTNER_REACH = 0.7
+SINGLE_LINE = 0.05
+
+
+def _runs(row: np.ndarray) -> list[tuple[int, int]]:
+    """(first, last) columns of each run of ink in a row (gaps of one pixel bridged)."""
+    xs = np.flatnonzero(row)
+    if xs.size == 0:
+        return []
+    cut = np.flatnonzero(np.diff(xs) > 2)
+    return list(zip(xs[np.r_[0, cut + 1]], xs[np.r_[cut, xs.size - 1]], strict=True))
+
+
+def _gap(a: tuple[int, int], b: tuple[int, int]) -> int:
+    """Columns between two runs (0 when they touch or overlap)."""
+    return max(0, a[0] - b[1], b[0] - a[1])
+
+
+def trunk_axis(ink: np.ndarray) -> float:
+    """The column of the trunk's axis at its base (``ink`` bool, not blank): the middle
+    of the lowest rows' ink.  People draw a trunk as two lines that seldom end on one
+    row: when the lowest rows hold one thin line, the axis is the middle of it and the
+    nearest line beside it a little higher up (the trunk's other side), not the line
+    alone (which would frame the tree half off the centre line)."""
+    ys = np.flatnonzero(ink.any(axis=1))
+    top, bottom = int(ys[0]), int(ys[-1])
+    h = bottom - top + 1
+    bx = np.flatnonzero(ink[max(top, bottom - max(2, (bottom - top) // 40)) : bottom + 1].any(0))
+    lo, hi = int(bx[0]), int(bx[-1])
+    if hi - lo + 1 <= SINGLE_LINE * h and len(_runs(ink[bottom])) <= 1:
+        reach, at = PARTNER_REACH * h, (lo, hi)  # the line followed up as it slants
+        for r in range(bottom - 1, max(top, bottom - int(PARTNER_RISE * h)) - 1, -1):
+            runs = _runs(ink[r])
+            mine = [u for u in runs if u[0] - 2 <= at[1] and u[1] + 2 >= at[0]]
+            if not mine:
+                break
+            at = (min(u[0] for u in mine), max(u[1] for u in mine))
+            other = [u for u in runs if u not in mine and _gap(u, at) < reach]
+            if other:
+                partner = min(other, key=lambda u: _gap(u, at))
+                axis = (min(at[0], partner[0]) + max(at[1], partner[1]) + 1) / 2.0
+                # the other side only when it puts the tree over its trunk: beside a
+                # trunk drawn as one line, the low leaves of a crown are not its side
+                above = np.flatnonzero(ink[top : r - int(PARTNER_RISE * h) + 1].any(axis=0))
+                middle = (above[0] + above[-1] + 1) / 2.0 if above.size else axis
+                if abs(middle - axis) < abs(middle - (lo + hi + 1) / 2.0):
+                    return axis
+                break
+    return (lo + hi + 1) / 2.0
+
+
 def _axis_and_box(ink: np.ndarray) -> tuple[int, int, int, int, float]:
     ys = np.flatnonzero(ink.any(axis=1))
     xs = np.flatnonzero(ink.any(axis=0))
     top, bottom, left, right = int(ys[0]), int(ys[-1]), int(xs[0]), int(xs[-1])
-    base_rows = ink[max(top, bottom - max(2, (bottom - top) // 40)) : bottom + 1]
-    bx = np.flatnonzero(base_rows.any(axis=0))
-    axis = (bx[0] + bx[-1] + 1) / 2.0
-    return top, bottom, left, right, float(axis)
+    return top, bottom, left, right, trunk_axis(ink)
 
 
 def normalise_drawing(img: np.ndarray, size: int = DRAWING_SIDE) -> np.ndarray:

@@ -436,3 +436,41 @@ def test_finding_the_tree_is_quick() -> None:
     for _ in range(5):
         tree_ink(ink)
     assert (time.process_time() - start) / 5 < 0.02  # a few ms at 512 px
+
+
+def _two_line_trunk(left_end: int, right_end: int) -> np.ndarray:
+    im = Image.new("L", (300, 300), 255)
+    d = ImageDraw.Draw(im)
+    d.ellipse([70, 30, 230, 150], outline=0, width=3)
+    d.line([(135, 148), (122, left_end)], fill=0, width=3)  # slanting out, as drawn
+    d.line([(165, 148), (178, right_end)], fill=0, width=3)
+    return normalise_drawing(np.asarray(im), 256) < 128
+
+
+@pytest.mark.parametrize("ends", [(280, 258), (258, 280)])
+def test_a_trunk_whose_two_lines_end_apart_is_framed_on_its_middle(
+    ends: tuple[int, int],
+) -> None:
+    # people draw a trunk as two lines that seldom end on one row; framed on the lower
+    # line alone, the tree sat half off the centre line and shrank to fit (issue 48)
+    def crown(out: np.ndarray) -> tuple[int, int]:
+        cols = np.flatnonzero(out[:128].any(axis=0))
+        return int(cols[0]), int(cols[-1])
+
+    even = crown(_two_line_trunk(280, 280))
+    assert abs((even[0] + even[1] + 1) / 2 - 128) <= 3
+    left, right = crown(_two_line_trunk(*ends))
+    assert abs((left + right + 1) / 2 - 128) <= 6, (left, right)
+    assert right - left >= 0.95 * (even[1] - even[0])  # as large as the frame allows
+
+
+def test_a_trunk_drawn_as_one_line_keeps_its_axis() -> None:
+    # a lollipop's stick: one line, nothing beside it; its low leaves do not move it
+    im = Image.new("L", (300, 300), 255)
+    d = ImageDraw.Draw(im)
+    d.ellipse([60, 30, 240, 170], outline=0, width=3)
+    d.line([(150, 170), (150, 280)], fill=0, width=3)
+    d.ellipse([175, 230, 195, 262], outline=0, width=3)  # a fallen leaf beside it
+    out = normalise_drawing(np.asarray(im), 256) < 128
+    base = np.flatnonzero(out[240:249].any(axis=0))
+    assert abs((base[0] + base[-1] + 1) / 2 - 128) <= 2

@@ -9,7 +9,8 @@ glb        the tree (branches and leaves), binary glTF, Y-up, textured
 obj        the tree as Wavefront OBJ (+ its .mtl and textures beside it, written together)
 json       the parameter dictionary (Sapling key names)
 preset     a Blender Sapling preset (.py)
-compare    PNG: input sketch | first estimate's sketch | refined sketch | colour render
+compare    PNG: input sketch | first estimate's sketch | refined sketch with the drawing's
+           outline (red) over the tree's (blue) | colour render
 sketch_before, sketch_after   PNG: the first estimate's and the result's sketches
 summary    JSON: species and scores, losses, yaw, confidence, warning, timings
 ========== ==========================================================================
@@ -59,14 +60,22 @@ def png_bytes(img: np.ndarray) -> bytes:
 
 
 def compare_image(result: Any, size: int = 256) -> np.ndarray:
-    """Side by side: input sketch | first estimate's sketch | refined sketch | colour render
-    (RGB uint8, captioned); one row per view when the tree was drawn from several sides."""
+    """Side by side: input sketch | first estimate's sketch | refined sketch, with the
+    drawing's outline (red) over the tree's (blue) | colour render (RGB uint8, captioned);
+    one row per view when the tree was drawn from several sides."""
     from PIL import Image, ImageDraw
 
+    from refine.envelope import outlines_rgb
     from render.sketch import SketchRenderer
 
     def grey(img: np.ndarray) -> Image.Image:
         return Image.fromarray(np.asarray(img, np.uint8)).convert("RGB").resize((size, size))
+
+    def outlined(drawing: np.ndarray, tree: np.ndarray) -> Image.Image:
+        # the drawing's outline (red) over the tree's (blue): does the tree follow it?
+        if drawing is None or np.shape(drawing) != np.shape(tree):
+            return grey(tree)
+        return Image.fromarray(outlines_rgb(drawing, tree)).resize((size, size))
 
     renderer = SketchRenderer(result.tree_mesh, species=result.species)
     views = result.views or ()
@@ -92,8 +101,11 @@ def compare_image(result: Any, size: int = 256) -> np.ndarray:
                     grey(views[i].sketch_before if views else result.sketch_before),
                 ),
                 (
-                    f"refined ({after:.3f})",
-                    grey(views[i].sketch_after if views else result.sketch_after),
+                    f"refined ({after:.3f}); outlines",
+                    outlined(
+                        views[i].input_sketch if views else result.input_sketch,
+                        views[i].sketch_after if views else result.sketch_after,
+                    ),
                 ),
                 (f"{result.species}, yaw {yaw:.0f}", Image.fromarray(colour).convert("RGB")),
             ]

@@ -16,6 +16,7 @@ own variation amplitudes, realised the same way.
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache
 from importlib import resources
@@ -245,18 +246,29 @@ SEARCH_FREEDOMS: dict[str, tuple[Unfixed, ...]] = {
 }
 
 
+#: The outline a drawing sets over the species' habit (issue 48, ``refine.start``): the
+#: crown's width profile (``shape`` 8 and its ``customShape``), the crown base, the
+#: trunk's thickness and the branches' reach.  ``project(..., keep=DRAWN_KEYS)`` keeps
+#: them as given (the parameter table has checked their ranges): where a person draws
+#: what the species' ranges do not allow, the tree follows the drawing as far as it grows.
+DRAWN_KEYS = ("shape", "customShape", "baseSize", "ratio", "length")
+
+
 def search_freedoms(name: str) -> tuple[Unfixed, ...]:
     """The species' search-only freedoms (see :data:`SEARCH_FREEDOMS`)."""
     return SEARCH_FREEDOMS.get(canonical(name), ())
 
 
-def project(name: str, params: TreeParams, search: bool = False) -> TreeParams:
+def project(
+    name: str, params: TreeParams, search: bool = False, keep: Sequence[str] = ()
+) -> TreeParams:
     """Force a dictionary onto a species: its fixed values, keeping the unfixed ones.
 
     Unfixed values are clipped into the species' ranges; derived values (mirrors, the
     split height) are recomputed.  Used after prediction so a tree is a valid member.
     With ``search`` the species' search-only freedoms (:data:`SEARCH_FREEDOMS`) keep the
-    given values too, clipped into their ranges (what the refinement moves).
+    given values too, clipped into their ranges (what the refinement moves); the keys in
+    ``keep`` (e.g. :data:`DRAWN_KEYS`) keep the given values whatever the species'.
     """
     values = base(name).to_dict()
     src = params.to_dict()
@@ -275,5 +287,7 @@ def project(name: str, params: TreeParams, search: bool = False) -> TreeParams:
     if search:
         for u in search_freedoms(name):
             _set(values, u.key, u.index, float(np.clip(_get(src, u.key, u.index), u.lo, u.hi)))
+    for key in keep:  # a start fitted to a drawing: its outline wins
+        values[key] = src[key]
     values["seed"] = params["seed"]
     return TreeParams(values)

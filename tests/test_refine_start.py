@@ -1,0 +1,113 @@
+"""The start with the drawn outline (refine.start, issue 48) on code-made drawings."""
+
+from __future__ import annotations
+
+import numpy as np
+from PIL import Image, ImageDraw
+
+from refine.objective import framed
+from refine.start import fit_start, profile_of
+from treesketch.trees import tree_sketch
+from weberpenn import species
+
+SIZE = 128
+
+
+def drawing(
+    crown: str, stick: float, page: Image.Image | None = None, at: tuple[float, float] = (0, 0)
+) -> np.ndarray:
+    """A tree drawn with a pen: a trunk of two lines ``stick`` of the height tall under a
+    crown outline, ``"round"`` (a lollipop) or ``"flat"`` (a wide flat-topped crown);
+    on a 256 px page of its own, or on ``page`` with its 256 px box scaled to fit the
+    page's width / 5 at ``at`` (a tree drawn small in a corner)."""
+    im = Image.new("L", (256, 256), 255) if page is None else page
+    k = 1.0 if page is None else page.width / 5 / 256
+
+    def xy(x: float, y: float) -> tuple[float, float]:
+        return at[0] + k * x, at[1] + k * y
+
+    d = ImageDraw.Draw(im)
+    top, bottom = 20, 240
+    base = bottom - stick * (bottom - top)
+    d.line([xy(120, bottom), xy(120, base)], fill=0, width=3)
+    d.line([xy(136, bottom), xy(136, base)], fill=0, width=3)
+    if crown == "round":
+        d.ellipse([*xy(78, top), *xy(178, base + 8)], outline=0, width=3)
+    else:  # flat top, flat base: an umbrella's outline
+        pts = [(40, top), (216, top), (200, base), (56, base)]
+        d.polygon([xy(*p) for p in pts], outline=0, width=3)
+    return np.asarray(im)
+
+
+def outline(params, name: str):
+    return profile_of(tree_sketch(params, name, 0.0, SIZE))
+
+
+def test_a_lollipop_keeps_its_stick_to_crown_proportion() -> None:
+    img = framed(drawing("round", 0.5), SIZE)
+    want = profile_of(img)
+    assert abs(want.crown_base - 0.5) < 0.08  # the reading itself
+    start = species.base("oak")
+    fitted = fit_start(img, start, "oak", SIZE)
+    before, after = outline(start, "oak").crown_base, outline(fitted, "oak").crown_base
+    assert abs(after - want.crown_base) < 0.12, (before, after, want.crown_base)
+    assert abs(after - want.crown_base) < abs(before - want.crown_base)
+
+
+def test_a_flat_topped_crown_stays_flat() -> None:
+    img = framed(drawing("flat", 0.35), SIZE)
+    want = profile_of(img)
+    start = species.base("oak")  # a round crown by habit
+    fitted = fit_start(img, start, "oak", SIZE)
+
+    def flatness(p) -> float:  # the crown's width near its top over its widest
+        w = p.widths
+        return float(w[-3:].max() / w.max())
+
+    assert flatness(want) > 0.9
+    assert flatness(outline(fitted, "oak")) > flatness(outline(start, "oak"))
+    assert flatness(outline(fitted, "oak")) > 0.6
+
+
+def test_the_drawn_outline_wins_over_the_species_ranges() -> None:
+    # a thick short trunk under a wide crown: the fitted values pass the species'
+    # projection kept (species.project keep=), not clipped back to its habit
+    img = framed(drawing("flat", 0.35), SIZE)
+    fitted = fit_start(img, species.base("oak"), "oak", SIZE)
+    kept = species.project("oak", fitted, search=True, keep=species.DRAWN_KEYS)
+    for key in species.DRAWN_KEYS:
+        assert kept[key] == fitted[key]
+    assert species.project("oak", fitted, search=True)["shape"] == species.base("oak")["shape"]
+
+
+def test_a_blank_drawing_leaves_the_start_alone() -> None:
+    start = species.base("oak")
+    assert fit_start(np.full((SIZE, SIZE), 255, np.uint8), start, "oak", SIZE) is start
+
+
+def test_a_tree_drawn_small_above_a_ground_line_is_not_blown_up() -> None:
+    # the same lollipop drawn small in a page's corner, standing on a ground line across
+    # the page: the pipeline compares the tree with the drawn tree, not with the page's
+    # ink, so the returned tree's outline overlaps the drawn one as when drawn alone
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from pipeline_helpers import Fixed
+
+    from eval.envelope import envelope_overlap
+    from treesketch import Pipeline, RefineSettings
+
+    alone = drawing("round", 0.5)
+    page = Image.new("L", (640, 640), 255)
+    drawing("round", 0.5, page, (30, 420))  # 128 px box: the tree 110 px of 640
+    ImageDraw.Draw(page).line([(10, 541), (620, 538)], fill=0, width=3)
+    run = Pipeline(Fixed("oak", 1), RefineSettings(budget=10))
+    drawn, ref = run.run(np.asarray(page)), run.run(alone)
+    # the drawing as prepared: the tree alone, filling the frame as the tree alone does
+    assert envelope_overlap(drawn.input_sketch, ref.input_sketch) > 0.85
+    ink = np.flatnonzero((drawn.input_sketch < 128).any(axis=1))
+    assert ink[-1] - ink[0] > 0.8 * drawn.input_sketch.shape[0]
+    # and the tree returned follows it as it follows the drawing alone
+    got = envelope_overlap(drawn.input_sketch, drawn.sketch_after)
+    assert got > 0.6 and got > envelope_overlap(ref.input_sketch, ref.sketch_after) - 0.1
