@@ -15,7 +15,9 @@
    empty named after the species) in the ``TreeSketch`` collection, and each
    prediction's Sapling preset gets a name of its own; a species picked in the panel is
    the tree's, and the panel says the species in words; a broken preset is reported by
-   the operator in plain words.
+   the operator in plain words.  Each prediction's outlines picture (the drawing's outline
+   over the tree's) is the image ``TreeSketch outlines``, shown beside the tree and in the
+   panel.
 4. The trees are dressed (issue 28, part 5): a Sapling tree gets bark and leaf materials
    with the GLB's textures (packed), the leaves alpha-clipped in Eevee, their shadows
    too; the imported GLB's leaves clip their shadows as well.  While the CLI refines,
@@ -36,6 +38,7 @@ NUMPY_HAD_BOOL = "bool" in _np.__dict__  # numpy >= 1.24 has no np.bool
 
 import bpy  # type: ignore[import-not-found]  # noqa: E402, I001 - bpy first (bpy module)
 import addon_utils  # type: ignore[import-not-found]  # noqa: E402
+from mathutils import Vector  # type: ignore[import-not-found]  # noqa: E402
 
 ZIP, GLB, HEIGHT, CLI = sys.argv[sys.argv.index("--") + 1 :]
 OBJ = GLB[: -len(".glb")] + ".obj"
@@ -146,6 +149,9 @@ class Layout:  # records what the panel draws (there is no screen in background 
     def box(self, **kw):
         return self
 
+    def template_icon(self, **kw):
+        self.log.append(("template_icon", kw.get("icon_value")))
+
 
 log = []
 panel = bpy.types.VIEW3D_PT_treesketch
@@ -219,12 +225,37 @@ def check_hierarchy(kind):
     return parent
 
 
+def check_outlines(parent, kind):
+    """The prediction's outlines picture (issue 48): the image ``TreeSketch outlines``,
+    packed, the drawing's outline red and the tree's blue; a reference image empty under
+    the tree showing it, upright and facing the Front view; the panel shows it."""
+    img = bpy.data.images.get("TreeSketch outlines")
+    assert img is not None and img.packed_file, f"{kind}: no outlines image"
+    w, h = img.size
+    px = _np.array(img.pixels[:]).reshape(h, w, -1)[..., :3]
+    red = (px[..., 0] > 0.7) & (px[..., 1] < 0.3) & (px[..., 2] < 0.3)
+    blue = (px[..., 2] > 0.7) & (px[..., 0] < 0.3)
+    assert (w, h) == (256, 256) and red.sum() > 200 and blue.sum() > 200, (w, h, red.sum())
+    refs = [o for o in parent.children if o.type == "EMPTY" and o.data == img]
+    assert len(refs) == 1 and refs[0].empty_display_type == "IMAGE", [
+        o.name for o in parent.children
+    ]
+    normal = refs[0].matrix_world.to_3x3() @ Vector((0.0, 0.0, 1.0))
+    assert normal.y < -0.99, normal  # faces the Front view (it looks along +Y)
+    log = []
+    panel.draw(type("P", (), {"layout": Layout(log)})(), bpy.context)
+    assert ("label", "Your drawing's outline (red) over the tree's (blue)") in log, log
+    assert any(k == "template_icon" for k, _ in log), log
+    step(f"{kind}: outlines image {w}x{h} ({red.sum()} red, {blue.sum()} blue px) beside the tree")
+
+
 # 3a. the bundled drawing -> native Sapling tree (the GLB where Sapling is missing)
 clear()
 settings = bpy.context.scene.treesketch
 settings.source, settings.refine = "IMAGE", False
 settings.result = "SAPLING" if SAPLING else "GLB"
 assert bpy.ops.treesketch.predict(wait=True) == {"FINISHED"}, settings.status
+check_outlines(check_hierarchy("bundled drawing"), "bundled drawing")
 if SAPLING:
     curves = [o for o in bpy.data.objects if o.type == "CURVE"]
     leaves = [o for o in bpy.data.objects if o.type == "MESH"]
@@ -292,6 +323,7 @@ if SAPLING:
     assert bpy.ops.treesketch.apply_controls() == {"FINISHED"}, settings.status
     edited = check_hierarchy("edited Sapling tree")
     check_sapling_materials(edited)
+    check_outlines(edited, "edited Sapling tree")  # the prediction's picture, kept
     after = roots()  # the edited tree took the old one's place
     assert len(after) == len(before) and old not in after and shown() != old, (before, after)
     more = sum(len(o.data.splines) for o in bpy.data.objects if o.type == "CURVE")

@@ -50,6 +50,7 @@ def test_cli_command(backend, tmp_path):
     assert cmd[cmd.index("--preset") + 1] == str(tmp_path / "tree_sapling.py")
     assert cmd[cmd.index("--budget") + 1] == "20"
     assert cmd[cmd.index("--preview") + 1] == str(tmp_path / "preview")
+    assert cmd[cmd.index("--outlines") + 1] == str(tmp_path / "tree_outlines.png")
     plain = backend.cli_command("t", "d.png", out, refine=False)
     assert "--no-refine" in plain and "--preview" not in plain  # the estimate is the result
     with pytest.raises(backend.PredictError, match="preferences"):
@@ -268,6 +269,36 @@ def test_post_predict_sends_the_token_in_a_header(backend, tmp_path, service):
         backend.post_predict(url, _image(tmp_path), tmp_path / "t.glb")
     with pytest.raises(backend.PredictError, match="one line"):
         backend.post_predict(url, _image(tmp_path), tmp_path / "t.glb", token="a\r\nX-Evil: 1")
+
+
+def test_post_predict_fetches_the_outlines_picture(backend, tmp_path, service):
+    """The job's outlines picture (its links' outlines.png) comes with the tree, with the
+    token, from the configured service only; without it the tree still comes."""
+    import json
+
+    url, routes, seen = service
+    port = url.rsplit(":", 1)[1]
+    png = b"\x89PNG\r\n\x1a\n picture"
+
+    def reply(link):
+        body = {"glb": "/t.glb", "links": {"outlines.png": link}}
+        return 200, {"Content-Type": "application/json"}, json.dumps(body).encode()
+
+    routes["/t.glb"] = (200, {}, b"glTF")
+    routes["/jobs/1/outlines.png"] = (200, {"Content-Type": "image/png"}, png)
+    out = tmp_path / "o.png"
+    routes["/predict"] = reply("/jobs/1/outlines.png")
+    backend.post_predict(url, _image(tmp_path), tmp_path / "t.glb", token="k", outlines_path=out)
+    assert out.read_bytes() == png
+    assert seen[-1] == ("/jobs/1/outlines.png", seen[-1][1])
+    assert seen[-1][1].get("Authorization") == "Bearer k"
+    out.unlink()
+    for link in (f"http://127.0.0.2:{port}/jobs/1/outlines.png", "/missing.png", None):
+        routes["/predict"] = reply(link)
+        n = len(seen)
+        backend.post_predict(url, _image(tmp_path), tmp_path / "t.glb", outlines_path=out)
+        assert (tmp_path / "t.glb").read_bytes() == b"glTF" and not out.exists(), link
+        assert all("127.0.0.2" not in p for p, _ in seen[n:])
 
 
 @pytest.mark.parametrize("url", ["file:///tmp", "ftp://example.com", "127.0.0.1:8000", "http://"])

@@ -65,6 +65,24 @@ def test_writes_all_outputs(tmp_path, sketch_png) -> None:
     assert w == 4 * 256 and h > 256
 
 
+def test_outlines_picture(tmp_path, sketch_png) -> None:
+    """--outlines: the drawing's outline (red) over the tree's (blue), at the drawn view
+    (the picture the Blender add-on shows)."""
+    from PIL import Image
+
+    from refine.envelope import DRAWING_RED, TREE_BLUE
+
+    path = tmp_path / "out" / "outlines.png"
+    res = runner.invoke(app, _args(tmp_path, sketch_png, "--no-refine", "--outlines", str(path)))
+    assert res.exit_code == 0, res.output
+    rgb = np.asarray(Image.open(path))
+    assert rgb.shape == (256, 256, 3)
+    for colour in (DRAWING_RED, TREE_BLUE):
+        assert np.all(rgb == colour, axis=2).sum() > 200, colour
+    res = runner.invoke(app, _args(tmp_path, sketch_png, "--outlines", str(tmp_path / "o.jpg")))
+    assert res.exit_code != 0 and "--outlines" in res.output
+
+
 def test_interrupted_run_writes_nothing(tmp_path, sketch_png, monkeypatch) -> None:
     def boom(result, size=256):
         raise KeyboardInterrupt  # e.g. Ctrl-C while the last output is being made

@@ -75,6 +75,12 @@ def predict_command(
         "--compare",
         help="Also write a PNG: input sketch, first estimate's sketch, refined sketch, colour render.",
     ),
+    outlines_path: Path | None = typer.Option(
+        None,
+        "--outlines",
+        help="Also write a PNG: your drawing's outline (red) over the tree's (blue), seen "
+        "from where you drew it (one picture per drawing, side by side).",
+    ),
     estimator: str = typer.Option(
         "tsn", "--estimator", help="First estimate: tsn, template (no network) or nns."
     ),
@@ -123,7 +129,7 @@ def predict_command(
     from .pipeline import Pipeline, SketchError, check_height
 
     # every option first: nothing is read, estimated or refined before they all pass
-    files = (out, params_path, preset_path, compare_path, summary_path)
+    files = (out, params_path, preset_path, compare_path, outlines_path, summary_path)
     outputs = dict(zip(OUTPUT_OPTIONS, files, strict=True))
     _check_outputs(outputs, textures, preview_dir)
     _check_estimator(estimator, checkpoint)
@@ -154,6 +160,7 @@ OUTPUT_OPTIONS = {
     "json": ("--params", (".json",)),
     "preset": ("--preset", (".py",)),
     "compare": ("--compare", (".png",)),
+    "outlines": ("--outlines", (".png",)),
     "summary": ("--summary", (".json",)),
 }
 

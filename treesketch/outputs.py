@@ -12,6 +12,9 @@ preset     a Blender Sapling preset (.py)
 compare    PNG: input sketch | first estimate's sketch | refined sketch with the drawing's
            outline (red) over the tree's (blue) | colour render
 sketch_before, sketch_after   PNG: the first estimate's and the result's sketches
+outlines   PNG: the drawing's outline (red) over the tree's (blue), at the drawn view
+           (``outlines_images``); the views side by side when the tree was drawn from
+           several sides
 summary    JSON: species and scores, losses, yaw, confidence, warning, timings
 ========== ==========================================================================
 """
@@ -34,6 +37,7 @@ __all__ = [
     "KINDS",
     "ExportOptions",
     "compare_image",
+    "outlines_images",
     "png_bytes",
     "result_files",
     "write_outputs",
@@ -45,6 +49,7 @@ KINDS = (
     "json",
     "preset",
     "compare",
+    "outlines",
     "sketch_before",
     "sketch_after",
     "summary",
@@ -59,23 +64,57 @@ def png_bytes(img: np.ndarray) -> bytes:
     return buf.getvalue()
 
 
+def outlines_images(result: Any) -> list[np.ndarray | None]:
+    """One picture per drawn view (RGB uint8, the sketches' size): the drawing's outline
+    (red) over the returned tree's (blue) seen from that view
+    (``refine.envelope.outlines_rgb`` of the prepared drawing and the tree's sketch).
+    None for a view whose drawing is not kept or differs in size (a result not made by
+    the pipeline): nothing to lay over."""
+    from refine.envelope import outlines_rgb
+
+    views = result.views or ()
+    pairs = [(v.input_sketch, v.sketch_after) for v in views] or [
+        (result.input_sketch, result.sketch_after)
+    ]
+    return [
+        None
+        if drawing is None or np.shape(drawing) != np.shape(tree)
+        else outlines_rgb(drawing, tree)
+        for drawing, tree in pairs
+    ]
+
+
+def outlines_strip(result: Any) -> np.ndarray:
+    """:func:`outlines_images` side by side (the tree's sketch alone for a view without
+    its drawing): the ``outlines`` kind."""
+    pictures = [
+        np.repeat(np.asarray(tree, np.uint8)[..., None], 3, axis=2) if pic is None else pic
+        for pic, tree in zip(
+            outlines_images(result),
+            [v.sketch_after for v in result.views or ()] or [result.sketch_after],
+            strict=True,
+        )
+    ]
+    return np.concatenate(pictures, axis=1)
+
+
 def compare_image(result: Any, size: int = 256) -> np.ndarray:
     """Side by side: input sketch | first estimate's sketch | refined sketch, with the
     drawing's outline (red) over the tree's (blue) | colour render (RGB uint8, captioned);
     one row per view when the tree was drawn from several sides."""
     from PIL import Image, ImageDraw
 
-    from refine.envelope import outlines_rgb
     from render.sketch import SketchRenderer
 
     def grey(img: np.ndarray) -> Image.Image:
         return Image.fromarray(np.asarray(img, np.uint8)).convert("RGB").resize((size, size))
 
-    def outlined(drawing: np.ndarray, tree: np.ndarray) -> Image.Image:
-        # the drawing's outline (red) over the tree's (blue): does the tree follow it?
-        if drawing is None or np.shape(drawing) != np.shape(tree):
-            return grey(tree)
-        return Image.fromarray(outlines_rgb(drawing, tree)).resize((size, size))
+    # the drawing's outline (red) over the tree's (blue): does the tree follow it?
+    outlines = outlines_images(result)
+
+    def outlined(i: int, tree: np.ndarray) -> Image.Image:
+        pic = outlines[i]
+        return grey(tree) if pic is None else Image.fromarray(pic).resize((size, size))
 
     renderer = SketchRenderer(result.tree_mesh, species=result.species)
     views = result.views or ()
@@ -102,10 +141,7 @@ def compare_image(result: Any, size: int = 256) -> np.ndarray:
                 ),
                 (
                     f"refined ({after:.3f}); outlines",
-                    outlined(
-                        views[i].input_sketch if views else result.input_sketch,
-                        views[i].sketch_after if views else result.sketch_after,
-                    ),
+                    outlined(i, views[i].sketch_after if views else result.sketch_after),
                 ),
                 (f"{result.species}, yaw {yaw:.0f}", Image.fromarray(colour).convert("RGB")),
             ]
@@ -179,6 +215,8 @@ def result_files(
             out[kind] = preset_text(result.params, yaw=yaw).encode()
         elif kind == "compare":
             out[kind] = png_bytes(compare_image(result))
+        elif kind == "outlines":
+            out[kind] = png_bytes(outlines_strip(result))
         elif kind in ("sketch_before", "sketch_after"):
             out[kind] = png_bytes(getattr(result, kind))
         elif kind == "summary":

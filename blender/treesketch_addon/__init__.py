@@ -41,6 +41,9 @@ COLLECTION = "TreeSketch"  # where every predicted tree goes
 CONTROLS = backend.load_controls(Path(__file__).with_name("controls.json"))["controls"]
 SPECIES = backend.load_species(Path(__file__).with_name("species.json"))
 AUTO = "AUTO"  # the species enum's "Let it decide"
+# the last prediction's drawing's outline (red) over its tree's (blue), seen from where
+# it was drawn: an image datablock, shown in the panel and beside the tree
+OUTLINES_IMAGE = "TreeSketch outlines"
 
 
 def species_items() -> list[tuple[str, str, str]]:
@@ -329,7 +332,14 @@ def prediction_job(context, drawings: list[tuple[Path, float]], out: backend.Out
 
     def ask(on_line=None, cancel=None):
         reply = backend.post_predict(
-            url, image, out.glb, refine=refine, budget=budget, token=token, species=species
+            url,
+            image,
+            out.glb,
+            refine=refine,
+            budget=budget,
+            token=token,
+            species=species,
+            outlines_path=out.outlines,
         )
         out.params.write_text(json.dumps(reply.get("params", {})), encoding="utf-8")
         return reply.get("species"), reply.get("species_text")
@@ -366,7 +376,65 @@ def add_result(
     new = [o for o in bpy.data.objects if o not in before]
     parent = _collect(context, new, species or "tree")
     parent.rotation_euler.z -= math.radians(turn)
-    return [parent, *new]
+    reference = _place_outlines(context, parent, new)
+    return [parent, *new, *([reference] if reference else [])]
+
+
+def load_outlines(path: Path):
+    """The prediction's outlines picture as the image ``TreeSketch outlines`` (packed: the
+    prediction's folder goes); None when the prediction made none (an older service).
+    The last prediction's picture keeps its place under another name where a tree still
+    shows it, and is dropped otherwise, so the name is never an older tree's."""
+    old = bpy.data.images.get(OUTLINES_IMAGE)
+    if old is not None:
+        if old.users:
+            old.name = f"{OUTLINES_IMAGE} (earlier)"  # Blender numbers it: .001, ...
+        else:
+            bpy.data.images.remove(old)
+    if not path.is_file():
+        return None
+    img = bpy.data.images.load(str(path))
+    img.name = OUTLINES_IMAGE
+    img.pack()
+    return img
+
+
+def _place_outlines(context, parent, objects: list):
+    """The outlines picture as a reference image empty standing beside the tree, facing
+    Blender's Front view (the drawn view, which the tree was turned to face), under the
+    tree's parent so it goes with the tree; None without a picture.  An edited tree gets
+    the prediction's picture again: an edit has no sketch of its own to outline."""
+    img = bpy.data.images.get(OUTLINES_IMAGE)
+    if img is None:
+        return None
+    from mathutils import Matrix, Vector
+
+    context.view_layer.update()  # the parent's turn in the children's world matrices
+    corners = [
+        o.matrix_world @ Vector(c)
+        for o in objects
+        if o.type in ("MESH", "CURVE")
+        for c in o.bound_box
+    ]
+    height = max((c.z for c in corners), default=1.0) - min((c.z for c in corners), default=0.0)
+    right = max((c.x for c in corners), default=0.5)
+    ref = bpy.data.objects.new(OUTLINES_IMAGE, None)
+    ref.empty_display_type = "IMAGE"
+    ref.data = img
+    ref.empty_display_size = max(height, 0.1) * 1.1
+    ref.empty_image_offset = (0.0, 0.0)  # its lower left corner at the empty
+    ref.show_empty_image_orthographic = ref.show_empty_image_perspective = True
+    for c in list(ref.users_collection):
+        c.objects.unlink(ref)
+    for c in parent.users_collection:
+        c.objects.link(ref)
+    ref.parent = parent
+    # world-aligned whatever the parent's turn: upright in the XZ plane, seen from the
+    # front (-Y), to the right of the tree
+    ref.matrix_world = Matrix.Translation((right + 0.1 * height, 0.0, 0.0)) @ Matrix.Rotation(
+        math.pi / 2, 4, "X"
+    )
+    return ref
 
 
 LEAF_ALPHA_THRESHOLD = 0.5  # as the GLB's alphaCutoff
@@ -665,6 +733,10 @@ class TREESKETCH_OT_predict(bpy.types.Operator):
         into the .blend by the importer; the preset was copied to Sapling's menu)."""
         settings = context.scene.treesketch
         try:
+            try:
+                load_outlines(self._out.outlines)
+            except (RuntimeError, OSError) as exc:  # a picture Blender cannot read
+                print("treesketch: outlines not shown:", backend.plain_error(exc))
             new = add_result(context, self._out, species=self._species)
             _remember(context, self._out, self._species, new[0].name)  # before the files go
         except (backend.PredictError, RuntimeError, OSError) as exc:
@@ -813,6 +885,12 @@ class TREESKETCH_PT_panel(bpy.types.Panel):
             layout.label(text=settings.status)
         if settings.species_text and not settings.running:
             layout.label(text=f"It is {settings.species_text}", icon="INFO")
+        outlines = bpy.data.images.get(OUTLINES_IMAGE)
+        if outlines is not None and settings.last_params and not settings.running:
+            box = layout.box()
+            box.label(text="Your drawing's outline (red) over the tree's (blue)")
+            outlines.preview_ensure()
+            box.template_icon(icon_value=outlines.preview.icon_id, scale=8.0)
         if settings.last_params and CONTROLS:
             box = layout.box()
             box.label(text=f"Shape the {settings.last_species or 'tree'}")

@@ -10,7 +10,9 @@ both), so the project's test suite checks it without Blender.
   GLB it names is downloaded.  Only from the configured service: plain http(s), the same
   origin (scheme, host, port) for the GLB and any redirect, never ``file://`` or another
   host; the reply and the GLB have size caps; a token goes in an ``Authorization:
-  Bearer`` header, never in a URL.
+  Bearer`` header, never in a URL.  The job's outlines picture (the drawing's outline
+  over the tree's) comes too when the service has one; ``cli_command`` asks the CLI for
+  it (``--outlines``).
 - :func:`read_preset`: the Sapling dict and the view yaw from a TreeSketch preset.
 - :func:`strokes_png`: pen strokes (lists of 2-D points) drawn black on white as a PNG,
   framed the way the project's reader expects (tree filling the canvas, base at the
@@ -104,11 +106,20 @@ class Outputs:
     params: Path
     preset: Path
     preview: Path  # the folder the CLI keeps the current best tree in while it refines
+    # the drawing's outline (red) over the tree's (blue) at the drawn view: the CLI's
+    # --outlines, or the service's GET /jobs/{id}/outlines.png
+    outlines: Path
 
     @classmethod
     def in_folder(cls, folder: str | os.PathLike[str], stem: str = "tree") -> Outputs:
         d = Path(folder)
-        return cls(d / f"{stem}.glb", d / f"{stem}.json", d / f"{stem}_sapling.py", d / "preview")
+        return cls(
+            d / f"{stem}.glb",
+            d / f"{stem}.json",
+            d / f"{stem}_sapling.py",
+            d / "preview",
+            d / f"{stem}_outlines.png",
+        )
 
 
 def cli_command(
@@ -129,6 +140,7 @@ def cli_command(
     for path, yaw in views:
         cmd += ["--view", f"{path}@{float(yaw):g}"]
     cmd += ["--params", str(outputs.params), "--preset", str(outputs.preset)]
+    cmd += ["--outlines", str(outputs.outlines)]
     if not refine:
         cmd.append("--no-refine")
     else:  # without a refinement the first estimate is the result: nothing to preview
@@ -217,6 +229,7 @@ def multipart_body(
 MAX_REPLY_BYTES = 1024 * 1024  # the service's JSON answer
 MAX_GLB_BYTES = 512 * 1024 * 1024  # the biggest tree (6 M triangles, textured) is far less
 MAX_PRESET_BYTES = 1_000_000  # as the project's own parameter reader
+MAX_OUTLINES_BYTES = 16 * 1024 * 1024  # a 256 px picture per view is some 10 KB
 _CHUNK = 1024 * 1024
 
 
@@ -305,11 +318,14 @@ def post_predict(
     token: str | None = None,
     max_glb_bytes: int = MAX_GLB_BYTES,
     species: str | None = None,
+    outlines_path: str | os.PathLike[str] | None = None,
 ) -> dict:
     """``POST {url}/predict`` with the drawing; writes the returned GLB to ``glb_path``
     (whole or not at all) and returns the service's JSON (its ``species_text`` says the
     species in words).  ``token``: the service's token, sent as ``Authorization:
-    Bearer``; ``species``: the one the person means (None lets the drawing decide)."""
+    Bearer``; ``species``: the one the person means (None lets the drawing decide);
+    ``outlines_path``: where the job's outlines picture goes (its ``links``'
+    ``outlines.png``), when the service has one (see :func:`_fetch_outlines`)."""
     origin = _origin(url)
     headers = {}
     if token:
@@ -346,6 +362,8 @@ def post_predict(
         with opener.open(glb_req, timeout=timeout) as resp, open(part, "wb") as sink:
             _read_capped(resp, max_glb_bytes, "the GLB", sink)
         os.replace(part, glb_path)
+        if outlines_path is not None:
+            _fetch_outlines(opener, base, origin, reply, headers, Path(outlines_path), timeout)
     except urllib.error.HTTPError as exc:
         raise PredictError(f"TreeSketch service at {url}: {_http_error(exc)}") from None
     except (OSError, ValueError) as exc:
@@ -353,6 +371,35 @@ def post_predict(
     finally:
         part.unlink(missing_ok=True)
     return reply
+
+
+def _fetch_outlines(
+    opener: urllib.request.OpenerDirector,
+    base: str,
+    origin: tuple[str, str, int],
+    reply: dict,
+    headers: dict,
+    path: Path,
+    timeout: float,
+) -> None:
+    """The job's outlines picture (``reply["links"]["outlines.png"]``) written to
+    ``path``, from the configured service only.  A convenience: a service without it (an
+    older one), another origin, an error or a picture over the cap leave no file and
+    never cost the tree."""
+    links = reply.get("links")
+    link = links.get("outlines.png") if isinstance(links, dict) else None
+    if not isinstance(link, str):
+        return
+    target = urllib.parse.urljoin(base, link)
+    if _safe_origin(target) != origin:
+        return
+    try:
+        with opener.open(urllib.request.Request(target, headers=headers), timeout=timeout) as resp:
+            data = _read_capped(resp, MAX_OUTLINES_BYTES, "the outlines picture")
+    except (OSError, PredictError):  # HTTPError is an OSError
+        return
+    if data.startswith(b"\x89PNG"):
+        path.write_bytes(data)
 
 
 def read_preset(path: str | os.PathLike[str]) -> tuple[dict, float]:

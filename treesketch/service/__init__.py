@@ -19,6 +19,8 @@
   job's progress says which ``preview`` is there), ``GET /examples``; ``tree_view.glb``
   is a finished job's light tree for the viewer (``tree.glb`` keeps full detail);
   ``GET /jobs/{id}/outline.png?turn=&size=``: a finished tree's sketch from another side.
+- ``outlines``: ``GET /jobs/{id}/outlines.png?view=N``: a done job's drawing's outline
+  (red) over its tree's (blue) at that drawing's view, as the CLI's ``--outlines``.
 
 Jobs live in SQLite (WAL) under the data folder with their artefacts; on restart, jobs
 that were running are marked failed and queued ones run.  Modules: ``store`` (the

@@ -28,6 +28,7 @@ from treesketch.trees import REPLY_FACES
 from .guards import LOOPBACK_HOSTS, AccessGuard, RedactTokens
 from .interactive import add_interactive_routes
 from .limits import MAX_VIEWS, LimitError, Limits, check_images, parse_options, read_form
+from .outlines import add_outlines_route
 from .owner import DataOwner
 from .pool import WorkerPool, default_workers
 from .preview import PREVIEW_FILES
@@ -81,6 +82,8 @@ def _links(job: Job) -> dict[str, str]:
     base = f"/jobs/{job.id}"
     links = {"self": base, "events": f"{base}/events"}
     links.update({name: f"{base}/{name}" for name in ARTEFACTS})
+    # the drawing's outline over the tree's (outlines.py; ?view=N for a later drawing)
+    links["outlines.png"] = f"{base}/outlines.png"
     # a job of several drawings: each later view's sketches
     links.update(
         {name: f"{base}/{name}" for v in range(2, _views(job) + 1) for name in view_artefacts(v)}
@@ -270,6 +273,7 @@ def create_app(config: ServiceConfig) -> FastAPI:
     desk = JobDesk(config, store, pool)
     # the interactive routes before the jobs' catch-all /jobs/{id}/{name}
     add_interactive_routes(app, store)
+    add_outlines_route(app, store)
     add_page_routes(app, desk)
     add_job_routes(app, desk)
     add_predict_route(app, desk)

@@ -31,6 +31,7 @@ __all__ = [
     "JobOptions",
     "Runner",
     "load_estimator_spec",
+    "outlines_file",
     "view_artefacts",
 ]
 
@@ -57,6 +58,13 @@ ARTEFACTS: dict[str, str] = {name: media for name, (_, media) in ARTEFACT_KINDS.
 def view_artefacts(view: int) -> tuple[str, str]:
     """The file names of view ``view``'s (2 and up) first-estimate and result sketches."""
     return f"view{view}_before.png", f"view{view}_after.png"
+
+
+def outlines_file(view: int) -> str:
+    """The file name of view ``view``'s (1 and up) outlines picture: the drawing's outline
+    (red) over the tree's (blue), served by ``GET /jobs/{id}/outlines.png?view=N``
+    (``outlines.py``), not by the artefact route."""
+    return "outlines.png" if view == 1 else f"view{view}_outlines.png"
 
 
 # a job of several drawings also has each later view's sketches (view 1's are
@@ -179,7 +187,7 @@ class Runner:
             cancel=cancel,
             species=options.species,
         )
-        from treesketch.outputs import png_bytes
+        from treesketch.outputs import outlines_images, png_bytes
 
         kinds = {
             kind: name
@@ -201,4 +209,9 @@ class Runner:
             before, after = view_artefacts(i)
             out[before] = png_bytes(view.sketch_before)
             out[after] = png_bytes(view.sketch_after)
+        # made now, while the prepared drawings are at hand (the job keeps only the
+        # uploads): a view without its drawing has none, and its route answers 404
+        for i, picture in enumerate(outlines_images(result), 1):
+            if picture is not None:
+                out[outlines_file(i)] = png_bytes(picture)
         return out, result.summary()

@@ -379,6 +379,7 @@ function clearResult() {
   $("warning").textContent = "";
   $("before").removeAttribute("src");
   $("after").removeAttribute("src");
+  clearOutlines();
   $("view-note").textContent = "";
   delete document.body.dataset.preview;
   delete document.body.dataset.shown;
@@ -402,6 +403,7 @@ function showResult(job) {
   showCandidates(job);
   showFacts(null);
   showViews(job);
+  showOutlines(job);
   updateSideButton();
   $("view-note").textContent = "";
   if (phone() && !restoring) $("result-panel").scrollIntoView({ behavior: "smooth" });
@@ -881,6 +883,7 @@ function endEdit() {
   $("candidates-panel").hidden = true;
   $("edit-panel").hidden = true;
   $("views-panel").hidden = true;
+  clearOutlines();
   delete document.body.dataset.edit;
   updateSideButton();
 }
@@ -1233,6 +1236,44 @@ function showViews(job) {
   });
   $("views-panel").hidden = views.length < 2;
   document.body.dataset.views = String(Math.max(1, views.length));
+}
+
+// the drawing's outline (red) over the tree's (blue), one picture per drawn view (GET
+// /jobs/{id}/outlines.png?view=N): does the tree follow what was drawn?  It is the job's
+// own tree: an edit or another species on show is not outlined.  A figure shows once its
+// picture has loaded; one that cannot load (a job from before these pictures, files
+// expired, a lost connection) is dropped, so no broken-image icon, and the rest stays.
+const OUTLINES_CAPTION = "your drawing's outline (red) over the tree's (blue)";
+function clearOutlines() {
+  $("outlines").replaceChildren();
+  $("outlines-panel").hidden = true;
+  delete document.body.dataset.outlines;
+}
+function showOutlines(job) {
+  clearOutlines();
+  const url = job.links["outlines.png"];
+  if (!url) return;
+  const box = $("outlines");
+  const n = Math.max(1, (job.result.views || []).length);
+  for (let i = 1; i <= n; i++) {
+    const fig = document.createElement("figure");
+    fig.hidden = true;
+    fig.title = "The tree the drawing gave, seen from where it was drawn (edits are not outlined)";
+    const im = document.createElement("img");
+    im.alt = `Drawing ${i}'s outline in red over the tree's outline in blue, seen from the same side`;
+    im.onload = () => {
+      if (!fig.isConnected) return; // another job came on show meanwhile
+      fig.hidden = false;
+      $("outlines-panel").hidden = false;
+      document.body.dataset.outlines = String(box.querySelectorAll("figure:not([hidden])").length);
+    };
+    im.onerror = () => fig.remove();
+    const cap = document.createElement("figcaption");
+    cap.textContent = n > 1 ? `drawing ${i}: ${OUTLINES_CAPTION}` : OUTLINES_CAPTION;
+    fig.append(im, cap);
+    box.append(fig);
+    im.src = `${url}?view=${i}`;
+  }
 }
 
 // the drawings of a job kept in this tab (sessionStorage, the latest few jobs) so that a
