@@ -67,12 +67,22 @@ def browser() -> Iterator[Any]:
 
 
 @pytest.fixture
-def page(browser: Any, server: str) -> Iterator[Any]:
-    """The drawing page on a desktop screen, held to the server (see ``guarded_context``)."""
-    from web_helpers import DESKTOP, guarded_context, open_page
+def context(browser: Any, server: str) -> Iterator[Any]:
+    """A new browser context on a desktop screen, held to the server (see
+    ``guarded_context``): a test that opens a job by its link takes this, not ``page``
+    (which first loads the empty drawing page)."""
+    from web_helpers import DESKTOP, guarded_context
 
     with guarded_context(browser, server, **DESKTOP) as ctx:
-        yield open_page(ctx, server)
+        yield ctx
+
+
+@pytest.fixture
+def page(context: Any, server: str) -> Any:
+    """The drawing page in ``context``."""
+    from web_helpers import open_page
+
+    return open_page(context, server)
 
 
 @pytest.fixture(scope="session")

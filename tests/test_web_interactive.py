@@ -54,7 +54,10 @@ def test_the_first_tree_is_shown_before_the_refinement_ends(page: Any) -> None:
     page.wait_for_selector("body[data-state=cancelled]", timeout=10_000)
 
 
-def test_sliders_variant_and_the_edited_download(page: Any, server: str, finished_job: Any) -> None:
+def test_sliders_variant_and_the_edited_download(
+    context: Any, server: str, finished_job: Any
+) -> None:
+    page = context.new_page()
     open_job(page, server, finished_job())
     before = view_pixels(page)
     h0 = _height(page)
@@ -138,7 +141,8 @@ def test_permalink_reload_and_recent_jobs(page: Any, server: str) -> None:
     assert other.inner_text("#species").lower() == "palm"
 
 
-def test_view_tools(page: Any, server: str, finished_job: Any) -> None:
+def test_view_tools(context: Any, server: str, finished_job: Any) -> None:
+    page = context.new_page()
     open_job(page, server, finished_job())
     assert page.inner_text("#height-readout").endswith(" m") and _height(page) > 1
     framed = view_pixels(page)

@@ -34,9 +34,14 @@ READY = "body[data-species=ready]"
 
 
 @pytest.fixture
-def page(browser: Any, server: str) -> Iterator[Any]:
+def context(browser: Any, server: str) -> Iterator[Any]:
     with guarded_context(browser, server, console=True, **DESKTOP) as ctx:
-        yield open_page(ctx, server, READY)
+        yield ctx
+
+
+@pytest.fixture
+def page(context: Any, server: str) -> Any:
+    return open_page(context, server, READY)
 
 
 def _make_tree(page: Any, pick: str | None = None) -> dict:
@@ -80,8 +85,9 @@ def test_the_picker_lists_every_species_and_the_pick_reaches_the_job(page: Any) 
 
 
 def test_candidates_switch_the_tree_the_controls_and_the_downloads(
-    page: Any, server: str, finished_job: Any
+    context: Any, server: str, finished_job: Any
 ) -> None:
+    page = context.new_page()
     job = open_job(page, server, finished_job(), READY)
     result = job["result"]
     assert result["species"] == "palm"
@@ -187,8 +193,9 @@ def test_a_phone_shows_and_switches_the_candidates(
 
 
 def test_a_slider_past_the_generators_limits_stops_at_the_most_it_grows(
-    page: Any, server: str, finished_job: Any
+    context: Any, server: str, finished_job: Any
 ) -> None:
+    page = context.new_page()
     open_job(page, server, finished_job(species="fir"), READY)
     n = int(page.get_attribute("body", "data-edits") or 0)
     # three times the branches of a fir: more leaves than the generator grows

@@ -97,9 +97,10 @@ def open_page(ctx: Any, server: str, ready: str = "") -> Any:
 def open_job(page: Any, server: str, job: str, ready: str = "") -> Any:
     """``page`` on the link of the finished ``job`` (a shared one, ``finished_job`` in
     ``conftest.py``), once its tree is shown and editable (and ``ready`` shows); the job
-    as the API gives it.  A fresh context each test: nothing of another test's visit
-    (its edits, its pad, its recent jobs) is kept, and the job itself is never changed
-    by the page (an edit is a new tree, ``POST /trees``)."""
+    as the API gives it.  ``page`` a new one of a new context (the ``context`` fixture):
+    nothing of another test's visit (its edits, its pad, its recent jobs) is kept, and
+    the job itself is never changed by the page (an edit is a new tree, ``POST
+    /trees``)."""
     page.goto(f"{server}/?job={job}")
     if ready:
         page.wait_for_selector(ready)
