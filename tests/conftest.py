@@ -4,7 +4,10 @@ are in ``web_helpers.py``.  A module may define its own fixture of the same name
 
 ``make test`` runs the suite on two workers (pytest-xdist, ``-n 2 --dist loadfile``: each
 module on one worker, so its module-scoped fixtures are made once and its tests run in
-order); the modules that start a Ray take turns (:func:`one_ray_at_a_time`)."""
+order; the session-scoped ones, once a worker, for the modules it runs); the modules that
+start a Ray take turns (:func:`one_ray_at_a_time`).  A page test that only reads a
+finished result shares one (``finished_job``); none may depend on the order its module's
+tests run in."""
 
 from __future__ import annotations
 
