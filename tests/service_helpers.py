@@ -105,6 +105,18 @@ def wait_for(http: Any, job_id: str, test: Callable[[dict], bool], timeout: floa
     raise AssertionError(f"job {job_id}: condition not met in {timeout} s; last {body}")
 
 
+def finished_job_id(server: str, sketch: bytes, timeout: float = 180.0, **fields: str) -> str:
+    """Submit ``sketch`` with form ``fields`` to the server at ``server`` and wait until
+    the job is done (a failed or cancelled one fails the caller); its id."""
+    import httpx
+
+    with httpx.Client(base_url=server, timeout=30) as http:
+        job_id = submit(http, sketch, **fields)
+        body = wait_for(http, job_id, finished, timeout=timeout)
+    assert body["state"] == "done", body
+    return job_id
+
+
 def refining(body: dict) -> bool:
     return body["state"] == "running" and (body["progress"] or {}).get("evaluations", 0) >= 1
 

@@ -2,7 +2,10 @@
 the first tree shown while the refinement runs, the sliders and "another variant", the
 example gallery, the job in the address and the recent jobs, the 3D view's tools,
 undo/redo and brush size from the keyboard, and a phone scrolled to the result.  A real
-server with one worker (a fixed palm as the first estimate)."""
+server with one worker (a fixed palm as the first estimate); the tests that only shape
+or look at a finished tree open a shared job by its link (``finished_job``), those about
+making one (the first tree, the link and the recent jobs, the phone's scroll) make
+their own."""
 
 from __future__ import annotations
 
@@ -18,6 +21,7 @@ from web_helpers import (
     draw_with_mouse,
     guarded_context,
     make_tree,
+    open_job,
     open_page,
     view_pixels,
 )
@@ -50,8 +54,11 @@ def test_the_first_tree_is_shown_before_the_refinement_ends(page: Any) -> None:
     page.wait_for_selector("body[data-state=cancelled]", timeout=10_000)
 
 
-def test_sliders_variant_and_the_edited_download(page: Any) -> None:
-    make_tree(page)
+def test_sliders_variant_and_the_edited_download(
+    context: Any, server: str, finished_job: Any
+) -> None:
+    page = context.new_page()
+    open_job(page, server, finished_job())
     before = view_pixels(page)
     h0 = _height(page)
     assert page.get_attribute("body", "data-edits") is None
@@ -134,8 +141,9 @@ def test_permalink_reload_and_recent_jobs(page: Any, server: str) -> None:
     assert other.inner_text("#species").lower() == "palm"
 
 
-def test_view_tools(page: Any) -> None:
-    make_tree(page)
+def test_view_tools(context: Any, server: str, finished_job: Any) -> None:
+    page = context.new_page()
+    open_job(page, server, finished_job())
     assert page.inner_text("#height-readout").endswith(" m") and _height(page) > 1
     framed = view_pixels(page)
     page.uncheck("#ground")

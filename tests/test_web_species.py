@@ -3,7 +3,9 @@ lists every species and the one picked reaches the job; the result names its spe
 words and shows its candidates as thumbnails; clicking one (or pressing Enter on it)
 switches the 3D view, the controls and the downloads to that candidate's tree.  A real
 server with one worker (a fixed palm as the first estimate, tiny budgets); any console
-error, page error or request outside the server fails the test."""
+error, page error or request outside the server fails the test.  The picker's test makes
+its job in the page (the pick must reach it); the others only read and shape a finished
+one, and open a shared job by its link (``finished_job``)."""
 
 from __future__ import annotations
 
@@ -15,7 +17,15 @@ from typing import Any
 
 import numpy as np
 import pytest
-from web_helpers import DESKTOP, PHONE, guarded_context, make_tree, open_page, view_pixels
+from web_helpers import (
+    DESKTOP,
+    PHONE,
+    guarded_context,
+    make_tree,
+    open_job,
+    open_page,
+    view_pixels,
+)
 
 from weberpenn import species
 
@@ -24,9 +34,14 @@ READY = "body[data-species=ready]"
 
 
 @pytest.fixture
-def page(browser: Any, server: str) -> Iterator[Any]:
+def context(browser: Any, server: str) -> Iterator[Any]:
     with guarded_context(browser, server, console=True, **DESKTOP) as ctx:
-        yield open_page(ctx, server, READY)
+        yield ctx
+
+
+@pytest.fixture
+def page(context: Any, server: str) -> Any:
+    return open_page(context, server, READY)
 
 
 def _make_tree(page: Any, pick: str | None = None) -> dict:
@@ -70,9 +85,10 @@ def test_the_picker_lists_every_species_and_the_pick_reaches_the_job(page: Any) 
 
 
 def test_candidates_switch_the_tree_the_controls_and_the_downloads(
-    page: Any, tmp_path: Path
+    context: Any, server: str, finished_job: Any
 ) -> None:
-    job = _make_tree(page)
+    page = context.new_page()
+    job = open_job(page, server, finished_job(), READY)
     result = job["result"]
     assert result["species"] == "palm"
     text = page.inner_text("#species-text")
@@ -153,14 +169,16 @@ def test_candidates_switch_the_tree_the_controls_and_the_downloads(
     assert page.get_attribute("#dl-glb", "href").endswith(f"/jobs/{job['id']}/tree.glb")
 
 
-def test_a_phone_shows_and_switches_the_candidates(browser: Any, server: str) -> None:
+def test_a_phone_shows_and_switches_the_candidates(
+    browser: Any, server: str, finished_job: Any
+) -> None:
     with guarded_context(browser, server, console=True, **PHONE) as ctx:
-        pg = open_page(ctx, server, READY)
-        job = _make_tree(pg)
+        pg = ctx.new_page()
+        job = open_job(pg, server, finished_job(), READY)
         cands = pg.locator("#candidates .candidate")
         assert cands.count() == 3
-        # all three in one layout: on a phone the page is still scrolling smoothly to the
-        # result, so boxes read one after another can sit at different heights
+        # all three in one layout: on a phone the page may still be scrolling smoothly,
+        # so boxes read one after another can sit at different heights
         boxes = cands.evaluate_all(
             "els => els.map(e => { const r = e.getBoundingClientRect();"
             " return {x: r.x, y: r.y, width: r.width}; })"
@@ -174,8 +192,11 @@ def test_a_phone_shows_and_switches_the_candidates(browser: Any, server: str) ->
         assert pg.get_attribute("body", "data-shown") == job["result"]["candidates"][2]["species"]
 
 
-def test_a_slider_past_the_generators_limits_stops_at_the_most_it_grows(page: Any) -> None:
-    _make_tree(page, "fir")
+def test_a_slider_past_the_generators_limits_stops_at_the_most_it_grows(
+    context: Any, server: str, finished_job: Any
+) -> None:
+    page = context.new_page()
+    open_job(page, server, finished_job(species="fir"), READY)
     n = int(page.get_attribute("body", "data-edits") or 0)
     # three times the branches of a fir: more leaves than the generator grows
     page.evaluate(

@@ -5,9 +5,10 @@ edits, the variant, the settings), one undo for the pad and the tree, a result t
 when the drawing may be no tree or the species was the person's pick, the OBJ and the
 light GLB, an edited tree framed again, and a phone that scrolls over the 3D view.
 
-Most tests need only a finished job: the module makes one (and a fir picked by hand) at
-the start through the API and each test opens it by its link; a real server with one
-worker (a fixed palm as the first estimate, tiny budgets)."""
+Most tests need only a finished job: the module asks for one (and a fir picked by hand)
+made through the API (``finished_job``, shared with the other page modules of its test
+process) and each test opens it by its link in a context of its own; a real server with
+one worker (a fixed palm as the first estimate, tiny budgets)."""
 
 from __future__ import annotations
 
@@ -26,6 +27,8 @@ from web_helpers import (
     PHONE,
     draw_with_mouse,
     guarded_context,
+    open_job,
+    painted,
     palm_service,
     view_pixels,
 )
@@ -35,32 +38,17 @@ READY = "body[data-edit=ready]"
 
 
 @pytest.fixture(scope="module")
-def jobs(server: str, sketch: bytes) -> dict[str, str]:
-    """Two finished jobs of the module's server: ``palm`` (the drawing decides) and
-    ``fir`` (the species picked by hand)."""
-    import httpx
-    from service_helpers import finished, submit, wait_for
-
-    with httpx.Client(base_url=server, timeout=30) as http:
-        ids = {
-            "palm": submit(http, sketch, budget="2"),
-            "fir": submit(http, sketch, budget="2", species="fir"),
-        }
-        for job_id in ids.values():
-            assert wait_for(http, job_id, finished, timeout=180)["state"] == "done"
-    return ids
+def jobs(finished_job: Any) -> dict[str, str]:
+    """Two finished jobs of the server (``finished_job``, shared with the other page
+    modules of the test process): ``palm`` (the drawing decides) and ``fir`` (the
+    species picked by hand)."""
+    return {"palm": finished_job(), "fir": finished_job(species="fir")}
 
 
 @pytest.fixture
 def page(browser: Any, server: str) -> Iterator[Any]:
     with guarded_context(browser, server, console=True, **DESKTOP) as ctx:
         yield ctx.new_page()
-
-
-def _open(page: Any, server: str, job: str) -> None:
-    page.goto(f"{server}/?job={job}")
-    page.wait_for_selector(READY, timeout=30_000)
-    page.wait_for_selector("body[data-model=loaded]", timeout=30_000)
 
 
 def _edits(page: Any) -> int:
@@ -88,7 +76,7 @@ def _job_count(server: str) -> int:
 
 
 def test_cancel_leaves_only_the_cancelled_job_on_screen(page: Any, server: str, jobs: dict) -> None:
-    _open(page, server, jobs["palm"])
+    open_job(page, server, jobs["palm"])
     assert "disabled" not in page.get_attribute("#dl-glb", "class")
     page.click("#clear")
     draw_with_mouse(page)
@@ -142,7 +130,7 @@ def _state(page: Any) -> dict:
 def test_a_reload_and_the_link_keep_the_drawing_the_edits_and_the_settings(
     page: Any, server: str, browser: Any, jobs: dict
 ) -> None:
-    _open(page, server, jobs["palm"])
+    open_job(page, server, jobs["palm"])
     page.wait_for_function(f"({INK})() > 500")  # the job's drawing is back on the pad
     # a few more strokes, settings for the next tree, a wider crown and another variant
     box = page.locator("#pad").bounding_box()
@@ -224,7 +212,7 @@ def test_the_api_gives_a_jobs_drawing_and_a_tree_as_obj(
 
 
 def test_a_reload_keeps_the_candidate_species_on_show(page: Any, server: str, jobs: dict) -> None:
-    _open(page, server, jobs["palm"])
+    open_job(page, server, jobs["palm"])
     other = page.get_attribute("#candidates .candidate >> nth=1", "data-species")
     n = int(page.get_attribute("body", "data-loads"))
     page.click("#candidates .candidate >> nth=1")
@@ -243,6 +231,8 @@ def test_a_reload_keeps_the_candidate_species_on_show(page: Any, server: str, jo
     # the candidate's tree, then its edit: never the job's own tree first (a model counts
     # as loaded once three.js has parsed it, which can come after the edit's count)
     page.wait_for_function("Number(document.body.dataset.loads || 0) >= 2", timeout=30_000)
+    # (what is checked is that nothing more comes: no condition to wait on, the one fixed
+    # wait of the page tests)
     page.wait_for_timeout(500)
     assert page.get_attribute("body", "data-loads") == "2"
 
@@ -250,7 +240,7 @@ def test_a_reload_keeps_the_candidate_species_on_show(page: Any, server: str, jo
 def test_ctrl_z_undoes_what_was_changed_last_the_pad_or_the_tree(
     page: Any, server: str, jobs: dict
 ) -> None:
-    _open(page, server, jobs["palm"])
+    open_job(page, server, jobs["palm"])
     page.click("#clear")
     draw_with_mouse(page)
     # a long stroke last (what its undo takes away is far more than a redraw's antialiasing)
@@ -295,7 +285,7 @@ def test_ctrl_z_undoes_what_was_changed_last_the_pad_or_the_tree(
 
 
 def test_a_picked_species_says_it_was_picked(page: Any, server: str, jobs: dict) -> None:
-    _open(page, server, jobs["fir"])
+    open_job(page, server, jobs["fir"])
     text = page.inner_text("#species-text")
     assert "you picked" in text.lower() and "fir" in text.lower(), text
     assert not text.startswith("It is"), text
@@ -306,22 +296,18 @@ def test_a_picked_species_says_it_was_picked(page: Any, server: str, jobs: dict)
 @pytest.fixture(scope="module")
 def not_a_tree(tmp_path_factory: pytest.TempPathFactory, sketch: bytes) -> Iterator[tuple]:
     """A server whose estimator calls every drawing no tree, and a finished job of it."""
-    import httpx
-    from service_helpers import finished, submit, wait_for
+    from service_helpers import finished_job_id
 
     data = tmp_path_factory.mktemp("no-tree")
     with palm_service(data, "service_helpers:not_a_tree_estimator") as url:
-        with httpx.Client(base_url=url, timeout=30) as http:
-            job = submit(http, sketch, budget="2")
-            assert wait_for(http, job, finished, timeout=180)["state"] == "done"
-        yield url, job
+        yield url, finished_job_id(url, sketch, budget="2")
 
 
 def test_a_drawing_that_is_no_tree_leads_with_the_question(browser: Any, not_a_tree: tuple) -> None:
     url, job = not_a_tree
     with guarded_context(browser, url, console=True, **DESKTOP) as ctx:
         pg = ctx.new_page()
-        _open(pg, url, job)
+        open_job(pg, url, job)
         text = pg.inner_text("#species-text")
         assert text.startswith("Is this a tree?"), text
         assert "It is a" not in text
@@ -330,7 +316,7 @@ def test_a_drawing_that_is_no_tree_leads_with_the_question(browser: Any, not_a_t
 
 
 def test_obj_and_the_light_glb(page: Any, server: str, jobs: dict, tmp_path: Path) -> None:
-    _open(page, server, jobs["palm"])
+    open_job(page, server, jobs["palm"])
     page.wait_for_function("document.getElementById('glb-note').textContent.includes('MB')")
     note = page.inner_text("#glb-note")
     assert "triangles" in note, note
@@ -348,13 +334,13 @@ def test_obj_and_the_light_glb(page: Any, server: str, jobs: dict, tmp_path: Pat
 
 
 def test_an_edited_tree_is_framed_again(page: Any, server: str, jobs: dict) -> None:
-    _open(page, server, jobs["palm"])
+    open_job(page, server, jobs["palm"])
     for name, value in (("crown_width", "max"), ("height", "min")):
         n = _edits(page)
         value = page.get_attribute(f"#c-{name}", value)
         _slide(page, name, value)
         _wait_edit(page, n)
-        page.wait_for_timeout(100)
+        painted(page)
         edited = view_pixels(page)
         page.click("#reset-view")
         framed = view_pixels(page)
@@ -367,7 +353,7 @@ def test_a_phone_scrolls_over_the_3d_view_and_has_large_targets(
 ) -> None:
     with guarded_context(browser, server, console=True, **PHONE) as ctx:
         pg = ctx.new_page()
-        _open(pg, server, jobs["palm"])
+        open_job(pg, server, jobs["palm"])
         pg.evaluate("document.getElementById('view').scrollIntoView({block: 'center'})")
         pg.wait_for_function("window.scrollY > 200")
         y0 = pg.evaluate("window.scrollY")

@@ -94,6 +94,21 @@ def open_page(ctx: Any, server: str, ready: str = "") -> Any:
     return pg
 
 
+def open_job(page: Any, server: str, job: str, ready: str = "") -> Any:
+    """``page`` on the link of the finished ``job`` (a shared one, ``finished_job`` in
+    ``conftest.py``), once its tree is shown and editable (and ``ready`` shows); the job
+    as the API gives it.  ``page`` a new one of a new context (the ``context`` fixture):
+    nothing of another test's visit (its edits, its pad, its recent jobs) is kept, and
+    the job itself is never changed by the page (an edit is a new tree, ``POST
+    /trees``)."""
+    page.goto(f"{server}/?job={job}")
+    if ready:
+        page.wait_for_selector(ready)
+    page.wait_for_selector("body[data-edit=ready]", timeout=30_000)
+    page.wait_for_selector("body[data-model=loaded]", timeout=30_000)
+    return page.evaluate("async (id) => (await fetch(`/jobs/${id}`)).json()", job)
+
+
 def make_tree(page: Any, budget: int = 2) -> None:
     """Draw ``tree_strokes``, submit with ``budget`` and wait until the result is shown
     and editable."""
@@ -103,6 +118,12 @@ def make_tree(page: Any, budget: int = 2) -> None:
     page.wait_for_selector("body[data-state=done]", timeout=JOB_TIMEOUT)
     page.wait_for_selector("body[data-edit=ready]", timeout=30_000)
     page.wait_for_selector("body[data-model=loaded]", timeout=30_000)
+
+
+def painted(page: Any) -> None:
+    """Wait until the browser has drawn two more frames: what a change of the page's
+    layout sets off (the 3D view resized, drawn again) has been painted by then."""
+    page.evaluate("() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)))")
 
 
 def view_pixels(page: Any) -> Any:
@@ -137,7 +158,11 @@ def tree_strokes(size: int = 512) -> list[list[tuple[float, float]]]:
 
 
 def draw_with_mouse(page: Any, selector: str = "#pad") -> None:
-    """Draw ``tree_strokes`` on the canvas with real mouse events."""
+    """Draw ``tree_strokes`` on the canvas with real mouse events, one move to each of a
+    stroke's points: the pad joins the points it is given with straight lines, so moves
+    in between (``steps``) draw the same lines, and each costs a round trip to the
+    browser and a redraw of the pad (three steps a point took 5.5 s a drawing, one 1.9 s,
+    for the same ink within 0.1%)."""
     box = page.locator(selector).bounding_box()
     k = box["width"] / 512
     for stroke in tree_strokes():
@@ -145,5 +170,5 @@ def draw_with_mouse(page: Any, selector: str = "#pad") -> None:
         page.mouse.move(box["x"] + x0 * k, box["y"] + y0 * k)
         page.mouse.down()
         for x, y in stroke[1:]:
-            page.mouse.move(box["x"] + x * k, box["y"] + y * k, steps=3)
+            page.mouse.move(box["x"] + x * k, box["y"] + y * k)
         page.mouse.up()
