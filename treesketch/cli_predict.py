@@ -27,6 +27,45 @@ if TYPE_CHECKING:
 __all__ = ["predict_command", "register"]
 
 
+# options kept out of the command's signature so it reads as what it does
+def _compare_option() -> Any:
+    return typer.Option(
+        None,
+        "--compare",
+        help="Also write a PNG: input sketch, first estimate's sketch, refined sketch with "
+        "your drawing's outline (red) over the tree's (blue), colour render.",
+    )
+
+
+def _outlines_option() -> Any:
+    return typer.Option(
+        None,
+        "--outlines",
+        help="Also write a PNG: your drawing's outline (red) over the tree's (blue), seen "
+        "from where you drew it (one picture per drawing, side by side).",
+    )
+
+
+def _embedding_option() -> Any:
+    return typer.Option(
+        "shipped",
+        "--embedding",
+        help="The learned style-blind shape embedding the refinement adds to its distance: "
+        "shipped (checkpoints/shape_embed.pt), none (the hand-made shape distance alone) or "
+        "a checkpoint file.",
+    )
+
+
+def _preview_option() -> Any:
+    return typer.Option(
+        None,
+        "--preview",
+        help="While it refines, keep the current best tree in this folder (tree.glb, light, "
+        "and sketch.png): the first estimate at once, then at most one every 2 s (the "
+        "Blender add-on shows it).",
+    )
+
+
 def predict_command(
     sketch: Path = typer.Argument(
         ..., help="The sketch: a PNG/JPEG of a tree, dark lines on white."
@@ -70,17 +109,8 @@ def predict_command(
         None, "--params", help="Also write the parameters (JSON)."
     ),
     preset_path: Path | None = preset_option(),
-    compare_path: Path | None = typer.Option(
-        None,
-        "--compare",
-        help="Also write a PNG: input sketch, first estimate's sketch, refined sketch, colour render.",
-    ),
-    outlines_path: Path | None = typer.Option(
-        None,
-        "--outlines",
-        help="Also write a PNG: your drawing's outline (red) over the tree's (blue), seen "
-        "from where you drew it (one picture per drawing, side by side).",
-    ),
+    compare_path: Path | None = _compare_option(),
+    outlines_path: Path | None = _outlines_option(),
     estimator: str = typer.Option(
         "tsn", "--estimator", help="First estimate: tsn, template (no network) or nns."
     ),
@@ -101,20 +131,8 @@ def predict_command(
     algorithm: str = typer.Option(
         RefineSettings.algorithm, "--algorithm", help="cobyla, bobyqa or sbplx."
     ),
-    embedding: str = typer.Option(
-        "shipped",
-        "--embedding",
-        help="The learned style-blind shape embedding the refinement adds to its distance: "
-        "shipped (checkpoints/shape_embed.pt), none (the hand-made shape distance alone) or "
-        "a checkpoint file.",
-    ),
-    preview_dir: Path | None = typer.Option(
-        None,
-        "--preview",
-        help="While it refines, keep the current best tree in this folder (tree.glb, light, "
-        "and sketch.png): the first estimate at once, then at most one every 2 s (the "
-        "Blender add-on shows it).",
-    ),
+    embedding: str = _embedding_option(),
+    preview_dir: Path | None = _preview_option(),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
     """Turn a sketch of a tree into a 3D tree: a first estimate (TSN), refined so the
