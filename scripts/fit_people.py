@@ -227,9 +227,14 @@ def main() -> None:
     det = TreeDetector.fit(
         x, y, held_out=detector_data(code_held, p_cal, head)[:2], weights=w, **shape
     )
+    # the warning limit where the calibration authors' trees and other things are
+    # judged wrongly alike (people's drawings only: they are what users send)
+    det = det.with_balanced_limit(p_cal["features"][:, :head], p_cal["kind"] == "tree")
     x, y, w = detector_data(code_fit, p_fit, head, LEFT_OUT_KINDS)
     held = detector_data(code_held, p_cal, head, LEFT_OUT_KINDS)[:2]
     lco = TreeDetector.fit(x, y, held_out=held, weights=w, **shape)
+    seen = ~np.isin(p_cal["kind"], LEFT_OUT_KINDS)
+    lco = lco.with_balanced_limit(p_cal["features"][seen, :head], p_cal["kind"][seen] == "tree")
     old = loaded.species_id.classifier
     if old is None or old.reads != "features":
         raise SystemExit("the checkpoint's species classifier must read features")
@@ -245,7 +250,7 @@ def main() -> None:
                 "people (fit part)": int(len(p_fit["kind"])),
             },
             "calibration_wrong": calib_rates,
-            "tree_detector": shape,
+            "tree_detector": shape | {"offset": det.offset},
             "species_pull": args.pull,
             "people_weight": args.people_weight,
             "command": " ".join(sys.argv),
@@ -262,6 +267,7 @@ def main() -> None:
     for k, v in calib_rates.items():
         print(f"calibration part, {k}: {v:.1%} judged wrongly")
     print(f"temperatures: detector {det.temperature:.2f}, species {clf.temperature:.2f}")
+    print(f"detector's limit: P(tree) {1 / (1 + np.exp(det.offset)):.3f} before the offset")
     print(
         f"wrote {out} and {args.features / 'lco_detector.npz'} ({time.perf_counter() - t0:.0f} s)"
     )

@@ -161,3 +161,30 @@ def test_fitting_networks_leaves_the_callers_random_state_alone() -> None:
     torch.manual_seed(123)
     TreeDetector.fit(*_ring(0, 200), hidden=4, members=2)
     assert torch.equal(torch.rand(3), expected)
+
+
+def test_a_balanced_limit_judges_both_kinds_wrongly_alike() -> None:
+    # trees that read less surely than the fit's (people's): at the plain 0.5 they are
+    # warned far more often than other things pass; the offset moves the limit between
+    x, y = _data(0, 400)
+    det = TreeDetector.fit(x, y)
+    xs, ys = _data(1, 400)
+    shifted = xs.copy()
+    shifted[ys] -= 0.8 * (xs[ys].mean(axis=0) - xs[~ys].mean(axis=0))  # trees drawn oddly
+
+    def rates(d: TreeDetector) -> tuple[float, float]:
+        p = d.probabilities(shifted)
+        return float(np.mean(p[ys] >= 0.5)), float(np.mean(p[~ys] < 0.5))
+
+    spared, warned = rates(det)
+    assert spared < warned - 0.1  # the plain limit is lopsided
+    balanced = det.with_balanced_limit(shifted, ys)
+    assert balanced.offset > 0
+    b_spared, b_warned = rates(balanced)
+    assert min(b_spared, b_warned) > min(spared, warned)
+    assert abs(b_spared - b_warned) < abs(spared - warned)
+    again = TreeDetector.from_dict(balanced.to_dict())
+    assert again.offset == balanced.offset
+    np.testing.assert_allclose(again.probabilities(xs), balanced.probabilities(xs))
+    with pytest.raises(ValueError, match="both"):
+        det.with_balanced_limit(xs[ys], ys[ys])
