@@ -64,7 +64,7 @@ from typing import Any
 
 import numpy as np
 
-from benchmarks.lib.settings import setting
+from benchmarks.lib.settings import add_set_option
 from eval.pictures import non_trees
 from render.sketch import SketchRenderer
 from render.styles import Silhouettes, draw
@@ -669,14 +669,7 @@ def main(argv: list[str] | None = None) -> int:
         default="shipped",
         help="RefineSettings.embedding: shipped, none or a checkpoint (warning and refine)",
     )
-    ap.add_argument(
-        "--set",
-        type=setting,
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="any other RefineSettings field (warning and refine), e.g. species_tries=1",
-    )
+    add_set_option(ap, "any other RefineSettings field (warning and refine), e.g. species_tries=1")
     args = ap.parse_args(argv)
     if args.markdown is not None:
         print(markdown(json.loads(args.markdown.read_text())))

@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from benchmarks.lib.settings import setting
+from benchmarks.lib.settings import add_set_option
 from eval.hausdorff import (
     DEFAULT_SAMPLES,
     FAMILY,
@@ -376,14 +376,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--budget", type=int, default=RefineSettings().budget)
     ap.add_argument("--time-limit", type=float, default=RefineSettings().time_limit)
     ap.add_argument("--samples", type=int, default=DEFAULT_SAMPLES)
-    ap.add_argument(
-        "--set",
-        type=setting,
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="a RefineSettings field (repeatable), e.g. fit_start=false",
-    )
+    add_set_option(ap, "a RefineSettings field (repeatable), e.g. fit_start=false")
     ap.add_argument(
         "--known-yaw",
         action="store_true",

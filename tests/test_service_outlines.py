@@ -5,30 +5,19 @@ real worker process, a fixed palm as the first estimate, no refinement (fast).""
 from __future__ import annotations
 
 import io
-import time
 from collections.abc import Iterator
 
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 from PIL import Image
-from service_helpers import palm_sketch_png
+from service_helpers import finished, palm_sketch_png, wait_for
 
 from refine.envelope import DRAWING_RED, TREE_BLUE
 from treesketch.service import ServiceConfig, create_app
 from treesketch.steps import SKETCH_SIZE
 
 ESTIMATOR = "service_helpers:palm_estimator"
-
-
-def _wait(client: TestClient, job_id: str, timeout: float = 180.0) -> dict:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        body = client.get(f"/jobs/{job_id}").json()
-        if body["state"] in ("done", "failed", "cancelled", "expired"):
-            return body
-        time.sleep(0.1)
-    raise AssertionError(f"job {job_id} did not finish in {timeout} s")
 
 
 @pytest.fixture(scope="module")
@@ -46,7 +35,7 @@ def two_view_job(client: TestClient) -> dict:
     ]
     r = client.post("/jobs", files=parts, data={"yaw": ["0", "90"], "refine": "false"})
     assert r.status_code == 202, r.text
-    job = _wait(client, r.json()["id"])
+    job = wait_for(client, r.json()["id"], finished, timeout=180.0)
     assert job["state"] == "done", job["error"]
     return job
 
@@ -101,7 +90,7 @@ def test_an_unknown_or_unfinished_job_is_404(client: TestClient, two_view_job: d
         assert ("queued" in detail or "running" in detail) and "no tree" in detail, detail
     finally:
         client.delete(f"/jobs/{job_id}")
-    _wait(client, job_id)
+    wait_for(client, job_id, finished, timeout=180.0)
 
 
 def test_a_job_without_the_picture_is_404(client: TestClient, two_view_job: dict) -> None:

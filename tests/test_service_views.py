@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 from PIL import Image
-from service_helpers import palm_sketch_png, png
+from service_helpers import finished, palm_sketch_png, png, wait_for
 
 from treesketch.service import VIEW_ARTEFACTS, JobStore, Limits, ServiceConfig, create_app
 from treesketch.service.limits import LimitError, parse_options
@@ -21,16 +21,6 @@ from treesketch.service.runner import JobOptions
 from treesketch.views import MAX_VIEWS
 
 ESTIMATOR = "service_helpers:palm_estimator"
-
-
-def _wait(client: TestClient, job_id: str, timeout: float = 180.0) -> dict:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        body = client.get(f"/jobs/{job_id}").json()
-        if body["state"] in ("done", "failed", "cancelled", "expired"):
-            return body
-        time.sleep(0.2)
-    raise AssertionError(f"job {job_id} did not finish in {timeout} s")
 
 
 def _parts(*drawings: bytes) -> list[tuple[str, tuple[str, bytes, str]]]:
@@ -67,7 +57,7 @@ def two_view_job(client: TestClient, front: bytes, side: bytes) -> dict:
     store: JobStore = client.app.state.store
     # both drawings stored beside each other, as sent
     assert store.read_uploads(body["id"], 2) == [front, side]
-    return _wait(client, body["id"])
+    return wait_for(client, body["id"], finished, timeout=180.0)
 
 
 def test_two_drawings_make_one_tree_with_both_views(client: TestClient, two_view_job: dict) -> None:
@@ -112,7 +102,7 @@ def test_an_unknown_side_is_searched(client: TestClient, front: bytes, side: byt
 def test_one_drawing_has_no_view_files(client: TestClient, front: bytes) -> None:
     r = client.post("/jobs", files=_parts(front), data={"yaw": "0", "refine": "false"})
     assert r.status_code == 202, r.text
-    job = _wait(client, r.json()["id"])
+    job = wait_for(client, r.json()["id"], finished, timeout=180.0)
     assert job["state"] == "done" and "views" not in job["result"]
     assert "yaws" not in job["options"]  # stored and shown as before
     assert not set(VIEW_ARTEFACTS) & set(job["links"])
@@ -187,7 +177,7 @@ def test_a_full_form_of_four_drawings_is_taken(client: TestClient, front: bytes)
     r = client.post("/jobs", files=_parts(*[front] * MAX_VIEWS), data={**options, "yaw": yaws})
     assert r.status_code == 202, r.text
     assert r.json()["options"]["yaws"] == [90.0, 180.0, 270.0]
-    job = _wait(client, r.json()["id"])
+    job = wait_for(client, r.json()["id"], finished, timeout=180.0)
     assert job["state"] == "done", job["error"]
     assert len(job["result"]["views"]) == MAX_VIEWS
     assert client.get(job["links"]["view4_after.png"]).status_code == 200
@@ -293,7 +283,9 @@ def test_outline_query_is_checked(
 def test_outline_of_no_tree(client: TestClient) -> None:
     assert client.get("/jobs/nope/outline.png").status_code == 404
     blank = png(np.full((64, 64), 255, np.uint8))
-    job = _wait(client, client.post("/jobs", files=_parts(blank)).json()["id"])
+    job = wait_for(
+        client, client.post("/jobs", files=_parts(blank)).json()["id"], finished, timeout=180.0
+    )
     assert job["state"] == "failed"
     r = client.get(f"/jobs/{job['id']}/outline.png")
     assert r.status_code == 409 and "no tree" in r.json()["detail"]

@@ -9,7 +9,7 @@ from typing import Any
 
 from refine.search import RefineSettings
 
-__all__ = ["setting"]
+__all__ = ["add_set_option", "setting"]
 
 
 def setting(text: str) -> tuple[str, Any]:
@@ -33,3 +33,10 @@ def setting(text: str) -> tuple[str, Any]:
         return key, kind(value)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{key} takes a {kind.__name__}, got {value!r}") from None
+
+
+def add_set_option(ap: argparse.ArgumentParser, help: str) -> None:
+    """``--set KEY=VALUE`` (repeatable) on ``ap``: ``args.set``, a list of (field, value)."""
+    ap.add_argument(
+        "--set", type=setting, action="append", default=[], metavar="KEY=VALUE", help=help
+    )
