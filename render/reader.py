@@ -829,31 +829,17 @@ def trunk_axis(ink: np.ndarray) -> float:
     of the lowest rows' ink.  People draw a trunk as two lines that seldom end on one
     row: when the lowest rows hold one thin line, the axis is the middle of it and the
     nearest line beside it a little higher up (the trunk's other side), not the line
-    alone (which would frame the tree half off the centre line).  The line is followed
-    up through its own stroke, so one that runs out along the ground as a root, several
-    pixels a row, is still one line."""
-    from scipy import ndimage
-
+    alone (which would frame the tree half off the centre line)."""
     ys = np.flatnonzero(ink.any(axis=1))
     top, bottom = int(ys[0]), int(ys[-1])
     h = bottom - top + 1
-    low = ink[max(top, bottom - max(2, (bottom - top) // 40)) : bottom + 1]
-    bx = np.flatnonzero(low.any(0))
+    bx = np.flatnonzero(ink[max(top, bottom - max(2, (bottom - top) // 40)) : bottom + 1].any(0))
     lo, hi = int(bx[0]), int(bx[-1])
-    base = _runs(ink[bottom])
-    band = max(top, bottom - int(PARTNER_RISE * h))
-    strokes = ndimage.label(ink[band : bottom + 1], structure=np.ones((3, 3)))[0]
-    line = strokes[-1, base[0][0]] if len(base) == 1 else 0
-    thin = len(base) == 1 and base[0][1] - base[0][0] + 1 <= SINGLE_LINE * h
-    if thin and (
-        hi - lo + 1 <= SINGLE_LINE * h or (strokes[-len(low) :] == line).sum() == low.sum()
-    ):
-        reach, at = PARTNER_REACH * h, base[0]
-        for r in range(bottom - 1, band - 1, -1):
+    if hi - lo + 1 <= SINGLE_LINE * h and len(_runs(ink[bottom])) <= 1:
+        reach, at = PARTNER_REACH * h, (lo, hi)  # the line followed up as it slants
+        for r in range(bottom - 1, max(top, bottom - int(PARTNER_RISE * h)) - 1, -1):
             runs = _runs(ink[r])
-            own = strokes[r - band] == line
-            mine = [u for u in runs if (u[0] - 2 <= at[1] and u[1] + 2 >= at[0])
-                    or own[u[0] : u[1] + 1].any()]  # fmt: skip
+            mine = [u for u in runs if u[0] - 2 <= at[1] and u[1] + 2 >= at[0]]
             if not mine:
                 break
             at = (min(u[0] for u in mine), max(u[1] for u in mine))

@@ -464,22 +464,6 @@ def test_a_trunk_whose_two_lines_end_apart_is_framed_on_its_middle(
     assert right - left >= 0.95 * (even[1] - even[0])  # as large as the frame allows
 
 
-@pytest.mark.parametrize("side", [-1, 1])
-def test_a_trunk_whose_line_flares_into_a_root_is_framed_on_its_middle(side: int) -> None:
-    # one line runs on out along the ground as a root (several pixels a row): the lowest
-    # ink is still one line, whose partner is the trunk's other side
-    im = Image.new("L", (300, 300), 255)
-    d = ImageDraw.Draw(im)
-    d.ellipse([70, 30, 230, 150], outline=0, width=3)
-    d.line([(135, 148), (135, 262)], fill=0, width=3)
-    d.line([(165, 148), (165, 262)], fill=0, width=3)
-    foot = 135 if side < 0 else 165
-    d.line([(foot, 262), (foot + side * 60, 282)], fill=0, width=3)  # the root
-    out = normalise_drawing(np.asarray(im), 256) < 128
-    cols = np.flatnonzero(out[:100].any(axis=0))  # the crown, over the trunk
-    assert abs((cols[0] + cols[-1] + 1) / 2 - 128) <= 6, (cols[0], cols[-1])
-
-
 def test_a_trunk_drawn_as_one_line_keeps_its_axis() -> None:
     # a lollipop's stick: one line, nothing beside it; its low leaves do not move it
     im = Image.new("L", (300, 300), 255)
