@@ -474,6 +474,12 @@ def people(args: argparse.Namespace) -> None:
     print(f"\ntrees unwarned: **{1 - warned[trees].mean():.1%}** of {trees.sum()}")
     print(f"other things warned: **{warned[~trees].mean():.1%}** of {(~trees).sum()}")
     print(f"trees read as a palm, bonsai or pine: **{odd.mean():.1%}**")
+    # how far "is this a tree?"'s confidence is from how often it is right (10 bins); the
+    # held part holds about one tree in six, the balanced limit assumes them alike
+    conf = np.maximum(p_tree, 1.0 - p_tree)
+    calib, _ = ece(conf, (p_tree >= 0.5) == trees)
+    print(f"the warning's confidence, ECE: {calib:.3f} (its mean {conf.mean():.3f}, right "
+          f"{np.mean((p_tree >= 0.5) == trees):.3f})")  # fmt: skip
     _people_palms(model, args.palms)
     if args.lco:
         lco = TreeDetector.from_dict(dict(np.load(args.lco)))
