@@ -1,7 +1,8 @@
 """Does the tree follow the drawing's outline?  The envelope overlap (issue 48).
 
 A picture's **envelope** is its ink (darker than half white) seen at :data:`SIDE` pixels,
-closed with a disk of radius :data:`CLOSE_RADIUS` pixels (a trunk drawn as two lines, a
+closed with a disk of radius :data:`CLOSE_RADIUS` pixels (``refine.envelope.CLOSE_FRACTION``
+of the side) (a trunk drawn as two lines, a
 broken crown outline become one shape), then every row filled between its leftmost and
 rightmost ink (``refine.envelope``).  The **overlap** of two pictures is the intersection
 over the union of their envelopes: 1 when the tree has the drawn outline (its crown's
@@ -20,12 +21,12 @@ from typing import Any
 import numpy as np
 from PIL import Image
 
-from refine.envelope import envelope_of_ink, mask_iou
+from refine.envelope import CLOSE_FRACTION, envelope_of_ink, mask_iou
 
 __all__ = ["CLOSE_RADIUS", "SIDE", "envelope", "envelope_overlap"]
 
 SIDE = 256  # pixels: the side the envelope is measured at
-CLOSE_RADIUS = 6  # pixels at SIDE: the disk the ink is closed with
+CLOSE_RADIUS = CLOSE_FRACTION * SIDE  # pixels at SIDE (6): the disk the ink is closed with
 _DARK = 128  # of 255: a darker pixel is ink
 
 

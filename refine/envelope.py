@@ -14,7 +14,16 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-__all__ = ["close_disk", "envelope_of_ink", "mask_iou", "outlines_rgb", "row_fill"]
+__all__ = [
+    "CLOSE_FRACTION",
+    "close_disk",
+    "envelope_of_ink",
+    "mask_iou",
+    "outlines_rgb",
+    "row_fill",
+]
+
+CLOSE_FRACTION = 6 / 256  # of the picture's side: the disk the ink is closed with
 
 
 def close_disk(ink: np.ndarray, radius: float) -> np.ndarray:
@@ -37,9 +46,11 @@ def row_fill(mask: np.ndarray) -> np.ndarray:
     return (cols[None, :] >= left[:, None]) & (cols[None, :] <= right[:, None])
 
 
-def envelope_of_ink(ink: np.ndarray, radius: float) -> np.ndarray:
-    """The envelope of an ink mask: closed with a disk of ``radius`` px, rows filled."""
-    return row_fill(close_disk(ink, radius))
+def envelope_of_ink(ink: np.ndarray, radius: float | None = None) -> np.ndarray:
+    """The envelope of an ink mask: closed with a disk of ``radius`` px (default
+    ``CLOSE_FRACTION`` of its height), rows filled."""
+    r = CLOSE_FRACTION * ink.shape[0] if radius is None else radius
+    return row_fill(close_disk(ink, r))
 
 
 def mask_iou(a: np.ndarray, b: np.ndarray) -> float:
@@ -55,15 +66,14 @@ TREE_BLUE = (30, 60, 220)
 def outlines_rgb(drawing: np.ndarray, tree: np.ndarray, radius: float | None = None) -> np.ndarray:
     """The tree's sketch faded, with the drawing's envelope outline in red and the tree's
     in blue (RGB uint8): what a person checks the tree against.  Both sketches uint8 of
-    one size, paper light; ``radius`` of the closing (default 6 px at 256)."""
+    one size, paper light; ``radius`` of the closing (default ``CLOSE_FRACTION``)."""
     a, b = np.asarray(drawing), np.asarray(tree)
     if a.shape != b.shape:
         raise ValueError(f"sketch sizes differ: {a.shape} vs {b.shape}")
-    r = 6 * a.shape[0] / 256 if radius is None else radius
     faded = 255 - (255 - b.astype(np.float32)) * 0.35
     rgb = np.repeat(faded[..., None], 3, axis=2).astype(np.uint8)
     width = max(1, round(a.shape[0] / 128))
     for ink, colour in ((a < 128, DRAWING_RED), (b < 128, TREE_BLUE)):
-        env = envelope_of_ink(ink, r)
+        env = envelope_of_ink(ink, radius)
         rgb[env & ~ndimage.binary_erosion(env, iterations=width, border_value=0)] = colour
     return rgb

@@ -90,7 +90,6 @@ _DARK = 0.5
 # hand-made shape distance: chosen on the benchmark's development pairs and the style
 # drawings' refinement (RESULTS.md)
 EMBED_WEIGHT = 4.0
-ENVELOPE_CLOSE = 6 / 256  # of the side: the disk the envelope closes the ink with
 
 
 class Embedder(Protocol):
@@ -232,7 +231,7 @@ class ShapeTarget:
     def envelope(self) -> np.ndarray:
         """The sketch's envelope as framed (``refine.envelope``; not height-framed: where
         the tree stands in the frame counts)."""
-        return envelope_of_ink(self.image < _DARK, ENVELOPE_CLOSE * self.size)
+        return envelope_of_ink(self.image < _DARK)
 
     @property
     def stem(self) -> float:

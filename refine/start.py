@@ -44,10 +44,9 @@ __all__ = ["DRAWN_KEYS", "Profile", "choose_start", "fit_start", "profile_of"]
 FIT_BELOW = 0.7
 BINS = 24  # height bins of a width profile
 TRUNK_FRACTION = 0.3  # of the widest row: narrower rows at the bottom are the trunk
-CLOSE_FRACTION = 6 / 256  # of the side: the disk the ink is closed with (eval.envelope's)
 REACH_STEP = 3.0  # the branches are made at most this many times longer or shorter
 CORRECTIONS = 2  # rounds of correction from the tree's own outline
-TRUNK_STEP = 2.0  # the trunk is made at most this many times thicker or thinner per round  # the branches are lengthened at most this many times
+TRUNK_STEP = 2.0  # the trunk is made at most this many times thicker or thinner per round
 _DARK = 0.5
 
 
@@ -75,7 +74,7 @@ def profile_of(img: np.ndarray) -> Profile | None:
     ink = a < _DARK
     if not ink.any():
         return None
-    env = envelope_of_ink(ink, CLOSE_FRACTION * ink.shape[0])
+    env = envelope_of_ink(ink)
     width = env.sum(axis=1).astype(np.float64)
     rows = np.flatnonzero(width)
     top, bottom = rows[0], rows[-1]
@@ -107,11 +106,16 @@ def _height(params: TreeParams) -> float:
     return float(z.max() - min(0.0, z.min()))
 
 
-def _render_profile(params: TreeParams, species: str, size: int, yaw: float) -> Profile | None:
+def _cheap_sketch(params: TreeParams, species: str, size: int, yaw: float) -> np.ndarray:
+    """The tree's fast sketch (the search's own) at ``yaw``, ``size`` px."""
     from render.sketch import SketchRenderer, sketch_mesh
 
     r = SketchRenderer(sketch_mesh(grow(params), size, species), engine="raster")
-    return profile_of(r.sketch(yaw % 360.0, size))
+    return r.sketch(yaw % 360.0, size)
+
+
+def _render_profile(params: TreeParams, species: str, size: int, yaw: float) -> Profile | None:
+    return profile_of(_cheap_sketch(params, species, size, yaw))
 
 
 def _custom_shape(want: Profile) -> list[float]:
@@ -135,13 +139,20 @@ def _custom_shape(want: Profile) -> list[float]:
 
 
 def fit_start(
-    drawing: np.ndarray, params: TreeParams, species: str, size: int = 128, yaw: float = 0.0
+    drawing: np.ndarray,
+    params: TreeParams,
+    species: str,
+    size: int = 128,
+    yaw: float = 0.0,
+    seen: np.ndarray | None = None,
 ) -> TreeParams:
     """``params`` with the drawn outline (see the module text); ``drawing`` the prepared
     drawing as the search frames it (``refine.objective.framed``), ``yaw`` the view the
-    tree is compared at.  Costs ``CORRECTIONS + 1`` grows and cheap sketches."""
+    tree is compared at; ``seen`` the cheap sketch of ``params`` there when the caller
+    has it.  Costs ``CORRECTIONS + 1`` grows and cheap sketches (one fewer with
+    ``seen``)."""
     want = profile_of(drawing)
-    got = _render_profile(params, species, size, yaw)
+    got = profile_of(_cheap_sketch(params, species, size, yaw) if seen is None else seen)
     if want is None or got is None or int(params["levels"]) < 2:
         return params
     height = _height(params)
@@ -209,16 +220,13 @@ def choose_start(
     from .shape import ShapeTarget
 
     def sketch(p: TreeParams) -> np.ndarray:
-        from render.sketch import SketchRenderer, sketch_mesh
-
-        r = SketchRenderer(sketch_mesh(grow(p), drawing.size, species), engine="raster")
-        return r.sketch(yaw % 360.0, drawing.size)
+        return _cheap_sketch(p, species, drawing.size, yaw)
 
     first = sketch(params)
     seen = ShapeTarget.from_image(framed(first, drawing.size), drawing.size)
     if mask_iou(drawing.shape.envelope, seen.envelope) >= FIT_BELOW:
         return params, ()
-    fitted = fit_start(drawing.target.image, params, species, drawing.size, yaw)
+    fitted = fit_start(drawing.target.image, params, species, drawing.size, yaw, seen=first)
     if fitted is params:
         return params, ()
     if drawing.distance(sketch(fitted)) < drawing.distance(first):

@@ -72,15 +72,11 @@ def outlines_images(result: Any) -> list[np.ndarray | None]:
     the pipeline): nothing to lay over."""
     from refine.envelope import outlines_rgb
 
-    views = result.views or ()
-    pairs = [(v.input_sketch, v.sketch_after) for v in views] or [
-        (result.input_sketch, result.sketch_after)
-    ]
     return [
         None
-        if drawing is None or np.shape(drawing) != np.shape(tree)
-        else outlines_rgb(drawing, tree)
-        for drawing, tree in pairs
+        if v.input_sketch is None or np.shape(v.input_sketch) != np.shape(v.sketch_after)
+        else outlines_rgb(v.input_sketch, v.sketch_after)
+        for v in result.views or (result,)
     ]
 
 
@@ -88,12 +84,10 @@ def outlines_strip(result: Any) -> np.ndarray:
     """:func:`outlines_images` side by side (the tree's sketch alone for a view without
     its drawing): the ``outlines`` kind."""
     pictures = [
-        np.repeat(np.asarray(tree, np.uint8)[..., None], 3, axis=2) if pic is None else pic
-        for pic, tree in zip(
-            outlines_images(result),
-            [v.sketch_after for v in result.views or ()] or [result.sketch_after],
-            strict=True,
-        )
+        np.repeat(np.asarray(v.sketch_after, np.uint8)[..., None], 3, axis=2)
+        if pic is None
+        else pic
+        for pic, v in zip(outlines_images(result), result.views or (result,), strict=True)
     ]
     return np.concatenate(pictures, axis=1)
 

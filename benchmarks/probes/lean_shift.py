@@ -17,7 +17,7 @@ import argparse
 import numpy as np
 
 from refine.envelope import envelope_of_ink
-from refine.start import CLOSE_FRACTION, profile_of
+from refine.start import profile_of
 from render.sketch import SketchRenderer, sketch_mesh
 from weberpenn import grow, species
 from weberpenn.controls import apply_controls
@@ -30,7 +30,7 @@ def shift(params, name: str, yaw: float, size: int = 128) -> float:
     ink = np.asarray(img) < 128
     if prof is None:
         return float("nan")
-    env = envelope_of_ink(ink, CLOSE_FRACTION * size)
+    env = envelope_of_ink(ink)
     rows = np.flatnonzero(env.any(axis=1))
     h = rows[-1] - rows[0] + 1
     crown = env[rows[0] : rows[-1] + 1 - round(prof.crown_base * h)]
