@@ -376,7 +376,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--budget", type=int, default=RefineSettings().budget)
     ap.add_argument("--time-limit", type=float, default=RefineSettings().time_limit)
     ap.add_argument("--samples", type=int, default=DEFAULT_SAMPLES)
-    add_set_option(ap, "a RefineSettings field (repeatable), e.g. fit_start=false")
+    add_set_option(ap, "a RefineSettings field (repeatable), e.g. budget=60")
     ap.add_argument(
         "--known-yaw",
         action="store_true",

@@ -224,8 +224,6 @@ class RefineSettings:
     metric: str = "shape"
     fast_sketch: bool = True
     embedding: str = "shipped"
-    # start from the drawn outline (``refine.start``) when it is nearer than the estimate
-    fit_start: bool = True
 
     def replace(self, **changes: Any) -> RefineSettings:
         return dataclasses.replace(self, **changes).validate()
@@ -257,9 +255,8 @@ class RefineSettings:
             raise ValueError(
                 f"metric must be one of {', '.join(METRICS)}, got {_shown(self.metric)}"
             )
-        for flag in ("fast_sketch", "fit_start"):
-            if not isinstance(getattr(self, flag), bool):
-                raise ValueError(f"{flag} must be True or False, got {getattr(self, flag)!r}")
+        if not isinstance(self.fast_sketch, bool):
+            raise ValueError(f"fast_sketch must be True or False, got {self.fast_sketch!r}")
         e = self.embedding
         if not isinstance(e, str) or not (e in EMBEDDINGS or Path(e).is_file()):
             raise ValueError(
@@ -336,7 +333,7 @@ def refine(
     # trunk bends freely (palm, bonsai): there the bends tried at the start find the
     # drawn trunk, and a start fitted to a bent trunk's outline leads them astray
     # (tests/test_refine_search.py, the trunk bent the other way)
-    if cfg.fit_start and _species.TRUNK_BEND[0][0] not in _bending_keys(name):
+    if _species.TRUNK_BEND[0][0] not in _bending_keys(name):
         initial_params, keep = choose_start(drawing, initial_params, name, yaw or 0.0)
     space = SearchSpace.create(
         name, initial_params, cfg.keys, search_yaw=yaw is None, yaw=yaw or 0.0, keep=keep
