@@ -398,8 +398,10 @@ def _fetch_outlines(
             data = _read_capped(resp, MAX_OUTLINES_BYTES, "the outlines picture")
     except (OSError, PredictError):  # HTTPError is an OSError
         return
-    if data.startswith(b"\x89PNG"):
-        path.write_bytes(data)
+    if data.startswith(b"\x89PNG"):  # whole or not at all, as the GLB
+        part = path.with_name(path.name + ".part")
+        part.write_bytes(data)
+        os.replace(part, path)
 
 
 def read_preset(path: str | os.PathLike[str]) -> tuple[dict, float]:
