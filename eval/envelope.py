@@ -9,9 +9,11 @@ over the union of their envelopes: 1 when the tree has the drawn outline (its cr
 width profile, its crown base, its trunk's width and height, where it stands), 0 when
 they share nothing.
 
-Both pictures are compared as they are framed (``Result.input_sketch`` and
-``Result.sketch_after`` share the renderer's frame): a tree drawn small in the page and
-returned filling it overlaps little.
+Both pictures are compared as they are framed: ``Result.input_sketch`` is the drawing
+framed on its tree (``render.reader.normalise_drawing``) and ``Result.sketch_after`` the
+tree's sketch framed by the same rule (``treesketch.steps.as_drawn``), the frame the
+refinement compares them in; a tree whose proportions differ from the drawn ones (a tall
+crown for a flat one, a long trunk for a short one) overlaps little.
 """
 
 from __future__ import annotations

@@ -56,6 +56,29 @@ def test_refine_improves_and_fields() -> None:
     assert summary["species_scores"] == {"palm": 1.0}
 
 
+def _frame_gaps(sketch: np.ndarray) -> tuple[float, float]:
+    """How far a sketch's ink is from the drawing's frame (px): its base from the bottom
+    margin, and the nearest of its top and sides from the frame's edge."""
+    from render.reader import FRAME_BOTTOM, FRAME_EDGE
+
+    ink = np.asarray(sketch) < 128
+    side = ink.shape[0]
+    ys, xs = np.flatnonzero(ink.any(axis=1)), np.flatnonzero(ink.any(axis=0))
+    edge = FRAME_EDGE * side
+    base = abs(ys[-1] + 1 - FRAME_BOTTOM * side)
+    return float(base), float(min(ys[0] - edge, xs[0] - edge, side - 1 - edge - xs[-1]))
+
+
+def test_the_tree_is_framed_as_the_drawing() -> None:
+    # an oak wider from another side: the renderer's frame (fit over all sides) leaves it
+    # 26 px below the top and 5 px inside the sides; beside the drawing it is shown, and
+    # its outline compared, as the drawing is framed (issue 48)
+    r = Pipeline(Fixed("oak", 3), RefineSettings(budget=6)).run(gt_sketch("oak", 3))
+    for sketch in (r.input_sketch, r.sketch_before, r.sketch_after):
+        base, edge = _frame_gaps(sketch)
+        assert base <= 2.0 and abs(edge) <= 2.0, (base, edge)
+
+
 def test_predict_then_refine_is_the_pipeline() -> None:
     img = gt_sketch()
     a = predict_then_refine(img, estimator=Fixed("palm", 9), budget=6)

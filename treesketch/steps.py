@@ -450,19 +450,36 @@ def draw_views(read: ReadDrawings, first: FirstEstimate, search: SpeciesSearch) 
     return _with_losses(mesh, views, read.drawings, search)
 
 
+def as_drawn(sketch: np.ndarray) -> np.ndarray:
+    """A tree's sketch framed as a drawing is (``render.reader.normalise_drawing``: trunk
+    base on the bottom margin, trunk axis on the centre line, as large as the frame
+    allows), the frame the refinement compares the drawing and the tree in.  The
+    renderer's own frame fits the tree's width over all sides, so beside the drawing a
+    tree wider from another side looked smaller than drawn (issue 48)."""
+    try:
+        return normalise_drawing(sketch, SKETCH_SIZE)
+    except SketchError:  # nothing drawn (a bare tree seen edge on): the frame as rendered
+        return sketch
+
+
 def _sketch_views(
     read: ReadDrawings, search: SpeciesSearch, draw0: Any, draw1: Any
 ) -> list[ViewResult]:
     """Every view's sketches of the first estimate (``draw0``, seen from the search's
-    start yaw) and of the result (``draw1``); the distances are left NaN."""
+    start yaw) and of the result (``draw1``), each framed as the drawings are
+    (:func:`as_drawn`); the distances are left NaN."""
     yaw0, yaw1 = search.start_yaw, search.yaw
-    after = draw1.sketch(yaw1, SKETCH_SIZE)
-    before = after if draw0 is draw1 else draw0.sketch(yaw0, SKETCH_SIZE)
+
+    def sketch(draw: Any, yaw: float) -> np.ndarray:
+        return as_drawn(draw.sketch(yaw % 360.0, SKETCH_SIZE))
+
+    after = sketch(draw1, yaw1)
+    before = after if draw0 is draw1 else sketch(draw0, yaw0)
     out = [ViewResult(0.0, read.images[0], before, after, math.nan, math.nan)]
     turns = view_turns(read.views, search.result, read.drawings, draw0, yaw0)
     for i, turn in enumerate(turns, start=1):
-        b = draw0.sketch((yaw0 + turn) % 360.0, SKETCH_SIZE)
-        a = b if draw1 is draw0 else draw1.sketch((yaw1 + turn) % 360.0, SKETCH_SIZE)
+        b = sketch(draw0, yaw0 + turn)
+        a = b if draw1 is draw0 else sketch(draw1, yaw1 + turn)
         searched = read.views[i].yaw is None
         out.append(ViewResult(turn, read.images[i], b, a, math.nan, math.nan, searched))
     return out
