@@ -229,6 +229,72 @@ def choose_start(
     fitted = fit_start(drawing.target.image, params, species, drawing.size, yaw, seen=first)
     if fitted is params:
         return params, ()
+    fitted = polish(fitted, drawing.shape.envelope, species, drawing.size, yaw)
     if drawing.distance(sketch(fitted)) < drawing.distance(first):
         return fitted, DRAWN_KEYS
     return params, ()
+
+
+POLISH_EVALS = 24
+
+
+def polish(
+    p: TreeParams, want: np.ndarray, species: str, size: int, yaw: float,
+    evals: int = POLISH_EVALS,
+) -> TreeParams:
+    """``p`` with its outline values searched (nlopt BOBYQA, ``evals`` cheap sketches) for
+    the envelope nearest ``want`` (the drawing's framed envelope)."""
+    import nlopt
+
+    from .objective import framed
+    from .shape import ShapeTarget
+
+    if evals <= 0:
+        return p
+    L0 = [float(v) for v in p["length"]]
+    DA0 = [float(v) for v in p["downAngle"]]
+    lo = np.array([0.01] * 4 + [0.0, np.log(1e-3), np.log(1e-3), 0.0])
+    hi = np.array([1.0] * 4 + [0.95, np.log(5.0), np.log(1.0), 140.0])
+    x0 = np.array(
+        [float(v) for v in p["customShape"]]
+        + [float(p["baseSize"]), np.log(max(L0[1], 1e-3)), np.log(max(float(p["ratio"]), 1e-3)), DA0[1]]
+    )
+    x0 = np.clip(x0, lo, hi)
+    span = hi - lo
+
+    def make(u: np.ndarray) -> TreeParams:
+        x = lo + np.clip(u, 0, 1) * span
+        L = list(L0)
+        L[1] = float(np.exp(x[5]))
+        DA = list(DA0)
+        DA[1] = float(x[7])
+        return p.replace(
+            customShape=[float(v) for v in x[:4]], baseSize=float(x[4]), length=L,
+            ratio=float(np.exp(x[6])), downAngle=DA,
+        )
+
+    best = [np.inf, p]
+
+    def gap(u: np.ndarray, grad: np.ndarray) -> float:
+        q = make(u)
+        env = ShapeTarget.from_image(framed(_cheap_sketch(q, species, size, yaw), size), size).envelope
+        v = 1.0 - mask_iou(want, env)
+        if v < best[0]:
+            best[:] = [v, q]
+        return v
+
+    opt = nlopt.opt(nlopt.LN_BOBYQA, len(x0))
+    opt.set_lower_bounds(np.zeros(len(x0)))
+    opt.set_upper_bounds(np.ones(len(x0)))
+    opt.set_initial_step(np.full(len(x0), 0.12))
+    opt.set_maxeval(evals)
+    opt.set_min_objective(gap)
+    u0 = (x0 - lo) / span
+    gap(u0, np.empty(0))
+    start = best[0]
+    best[1] = p
+    try:
+        opt.optimize(u0)
+    except (RuntimeError, ValueError):
+        pass
+    return best[1] if best[0] < start else p
