@@ -8,7 +8,10 @@ at a few values either way (``BEND_FRACTIONS``) from that view and, when the bud
 room (``MIRROR_RESERVE``), from the opposite one, then runs an nlopt local search (COBYLA
 by default) from the best point seen, in the unit cube.  It stops on the evaluation budget,
 the time limit or nlopt's tolerances, and always returns the best point seen, so the loss
-after is never above the loss before.
+after is never above the loss before.  When the search started from the drawn outline
+(``refine.start.choose_start``, whose values it holds), those values are then searched for
+the drawn outline alone (``refine.start.polish``, up to ``POLISH_EVALS`` more trees),
+and that tree kept when it is nearer the drawing by the search's distance.
 
 Studies measured to give nothing and removed (their numbers stay in
 ``docs/history/results-2026-12-05.md``, "Options measured and removed"; the code last lived at commit
@@ -33,7 +36,7 @@ from weberpenn import TreeParams, species
 from weberpenn.params import SPECS
 
 from .objective import METRICS, OtherView, PreparedDrawing, SearchSpace, SketchObjective
-from .start import choose_start
+from .start import choose_start, polish
 
 __all__ = [
     "ALGORITHMS",
@@ -116,6 +119,9 @@ class RefineResult:
     view_yaws: tuple[float, ...] = ()
     view_losses_before: tuple[float, ...] = ()
     view_losses_after: tuple[float, ...] = ()
+    # trees drawn after the search for a fitted start's outline (``refine.start.polish``;
+    # not in ``evaluations``, which the budget bounds)
+    outline_evaluations: int = 0
 
     @property
     def improvement(self) -> float:
@@ -363,7 +369,54 @@ def refine(
         pass
     if cancel is not None and run.stopped.startswith("nlopt") and cancel():
         raise Cancelled("refinement cancelled")  # nlopt swallowed the exception
-    return _result(run, space, start, views, name, t0)
+    result = _result(run, space, start, views, name, t0)
+    # 3. a fitted start's drawn values, which the search held, searched for the drawn
+    # outline from the best (one drawing: the outline is the drawn view's); its trees come
+    # on top of the budget (a share of it cost the search what the outline gained:
+    # RESULTS.md, "The tree follows the drawing")
+    if keep and not views:
+        result = _outline_searched(result, drawing, run, t0)
+    return result
+
+
+def _outline_searched(
+    result: RefineResult, drawing: PreparedDrawing, run: _Run, t0: float
+) -> RefineResult:
+    """``result`` with its drawn values searched for the drawn outline
+    (``refine.start.polish``, up to ``POLISH_EVALS`` trees, told in
+    ``outline_evaluations``), kept when that tree is nearer the drawing by the search's
+    own distance."""
+    used = 0
+
+    def going() -> bool:
+        nonlocal used
+        if run.cancel is not None and run.cancel():
+            return False
+        if run.deadline is not None and time.perf_counter() >= run.deadline:
+            return False
+        used += 1
+        return True
+
+    name, yaw = result.species, result.yaw
+    tree, sketch = polish(
+        result.params, drawing.shape.envelope, name, drawing.size, yaw, going=going
+    )
+    if run.cancel is not None and run.cancel():
+        raise Cancelled("refinement cancelled")
+    loss = math.inf if sketch is None else drawing.distance(sketch)
+    if not loss < result.loss_after:
+        return dataclasses.replace(
+            result, outline_evaluations=used, seconds=time.perf_counter() - t0
+        )
+    if run.on_best is not None:
+        run.on_best(tree, yaw, loss)
+    return dataclasses.replace(
+        result,
+        params=tree,
+        loss_after=float(loss),
+        outline_evaluations=used,
+        seconds=time.perf_counter() - t0,
+    )
 
 
 def _checked_drawing(

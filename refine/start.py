@@ -24,6 +24,8 @@ refinement's distance.
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,7 +37,16 @@ from weberpenn.species import DRAWN_KEYS
 
 from .envelope import envelope_of_ink, mask_iou
 
-__all__ = ["DRAWN_KEYS", "Profile", "choose_start", "fit_start", "profile_of"]
+__all__ = [
+    "DRAWN_KEYS",
+    "POLISH_EVALS",
+    "Profile",
+    "cheap_sketch",
+    "choose_start",
+    "fit_start",
+    "polish",
+    "profile_of",
+]
 
 # the estimate's outline overlapping the drawn one at least this much is kept as it is:
 # where the network reads the outline, its 3D shape is worth more than a nearer sketch
@@ -106,7 +117,7 @@ def _height(params: TreeParams) -> float:
     return float(z.max() - min(0.0, z.min()))
 
 
-def _cheap_sketch(params: TreeParams, species: str, size: int, yaw: float) -> np.ndarray:
+def cheap_sketch(params: TreeParams, species: str, size: int, yaw: float) -> np.ndarray:
     """The tree's fast sketch (the search's own) at ``yaw``, ``size`` px."""
     from render.sketch import SketchRenderer, sketch_mesh
 
@@ -115,7 +126,7 @@ def _cheap_sketch(params: TreeParams, species: str, size: int, yaw: float) -> np
 
 
 def _render_profile(params: TreeParams, species: str, size: int, yaw: float) -> Profile | None:
-    return profile_of(_cheap_sketch(params, species, size, yaw))
+    return profile_of(cheap_sketch(params, species, size, yaw))
 
 
 def _custom_shape(want: Profile) -> list[float]:
@@ -152,7 +163,7 @@ def fit_start(
     has it.  Costs ``CORRECTIONS + 1`` grows and cheap sketches (one fewer with
     ``seen``)."""
     want = profile_of(drawing)
-    got = profile_of(_cheap_sketch(params, species, size, yaw) if seen is None else seen)
+    got = profile_of(cheap_sketch(params, species, size, yaw) if seen is None else seen)
     if want is None or got is None or int(params["levels"]) < 2:
         return params
     height = _height(params)
@@ -220,7 +231,7 @@ def choose_start(
     from .shape import ShapeTarget
 
     def sketch(p: TreeParams) -> np.ndarray:
-        return _cheap_sketch(p, species, drawing.size, yaw)
+        return cheap_sketch(p, species, drawing.size, yaw)
 
     first = sketch(params)
     seen = ShapeTarget.from_image(framed(first, drawing.size), drawing.size)
@@ -232,3 +243,86 @@ def choose_start(
     if drawing.distance(sketch(fitted)) < drawing.distance(first):
         return fitted, DRAWN_KEYS
     return params, ()
+
+
+POLISH_EVALS = 24  # trees a fitted start's outline is searched with, after the search
+
+
+def polish(
+    p: TreeParams,
+    want: np.ndarray,
+    species: str,
+    size: int,
+    yaw: float,
+    evals: int | None = None,
+    going: Callable[[], bool] | None = None,
+) -> tuple[TreeParams, np.ndarray | None]:
+    """``p`` with its drawn values (``DRAWN_KEYS``: the custom shape, crown base, branch
+    reach, trunk thickness) searched for the outline nearest ``want`` (the drawing's framed
+    envelope, seen at ``yaw``): nlopt COBYLA on one minus the envelope overlap, at most
+    ``evals`` (default ``POLISH_EVALS``) cheap sketches, while ``going()`` (the caller's
+    time and cancel) says so.  Returns the tree and its cheap sketch, or ``p`` and None
+    when it found no nearer outline.
+
+    The refinement's search holds these values at the fitted start's; the branches leave
+    the trunk lower than the rows they reach, so the outline between the heights the
+    start read is searched here, after it (COBYLA: its first model costs one tree per
+    value, BOBYQA's two)."""
+    import nlopt
+
+    from .objective import framed
+    from .shape import ShapeTarget
+
+    evals = POLISH_EVALS if evals is None else int(evals)
+    if evals <= 0 or str(p["shape"]) != "8":
+        return p, None
+    length = [float(v) for v in p["length"]]
+    lo = np.array([SPECS["customShape"].lo] * 4 + [0.0, np.log(0.02), np.log(0.02), np.log(1e-3)])
+    hi = np.array([SPECS["customShape"].hi] * 4 + [0.95, np.log(3.0), np.log(2.0), np.log(0.5)])
+    x0 = np.array(
+        [float(v) for v in p["customShape"]]
+        + [float(p["baseSize"]), np.log(max(length[1], 1e-6)), np.log(max(length[2], 1e-6))]
+        + [np.log(max(float(p["ratio"]), 1e-6))]
+    )
+    x0 = np.clip(x0, lo, hi)
+
+    def make(u: np.ndarray) -> TreeParams:
+        x = lo + np.clip(u, 0.0, 1.0) * (hi - lo)
+        ln = list(length)
+        ln[1], ln[2] = float(np.exp(x[5])), float(np.exp(x[6]))
+        return p.replace(
+            customShape=[float(v) for v in x[:4]],
+            baseSize=float(x[4]),
+            length=ln,
+            ratio=float(np.exp(x[7])),
+        )
+
+    best: list = [np.inf, p, None]
+
+    def gap(u: np.ndarray, grad: np.ndarray) -> float:
+        if going is not None and not going():
+            raise nlopt.ForcedStop
+        q = make(u)
+        sketch = cheap_sketch(q, species, size, yaw)
+        v = 1.0 - mask_iou(want, ShapeTarget.from_image(framed(sketch, size), size).envelope)
+        if v < best[0]:
+            best[:] = [v, q, sketch]
+        return v
+
+    u0 = (x0 - lo) / (hi - lo)
+    opt = nlopt.opt(nlopt.LN_COBYLA, len(u0))
+    opt.set_lower_bounds(np.zeros(len(u0)))
+    opt.set_upper_bounds(np.ones(len(u0)))
+    opt.set_initial_step(np.full(len(u0), 0.1))
+    opt.set_maxeval(evals - 1)  # the start is one
+    opt.set_min_objective(gap)
+    try:
+        start = gap(u0, np.empty(0))
+    except nlopt.ForcedStop:
+        return p, None
+    if evals < 2:
+        return p, None
+    best[1:] = [p, None]
+    with contextlib.suppress(RuntimeError, ValueError, nlopt.ForcedStop):  # the best seen
+        opt.optimize(u0)
+    return (best[1], best[2]) if best[0] < start else (p, None)

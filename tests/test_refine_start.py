@@ -111,3 +111,33 @@ def test_a_tree_drawn_small_above_a_ground_line_is_not_blown_up() -> None:
     # and the tree returned follows it as it follows the drawing alone
     got = envelope_overlap(drawn.input_sketch, drawn.sketch_after)
     assert got > 0.6 and got > envelope_overlap(ref.input_sketch, ref.sketch_after) - 0.1
+
+
+def test_the_drawn_outline_is_searched_after_the_search(monkeypatch) -> None:
+    # a lollipop on an oak's start: the search holds the fitted start's drawn values;
+    # searched after it, the outline follows the drawing more closely than with that step
+    # turned off, within the same budget for the search
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from pipeline_helpers import Fixed
+
+    import refine.start
+    from eval.envelope import envelope_overlap
+    from treesketch import Pipeline, RefineSettings
+
+    img = drawing("round", 0.5)
+    run = Pipeline(Fixed("oak", 1), RefineSettings(budget=40))
+    searched = run.run(img)
+    trees = refine.start.POLISH_EVALS
+    monkeypatch.setattr(refine.start, "POLISH_EVALS", 0)  # the step off
+    held = run.run(img)
+    assert searched.refinement.evaluations <= 40
+    assert 0 < searched.refinement.outline_evaluations <= trees
+    assert held.refinement.outline_evaluations == 0
+    assert searched.params["shape"] == "8"  # the fitted start was taken
+    got = envelope_overlap(searched.input_sketch, searched.sketch_after)
+    without = envelope_overlap(held.input_sketch, held.sketch_after)
+    assert got > without + 0.03, (got, without)
+    assert searched.losses["after"] < held.losses["after"]
