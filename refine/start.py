@@ -322,7 +322,7 @@ def polish(
         return p, None
     if evals < 2:
         return p, None
-    best[1:] = [p, None]
+    best[1:] = [p, None]  # the start (``p`` clipped into the box) is not a new tree
     with contextlib.suppress(RuntimeError, ValueError, nlopt.ForcedStop):  # the best seen
         opt.optimize(u0)
     return (best[1], best[2]) if best[0] < start else (p, None)
