@@ -25,7 +25,7 @@ refinement's distance.
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -42,6 +42,7 @@ __all__ = [
     "POLISH_EVALS",
     "Profile",
     "cheap_sketch",
+    "cheap_sketches",
     "choose_start",
     "fit_start",
     "polish",
@@ -117,12 +118,19 @@ def _height(params: TreeParams) -> float:
     return float(z.max() - min(0.0, z.min()))
 
 
-def cheap_sketch(params: TreeParams, species: str, size: int, yaw: float) -> np.ndarray:
-    """The tree's fast sketch (the search's own) at ``yaw``, ``size`` px."""
+def cheap_sketches(
+    params: TreeParams, species: str, size: int, yaws: Sequence[float]
+) -> list[np.ndarray]:
+    """The tree's fast sketches (the search's own) at each of ``yaws``, ``size`` px."""
     from render.sketch import SketchRenderer, sketch_mesh
 
     r = SketchRenderer(sketch_mesh(grow(params), size, species), engine="raster")
-    return r.sketch(yaw % 360.0, size)
+    return [r.sketch(yaw % 360.0, size) for yaw in yaws]
+
+
+def cheap_sketch(params: TreeParams, species: str, size: int, yaw: float) -> np.ndarray:
+    """The tree's fast sketch (the search's own) at ``yaw``, ``size`` px."""
+    return cheap_sketches(params, species, size, (yaw,))[0]
 
 
 def _render_profile(params: TreeParams, species: str, size: int, yaw: float) -> Profile | None:
@@ -250,19 +258,20 @@ POLISH_EVALS = 24  # trees a fitted start's outline is searched with, after the 
 
 def polish(
     p: TreeParams,
-    want: np.ndarray,
+    wants: Sequence[tuple[np.ndarray, float]],
     species: str,
     size: int,
-    yaw: float,
     evals: int | None = None,
     going: Callable[[], bool] | None = None,
-) -> tuple[TreeParams, np.ndarray | None]:
+) -> tuple[TreeParams, list[np.ndarray] | None]:
     """``p`` with its drawn values (``DRAWN_KEYS``: the custom shape, crown base, branch
-    reach, trunk thickness) searched for the outline nearest ``want`` (the drawing's framed
-    envelope, seen at ``yaw``): nlopt COBYLA on one minus the envelope overlap, at most
-    ``evals`` (default ``POLISH_EVALS``) cheap sketches, while ``going()`` (the caller's
-    time and cancel) says so.  Returns the tree and its cheap sketch, or ``p`` and None
-    when it found no nearer outline.
+    reach, trunk thickness) and its first branches' angle (``downAngle[1]``, which sets
+    how far the low branches reach out under the crown) searched for the outlines
+    nearest ``wants`` (each a drawing's framed envelope and the yaw it is seen from): nlopt
+    COBYLA on one minus the mean envelope overlap, at most ``evals`` (default
+    ``POLISH_EVALS``) trees, while ``going()`` (the caller's time and cancel) says so.
+    Returns the tree and its cheap sketch at each view, or ``p`` and None when it found
+    no nearer outline.
 
     The refinement's search holds these values at the fitted start's; the branches leave
     the trunk lower than the rows they reach, so the outline between the heights the
@@ -274,27 +283,29 @@ def polish(
     from .shape import ShapeTarget
 
     evals = POLISH_EVALS if evals is None else int(evals)
-    if evals <= 0 or str(p["shape"]) != "8":
+    if evals <= 0 or str(p["shape"]) != "8" or not wants:
         return p, None
     length = [float(v) for v in p["length"]]
-    lo = np.array([SPECS["customShape"].lo] * 4 + [0.0, np.log(0.02), np.log(0.02), np.log(1e-3)])
-    hi = np.array([SPECS["customShape"].hi] * 4 + [0.95, np.log(3.0), np.log(2.0), np.log(0.5)])
+    down = [float(v) for v in p["downAngle"]]
+    lo = np.array([SPECS["customShape"].lo] * 4 + [0.0, np.log(0.02), np.log(1e-3), 0.0])
+    hi = np.array([SPECS["customShape"].hi] * 4 + [0.95, np.log(3.0), np.log(0.5), 140.0])
     x0 = np.array(
         [float(v) for v in p["customShape"]]
-        + [float(p["baseSize"]), np.log(max(length[1], 1e-6)), np.log(max(length[2], 1e-6))]
-        + [np.log(max(float(p["ratio"]), 1e-6))]
+        + [float(p["baseSize"]), np.log(max(length[1], 1e-6))]
+        + [np.log(max(float(p["ratio"]), 1e-6)), down[1]]
     )
     x0 = np.clip(x0, lo, hi)
 
     def make(u: np.ndarray) -> TreeParams:
         x = lo + np.clip(u, 0.0, 1.0) * (hi - lo)
-        ln = list(length)
-        ln[1], ln[2] = float(np.exp(x[5])), float(np.exp(x[6]))
+        ln, da = list(length), list(down)
+        ln[1], da[1] = float(np.exp(x[5])), float(x[7])
         return p.replace(
             customShape=[float(v) for v in x[:4]],
             baseSize=float(x[4]),
             length=ln,
-            ratio=float(np.exp(x[7])),
+            ratio=float(np.exp(x[6])),
+            downAngle=da,
         )
 
     best: list = [np.inf, p, None]
@@ -303,10 +314,11 @@ def polish(
         if going is not None and not going():
             raise nlopt.ForcedStop
         q = make(u)
-        sketch = cheap_sketch(q, species, size, yaw)
-        v = 1.0 - mask_iou(want, ShapeTarget.from_image(framed(sketch, size), size).envelope)
+        sketches = cheap_sketches(q, species, size, [yaw for _, yaw in wants])
+        seen = [ShapeTarget.from_image(framed(s, size), size).envelope for s in sketches]
+        v = 1.0 - float(np.mean([mask_iou(w, e) for (w, _), e in zip(wants, seen, strict=True)]))
         if v < best[0]:
-            best[:] = [v, q, sketch]
+            best[:] = [v, q, sketches]
         return v
 
     u0 = (x0 - lo) / (hi - lo)

@@ -140,4 +140,33 @@ def test_the_drawn_outline_is_searched_after_the_search(monkeypatch) -> None:
     got = envelope_overlap(searched.input_sketch, searched.sketch_after)
     without = envelope_overlap(held.input_sketch, held.sketch_after)
     assert got > without + 0.03, (got, without)
-    assert searched.losses["after"] < held.losses["after"]
+    # the outline wins over the search's other terms, the tree still nearer the
+    # drawing than the first estimate by the search's distance
+    assert searched.refinement.loss_after < searched.refinement.loss_before
+
+
+def test_with_two_drawings_every_view_outline_is_searched(monkeypatch) -> None:
+    # the lollipop drawn from the front and from 90 degrees round: the step after the
+    # search follows both drawn outlines (the mean overlap of the views), not the first's
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from pipeline_helpers import Fixed
+
+    import refine.start
+    from eval.envelope import envelope_overlap
+    from treesketch import Pipeline, RefineSettings
+
+    img = drawing("round", 0.5)
+    run = Pipeline(Fixed("oak", 1), RefineSettings(budget=40))
+    searched = run.run([img, (img, 90.0)])
+    monkeypatch.setattr(refine.start, "POLISH_EVALS", 0)  # the step off
+    held = run.run([img, (img, 90.0)])
+    assert searched.refinement.outline_evaluations > 0
+    assert held.refinement.outline_evaluations == 0
+    got = [envelope_overlap(v.input_sketch, v.sketch_after) for v in searched.views]
+    without = [envelope_overlap(v.input_sketch, v.sketch_after) for v in held.views]
+    assert len(got) == 2
+    assert all(g > w + 0.02 for g, w in zip(got, without, strict=True)), (got, without)
+    assert len(searched.refinement.view_losses_after) == 2
