@@ -9,10 +9,11 @@ room (``MIRROR_RESERVE``), from the opposite one, then runs an nlopt local searc
 by default) from the best point seen, in the unit cube.  It stops on the evaluation budget,
 the time limit or nlopt's tolerances, and returns the best point seen, so the search's
 loss after is never above the loss before.  When the search started from the drawn outline
-(``refine.start.choose_start``, whose values it holds), those values are then searched for
-the drawn outlines alone, every view's (``refine.start.polish``, up to ``POLISH_EVALS``
-more trees), and that tree kept when its outlines are nearer the drawn ones: there the
-drawn outline wins over the distance's other terms, and ``loss_after`` is that tree's.
+(``refine.start.choose_start``, whose values it holds), or its tree grows from a custom
+shape and still misses the drawn outline, those values are then searched for the drawn
+outlines alone, every view's (``refine.start.polish``, up to ``POLISH_EVALS`` more trees),
+and that tree kept when its outlines are nearer the drawn ones: there the drawn outline
+wins over the distance's other terms, and ``loss_after`` is that tree's.
 
 Studies measured to give nothing and removed (their numbers stay in
 ``docs/history/results-2026-12-05.md``, "Options measured and removed"; the code last lived at commit
@@ -37,7 +38,7 @@ from weberpenn import TreeParams, species
 from weberpenn.params import SPECS
 
 from .objective import METRICS, OtherView, PreparedDrawing, SearchSpace, SketchObjective
-from .start import choose_start, polish
+from .start import FIT_BELOW, choose_start, polish
 
 __all__ = [
     "ALGORITHMS",
@@ -371,11 +372,15 @@ def refine(
     if cancel is not None and run.stopped.startswith("nlopt") and cancel():
         raise Cancelled("refinement cancelled")  # nlopt swallowed the exception
     result = _result(run, space, start, views, name, t0)
-    # 3. a fitted start's drawn values, which the search held, searched for the drawn
-    # outlines from the best (every view's); its trees come on top of the budget (a share of it cost the search what the outline gained:
-    # RESULTS.md, "The tree follows the drawing")
+    # 3. the drawn values searched for the drawn outlines from the best (every view's):
+    # a fitted start's, which the search held; or any tree grown from a custom shape
+    # whose outlines still miss the drawn ones (under FIT_BELOW).  Its trees come on top
+    # of the budget (a share of it cost the search what the outline gained: RESULTS.md,
+    # "The tree follows the drawing")
     if keep:
         result = _outline_searched(result, drawing, views, run, t0)
+    elif str(result.params["shape"]) == "8":
+        result = _outline_searched(result, drawing, views, run, t0, below=FIT_BELOW)
     return result
 
 
@@ -385,12 +390,14 @@ def _outline_searched(
     views: Sequence[OtherView],
     run: _Run,
     t0: float,
+    below: float | None = None,
 ) -> RefineResult:
     """``result`` with its drawn values searched for the drawn outlines, every view's
     (``refine.start.polish``, up to ``POLISH_EVALS`` trees, told in
     ``outline_evaluations``), kept when its outlines are nearer the drawn ones (its
     ``loss_after`` then the search's distance of that tree, the mean over the views, which
-    may be above the search's best)."""
+    may be above the search's best).  ``below``: only when the tree's outlines overlap the
+    drawn ones less than this (one tree to see)."""
     used = 0
 
     def going() -> bool:
@@ -405,7 +412,9 @@ def _outline_searched(
     drawings = [drawing, *(v.drawing for v in views)]
     turns = [0.0, *result.view_yaws]
     wants = [(d.shape.envelope, result.yaw + t) for d, t in zip(drawings, turns, strict=True)]
-    tree, sketches = polish(result.params, wants, result.species, drawing.size, going=going)
+    tree, sketches = polish(
+        result.params, wants, result.species, drawing.size, going=going, below=below
+    )
     if run.cancel is not None and run.cancel():
         raise Cancelled("refinement cancelled")
     # the drawn outline wins over the search's other terms (its lines, the learned

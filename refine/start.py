@@ -263,6 +263,7 @@ def polish(
     size: int,
     evals: int | None = None,
     going: Callable[[], bool] | None = None,
+    below: float | None = None,
 ) -> tuple[TreeParams, list[np.ndarray] | None]:
     """``p`` with its drawn values (``DRAWN_KEYS``: the custom shape, crown base, branch
     reach, trunk thickness) and its first branches' angle (``downAngle[1]``, which sets
@@ -271,7 +272,7 @@ def polish(
     COBYLA on one minus the mean envelope overlap, at most ``evals`` (default
     ``POLISH_EVALS``) trees, while ``going()`` (the caller's time and cancel) says so.
     Returns the tree and its cheap sketch at each view, or ``p`` and None when it found
-    no nearer outline.
+    no nearer outline or ``p``'s mean overlap is already ``below`` or more.
 
     The refinement's search holds these values at the fitted start's; the branches leave
     the trunk lower than the rows they reach, so the outline between the heights the
@@ -332,7 +333,7 @@ def polish(
         start = gap(u0, np.empty(0))
     except nlopt.ForcedStop:
         return p, None
-    if evals < 2:
+    if evals < 2 or (below is not None and 1.0 - start >= below):
         return p, None
     best[1:] = [p, None]  # the start (``p`` clipped into the box) is not a new tree
     with contextlib.suppress(RuntimeError, ValueError, nlopt.ForcedStop):  # the best seen

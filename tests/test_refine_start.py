@@ -170,3 +170,29 @@ def test_with_two_drawings_every_view_outline_is_searched(monkeypatch) -> None:
     assert len(got) == 2
     assert all(g > w + 0.02 for g, w in zip(got, without, strict=True)), (got, without)
     assert len(searched.refinement.view_losses_after) == 2
+
+
+def test_an_outline_already_followed_is_left_as_it_is() -> None:
+    # a tree the search did not start from the drawn outline is searched for it only
+    # where its outline misses the drawn one (``below``): its own outline is met at once
+    from scipy import ndimage
+
+    from refine.envelope import envelope_of_ink
+    from refine.start import FIT_BELOW, cheap_sketch, polish
+
+    p = species.sample("birch", 3)
+    assert p["shape"] == "8"
+    seen = framed(cheap_sketch(p, "birch", SIZE, 0.0), SIZE)
+    own = envelope_of_ink(seen < 128)
+    calls = []
+
+    def going() -> bool:
+        calls.append(1)
+        return True
+
+    q, sketches = polish(p, [(own, 0.0)], "birch", SIZE, going=going, below=FIT_BELOW)
+    assert q is p and sketches is None and len(calls) == 1
+    # a drawn outline far wider is searched for
+    wide = ndimage.binary_dilation(own, structure=np.ones((1, 41), bool))
+    q, sketches = polish(p, [(wide, 0.0)], "birch", SIZE, below=FIT_BELOW)
+    assert q is not p and sketches is not None and len(sketches) == 1
