@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from render.reader import SketchError, frame_sketch, normalise_drawing
+from render.reader import SketchError, normalise_drawing
 from weberpenn import TreeParams, build_mesh, grow, species
 from weberpenn.params import SPECS
 
@@ -179,18 +179,16 @@ def sketch_distance(
 METRICS = ("shape", "ink")
 
 
-def framed(img: Any, size: int, rendered: bool = False) -> np.ndarray:
+def framed(img: Any, size: int) -> np.ndarray:
     """A sketch as every comparison sees it: ``render.reader.normalise_drawing`` at ``size``
-    (ink on white, framed by its own drawn extent); a tree's ``rendered`` sketch by the
-    same rule on all its ink (``render.reader.frame_sketch``: a drawing's clean-up is not
-    for a renderer's picture).  The input and every candidate go through it, so both sides
-    of the distance share one framing.  Framed at twice the size
+    (ink on white, framed by its own drawn extent).  The input and every candidate go
+    through it, so both sides of the distance share one framing.  Framed at twice the size
     and pooled "any ink", so a thin pen line stays a whole line at the work size (a plain
     downscale and threshold breaks it into dashes, and an outline into pieces)."""
     a = img if isinstance(img, np.ndarray) and img.dtype == np.uint8 and img.ndim == 2 else None
     if a is None:
         a = np.round(prepare_sketch(img, max(8, min(np.shape(img)[:2]))) * 255).astype(np.uint8)
-    big = (frame_sketch if rendered else normalise_drawing)(a, 2 * size)
+    big = normalise_drawing(a, 2 * size)
     return big.reshape(size, 2, size, 2).min(axis=(1, 3))
 
 
@@ -267,9 +265,7 @@ class PreparedDrawing:
         """The search's distance from this drawing to another sketch (framed alike)."""
         return search_distance(
             self.target,
-            make_target(
-                framed(sketch, self.size, rendered=True), self.size, self.metric, self.embedder
-            ),
+            make_target(framed(sketch, self.size), self.size, self.metric, self.embedder),
         )
 
 
@@ -496,7 +492,7 @@ class SketchObjective:
         target = self.target if target is None else target
         size = target.size
         try:
-            cand = make_target(framed(img, size, rendered=True), size, self.metric, self.embedder)
+            cand = make_target(framed(img, size), size, self.metric, self.embedder)
         except SketchError:
             blank = np.full((size, size), 255, np.uint8)
             return search_distance(target, make_target(blank, size, self.metric, self.embedder))

@@ -242,7 +242,7 @@ def choose_start(
         return cheap_sketch(p, species, drawing.size, yaw)
 
     first = sketch(params)
-    seen = ShapeTarget.from_image(framed(first, drawing.size, rendered=True), drawing.size)
+    seen = ShapeTarget.from_image(framed(first, drawing.size), drawing.size)
     if mask_iou(drawing.shape.envelope, seen.envelope) >= FIT_BELOW:
         return params, ()
     fitted = fit_start(drawing.target.image, params, species, drawing.size, yaw, seen=first)
@@ -316,9 +316,7 @@ def polish(
             raise nlopt.ForcedStop
         q = make(u)
         sketches = cheap_sketches(q, species, size, [yaw for _, yaw in wants])
-        seen = [
-            ShapeTarget.from_image(framed(s, size, rendered=True), size).envelope for s in sketches
-        ]
+        seen = [ShapeTarget.from_image(framed(s, size), size).envelope for s in sketches]
         v = 1.0 - float(np.mean([mask_iou(w, e) for (w, _), e in zip(wants, seen, strict=True)]))
         if v < best[0]:
             best[:] = [v, q, sketches]

@@ -46,7 +46,6 @@ __all__ = [
     "FormatError",
     "SketchError",
     "check_ink",
-    "frame_sketch",
     "image_format",
     "ink_mask",
     "read_sketch",
@@ -326,7 +325,6 @@ def check_ink(img: np.ndarray) -> float:
 # FRAME_EDGE from the top or sideways to FRAME_EDGE from an edge, whichever comes first.
 FRAME_BOTTOM = 0.969
 FRAME_EDGE = 0.043
-AXIS_SLACK = 0.02  # of a rendered sketch's width: its trunk's axis is this near its centre
 WORK_SIDE = 512  # drawings are normalised at most this large (bounded time and memory)
 DRAWING_SIDE = 256  # the side of a normalised drawing (the dataset's sketch size)
 MIN_PAPER = 0.25  # paper darker than this (fraction of white) is refused as a dark page
@@ -877,9 +875,9 @@ def normalise_drawing(img: np.ndarray, size: int = DRAWING_SIDE) -> np.ndarray:
     framed on the tree (:func:`tree_ink`), not on all the ink: a ground line under the
     tree, a sun, a cloud or grass beside it are left out of the frame and the picture; a
     drawing in a corner is moved and scaled to the middle.  The refinement frames every
-    candidate's sketch by the same rule (:func:`frame_sketch`), so drawing and candidates
-    always compare at one framing (the renderer's own frame fits a tree's width over all
-    sides, not the drawn one).  Refuses blank and dark pages.
+    candidate's sketch the same way, so drawing and candidates always compare at one framing (the
+    renderer's own frame fits a tree's width over all sides, not the drawn one).  Refuses
+    blank and dark pages.
     """
     from PIL import Image
 
@@ -892,27 +890,6 @@ def normalise_drawing(img: np.ndarray, size: int = DRAWING_SIDE) -> np.ndarray:
     # a ground line drawn from edge to edge looks like ruling, whose removal keeps what
     # crosses it and leaves the line's crests: it goes as a ground line first
     ink = tree_ink(drop_specks(_drop_ruled_lines(_drop_ground(_ink_of(flat)))))
-    return _framed_ink(ink, size)
-
-
-def frame_sketch(sketch: np.ndarray, size: int = DRAWING_SIDE) -> np.ndarray:
-    """A rendered tree's sketch (grey ``uint8``, the renderer's frame: the trunk's base on
-    the centre column) framed as :func:`normalise_drawing` frames a drawing, by the same
-    ink and the same rule.  A renderer's sketch is the tree alone, so none of the
-    drawing's clean-up applies; and where its lowest ink is a crown's edge hiding the
-    trunk, the trunk's axis is the renderer's centre line, not that edge's lowest point
-    (which framed such a tree off its trunk, and differently at each size)."""
-    a = np.asarray(sketch, dtype=np.uint8)
-    return _framed_ink(_ink_of(flatten_paper(a)), size, centre=a.shape[1] / 2.0)
-
-
-def _framed_ink(ink: np.ndarray, size: int, centre: float | None = None) -> np.ndarray:
-    """``ink`` (bool, the tree's) drawn black on white at ``size``: trunk base on the bottom
-    margin, trunk axis on the centre line, as large as the frame allows.  ``centre``: the
-    column the trunk is known to stand on; a found axis further from it than
-    ``AXIS_SLACK`` of the width is not the trunk's."""
-    from PIL import Image
-
     frac = float(ink.mean())
     if frac < MIN_INK:
         raise SketchError("the sketch is blank: draw a tree (dark lines on a light page)")
@@ -921,16 +898,14 @@ def _framed_ink(ink: np.ndarray, size: int, centre: float | None = None) -> np.n
     clean = np.where(ink, 0.0, 1.0)
 
     top, bottom, left, right, axis = _axis_and_box(ink)
-    if centre is not None and abs(axis - centre) > AXIS_SLACK * ink.shape[1]:
-        axis = centre
     h = bottom - top + 1
     half = max(axis - left, right + 1 - axis, 0.5)
     scale = min((FRAME_BOTTOM - FRAME_EDGE) * size / h, (0.5 - FRAME_EDGE) * size / half)
     if abs(scale - 1.0) < 0.02:  # already framed: move it, do not resample it
         scale = 1.0
     # the page, scaled, with the trunk base at (size/2, FRAME_BOTTOM * size)
-    out_w = max(1, int(round(ink.shape[1] * scale)))
-    out_h = max(1, int(round(ink.shape[0] * scale)))
+    out_w = max(1, int(round(a.shape[1] * scale)))
+    out_h = max(1, int(round(a.shape[0] * scale)))
     x0 = int(round(size / 2 - axis * scale))
     y0 = int(round(FRAME_BOTTOM * size - (bottom + 1) * scale))
     pic = Image.fromarray(np.round(clean * 255).astype(np.uint8))

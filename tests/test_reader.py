@@ -20,7 +20,6 @@ from render.reader import (
     MAX_PIXELS,
     SketchError,
     check_ink,
-    frame_sketch,
     ink_mask,
     normalise_drawing,
     read_sketch,
@@ -475,19 +474,3 @@ def test_a_trunk_drawn_as_one_line_keeps_its_axis() -> None:
     out = normalise_drawing(np.asarray(im), 256) < 128
     base = np.flatnonzero(out[240:249].any(axis=0))
     assert abs((base[0] + base[-1] + 1) / 2 - 128) <= 2
-
-
-def test_a_rendered_tree_is_framed_on_its_trunk_when_its_crown_hides_it() -> None:
-    # the renderer stands a tree's trunk on its centre column; a crown down to the ground
-    # whose lowest ink is a leaf beside the trunk is framed on that centre, as the same
-    # tree with its trunk showing would be, not on the leaf
-    im = Image.new("L", (128, 128), 255)
-    d = ImageDraw.Draw(im)
-    d.ellipse([24, 10, 104, 120], outline=0, width=1)  # the crown, centred on column 64
-    d.ellipse([80, 112, 86, 124], fill=0)  # a leaf hanging lowest, off the axis
-    d.line([(64, 120), (64, 90)], fill=0, width=1)
-    cols = np.flatnonzero((frame_sketch(np.asarray(im), 256) < 128).any(axis=0))
-    assert abs(int(cols[0]) - (255 - int(cols[-1]))) <= 4, (cols[0], cols[-1])
-    # a drawing's trunk is found, not assumed: the same picture as a drawing moves
-    cols = np.flatnonzero((normalise_drawing(np.asarray(im), 256) < 128).any(axis=0))
-    assert abs(int(cols[0]) - (255 - int(cols[-1]))) > 10

@@ -149,8 +149,7 @@ class TemplateEstimator:
                 r = SketchRenderer(build_mesh(grow(species.sample(name, seed)), species=name))
                 for yaw in TEMPLATE_YAWS:
                     img = r.sketch(yaw, TEMPLATE_SIZE)
-                    framed_img = framed(img, TEMPLATE_SIZE, rendered=True)
-                    target = make_target(framed_img, TEMPLATE_SIZE)
+                    target = make_target(framed(img, TEMPLATE_SIZE), TEMPLATE_SIZE)
                     out.append((name, seed, yaw, target))
         return out
 

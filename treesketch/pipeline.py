@@ -215,7 +215,7 @@ def drawing_line_distance(drawing: ShapeTarget, tree_sketch: Any) -> float:
     """:func:`tree_line_distance` from the drawing's shape features, already prepared."""
     size = drawing.size
     try:
-        tree = ShapeTarget.from_image(framed(tree_sketch, size, rendered=True), size)
+        tree = ShapeTarget.from_image(framed(tree_sketch, size), size)
     except SketchError:
         return 1.0
     return line_distance(drawing, tree)

@@ -21,13 +21,7 @@ import numpy as np
 from refine.objective import OtherView, PreparedDrawing
 from refine.search import Cancelled, RefineResult, RefineSettings
 from refine.search import refine as refine_search
-from render.reader import (
-    DRAWING_SIDE,
-    SketchError,
-    frame_sketch,
-    normalise_drawing,
-    read_sketch,
-)
+from render.reader import DRAWING_SIDE, SketchError, normalise_drawing, read_sketch
 from weberpenn import TreeMesh, TreeParams, build_mesh, grow
 from weberpenn import species as wp_species
 
@@ -457,13 +451,13 @@ def draw_views(read: ReadDrawings, first: FirstEstimate, search: SpeciesSearch) 
 
 
 def as_drawn(sketch: np.ndarray) -> np.ndarray:
-    """A tree's sketch framed as a drawing is (``render.reader.frame_sketch``: trunk base
-    on the bottom margin, trunk axis on the centre line, as large as the frame allows),
-    the frame the refinement compares the drawing and the tree in.  The
+    """A tree's sketch framed as a drawing is (``render.reader.normalise_drawing``: trunk
+    base on the bottom margin, trunk axis on the centre line, as large as the frame
+    allows), the frame the refinement compares the drawing and the tree in.  The
     renderer's own frame fits the tree's width over all sides, so beside the drawing a
     tree wider from another side looked smaller than drawn (issue 48)."""
     try:
-        return frame_sketch(sketch, SKETCH_SIZE)
+        return normalise_drawing(sketch, SKETCH_SIZE)
     except SketchError:  # nothing drawn (a bare tree seen edge on): the frame as rendered
         return sketch
 
