@@ -38,7 +38,7 @@ from weberpenn import TreeParams, species
 from weberpenn.params import SPECS
 
 from .objective import METRICS, OtherView, PreparedDrawing, SearchSpace, SketchObjective
-from .start import FIT_BELOW, choose_start, polish
+from .start import FIT_BELOW, POLISH_BELOW, choose_start, fit_start, polish
 
 __all__ = [
     "ALGORITHMS",
@@ -341,7 +341,8 @@ def refine(
     # trunk bends freely (palm, bonsai): there the bends tried at the start find the
     # drawn trunk, and a start fitted to a bent trunk's outline leads them astray
     # (tests/test_refine_search.py, the trunk bent the other way)
-    if _species.TRUNK_BEND[0][0] not in _bending_keys(name):
+    bending = _species.TRUNK_BEND[0][0] in _bending_keys(name)
+    if not bending:
         initial_params, keep = choose_start(drawing, initial_params, name, yaw or 0.0)
     space = SearchSpace.create(
         name, initial_params, cfg.keys, search_yaw=yaw is None, yaw=yaw or 0.0, keep=keep
@@ -373,14 +374,17 @@ def refine(
         raise Cancelled("refinement cancelled")  # nlopt swallowed the exception
     result = _result(run, space, start, views, name, t0)
     # 3. the drawn values searched for the drawn outlines from the best (every view's):
-    # a fitted start's, which the search held; or any tree grown from a custom shape
-    # whose outlines still miss the drawn ones (under FIT_BELOW).  Its trees come on top
-    # of the budget (a share of it cost the search what the outline gained: RESULTS.md,
-    # "The tree follows the drawing")
+    # a fitted start's, which the search held; or any other tree whose outlines still
+    # miss the drawn ones (under POLISH_BELOW; under FIT_BELOW where the trunk bends
+    # freely: there the bends the search found set the outline, and the step cost the
+    # held-out-style bonsai mesh error).  Its trees come on top of the budget (a share of
+    # it cost the search what the outline gained: RESULTS.md, "The tree follows the
+    # drawing")
     if keep:
         result = _outline_searched(result, drawing, views, run, t0)
-    elif str(result.params["shape"]) == "8":
-        result = _outline_searched(result, drawing, views, run, t0, below=FIT_BELOW)
+    else:
+        below = FIT_BELOW if bending else POLISH_BELOW
+        result = _outline_searched(result, drawing, views, run, t0, below=below)
     return result
 
 
@@ -413,7 +417,17 @@ def _outline_searched(
     turns = [0.0, *result.view_yaws]
     wants = [(d.shape.envelope, result.yaw + t) for d, t in zip(drawings, turns, strict=True)]
     tree, sketches = polish(
-        result.params, wants, result.species, drawing.size, going=going, below=below
+        result.params,
+        wants,
+        result.species,
+        drawing.size,
+        going=going,
+        below=below,
+        # a tree grown from one of the species' shapes: searched from the custom shape
+        # fitted to the first drawing
+        refit=lambda p: fit_start(
+            drawing.target.image, p, result.species, drawing.size, result.yaw
+        ),
     )
     if run.cancel is not None and run.cancel():
         raise Cancelled("refinement cancelled")

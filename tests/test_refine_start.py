@@ -196,3 +196,33 @@ def test_an_outline_already_followed_is_left_as_it_is() -> None:
     wide = ndimage.binary_dilation(own, structure=np.ones((1, 41), bool))
     q, sketches = polish(p, [(wide, 0.0)], "birch", SIZE, below=FIT_BELOW)
     assert q is not p and sketches is not None and len(sketches) == 1
+
+
+def test_a_tree_of_the_species_shape_is_refitted_to_the_drawn_outline() -> None:
+    # an oak grown from its habit's shape (no custom shape to search) under a wide
+    # flat-topped drawn crown: searched from the custom shape fitted to the drawing, its
+    # outline comes nearer; without a way to refit it the tree is left as it is
+    from refine.envelope import envelope_of_ink
+    from refine.start import FIT_BELOW, polish
+
+    img = framed(drawing("flat", 0.35), SIZE)
+    p = species.base("oak")
+    assert p["shape"] != "8"
+    want = envelope_of_ink(img < 128)
+    q, sketches = polish(p, [(want, 0.0)], "oak", SIZE, below=FIT_BELOW)
+    assert q is p and sketches is None
+    refit = []
+
+    def fit(t):
+        refit.append(t)
+        return fit_start(img, t, "oak", SIZE)
+
+    q, sketches = polish(p, [(want, 0.0)], "oak", SIZE, below=FIT_BELOW, refit=fit)
+    assert refit == [p] and q["shape"] == "8" and sketches is not None
+
+    def overlap(t) -> float:
+        from eval.envelope import envelope_overlap
+
+        return envelope_overlap(img, tree_sketch(t, "oak", 0.0, SIZE))
+
+    assert overlap(q) > overlap(p) + 0.05, (overlap(q), overlap(p))
