@@ -802,59 +802,44 @@ def _drop_ruled_lines(ink: np.ndarray) -> np.ndarray:
     return out
 
 
-# a trunk drawn as two lines, one ending lower than the other: its partner is looked for
-# up to this much of the drawing's height above the lowest ink, at most PARTNER_REACH of
-# the height beside it; a base narrower than SINGLE_LINE of the height is one line
-PARTNER_RISE = 0.15
-PARTNER_REACH = 0.7
-SINGLE_LINE = 0.05
-
-
-def _runs(row: np.ndarray) -> list[tuple[int, int]]:
-    """(first, last) columns of each run of ink in a row (gaps of one pixel bridged)."""
-    xs = np.flatnonzero(row)
-    if xs.size == 0:
-        return []
-    cut = np.flatnonzero(np.diff(xs) > 2)
-    return list(zip(xs[np.r_[0, cut + 1]], xs[np.r_[cut, xs.size - 1]], strict=True))
-
-
-def _gap(a: tuple[int, int], b: tuple[int, int]) -> int:
-    """Columns between two runs (0 when they touch or overlap)."""
-    return max(0, a[0] - b[1], b[0] - a[1])
+# the trunk's foot: the ink of this much of the drawing's height above its lowest ink
+# (a trunk's two lines seldom end on one row)
+FOOT_RISE = 0.15
 
 
 def trunk_axis(ink: np.ndarray) -> float:
-    """The column of the trunk's axis at its base (``ink`` bool, not blank): the middle
-    of the lowest rows' ink.  People draw a trunk as two lines that seldom end on one
-    row: when the lowest rows hold one thin line, the axis is the middle of it and the
-    nearest line beside it a little higher up (the trunk's other side), not the line
-    alone (which would frame the tree half off the centre line)."""
+    """The column of the tree's axis (``ink`` bool, not blank): of the columns over the
+    trunk's foot (the ink of the lowest ``FOOT_RISE`` of the height, where a trunk's
+    two lines, its roots or a flared base end), the one the drawing is most nearly
+    mirror-symmetric about (each row filled between its leftmost and rightmost ink).
+
+    People draw a trunk as two lines that seldom end on one row, flare one of them or
+    draw the crown a little to one side: the middle of the lowest ink alone sat the tree
+    on one of its lines, half off the centre line, and shrank it to fit.  A grown tree's
+    crown stands over its trunk, so the frame it is compared in is the one where the
+    drawn crown does too, as far as the drawn trunk's foot allows."""
     ys = np.flatnonzero(ink.any(axis=1))
     top, bottom = int(ys[0]), int(ys[-1])
     h = bottom - top + 1
-    bx = np.flatnonzero(ink[max(top, bottom - max(2, (bottom - top) // 40)) : bottom + 1].any(0))
-    lo, hi = int(bx[0]), int(bx[-1])
-    if hi - lo + 1 <= SINGLE_LINE * h and len(_runs(ink[bottom])) <= 1:
-        reach, at = PARTNER_REACH * h, (lo, hi)  # the line followed up as it slants
-        for r in range(bottom - 1, max(top, bottom - int(PARTNER_RISE * h)) - 1, -1):
-            runs = _runs(ink[r])
-            mine = [u for u in runs if u[0] - 2 <= at[1] and u[1] + 2 >= at[0]]
-            if not mine:
-                break
-            at = (min(u[0] for u in mine), max(u[1] for u in mine))
-            other = [u for u in runs if u not in mine and _gap(u, at) < reach]
-            if other:
-                partner = min(other, key=lambda u: _gap(u, at))
-                axis = (min(at[0], partner[0]) + max(at[1], partner[1]) + 1) / 2.0
-                # the other side only when it puts the tree over its trunk: beside a
-                # trunk drawn as one line, the low leaves of a crown are not its side
-                above = np.flatnonzero(ink[top : r - int(PARTNER_RISE * h) + 1].any(axis=0))
-                middle = (above[0] + above[-1] + 1) / 2.0 if above.size else axis
-                if abs(middle - axis) < abs(middle - (lo + hi + 1) / 2.0):
-                    return axis
-                break
-    return (lo + hi + 1) / 2.0
+    foot = np.flatnonzero(ink[max(top, bottom - int(FOOT_RISE * h)) : bottom + 1].any(0))
+    # the whole drawing, foot and all (without the foot's rows, people's outlines fell:
+    # RESULTS.md, "The tree follows the drawing")
+    rows = ink[top : bottom + 1]
+    has = rows.any(axis=1)
+    left = np.argmax(rows, axis=1)[has].astype(float)
+    right = (rows.shape[1] - 1 - np.argmax(rows[:, ::-1], axis=1))[has].astype(float)
+    # candidate axes every half column over the foot; each row's span [left, right]
+    # mirrored about c is [2c - right, 2c - left]
+    c = np.arange(2 * int(foot[0]), 2 * int(foot[-1]) + 1) / 2.0
+    lo = np.maximum(left[None, :], 2 * c[:, None] - right[None, :])
+    hi = np.minimum(right[None, :], 2 * c[:, None] - left[None, :])
+    inter = np.clip(hi - lo + 1, 0, None).sum(axis=1)
+    span = (right - left + 1).sum()
+    score = inter / np.maximum(2 * span - inter, 1)
+    # ties (a symmetric foot) go to the foot's middle
+    middle = (foot[0] + foot[-1] + 1) / 2.0
+    best = np.flatnonzero(score >= score.max() - 1e-9)
+    return float(c[best[np.argmin(np.abs(c[best] + 0.5 - middle))]] + 0.5)
 
 
 def _axis_and_box(ink: np.ndarray) -> tuple[int, int, int, int, float]:
