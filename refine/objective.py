@@ -181,14 +181,15 @@ METRICS = ("shape", "ink")
 
 def framed(img: Any, size: int) -> np.ndarray:
     """A sketch as every comparison sees it: ``render.reader.normalise_drawing`` at ``size``
-    (ink on white, framed by its own drawn extent).  The input and every candidate go
+    (ink on white, framed by its own drawn extent, its axis where a grown tree's would
+    stand: ``over_crown``).  The input and every candidate go
     through it, so both sides of the distance share one framing.  Framed at twice the size
     and pooled "any ink", so a thin pen line stays a whole line at the work size (a plain
     downscale and threshold breaks it into dashes, and an outline into pieces)."""
     a = img if isinstance(img, np.ndarray) and img.dtype == np.uint8 and img.ndim == 2 else None
     if a is None:
         a = np.round(prepare_sketch(img, max(8, min(np.shape(img)[:2]))) * 255).astype(np.uint8)
-    big = normalise_drawing(a, 2 * size)
+    big = normalise_drawing(a, 2 * size, over_crown=True)
     return big.reshape(size, 2, size, 2).min(axis=(1, 3))
 
 

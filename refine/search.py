@@ -124,10 +124,21 @@ class RefineResult:
     # trees drawn after the search for a fitted start's outline (``refine.start.polish``;
     # not in ``evaluations``, which the budget bounds)
     outline_evaluations: int = 0
+    # the search's best distance, before the outline step moved the tree (NaN: as
+    # ``loss_after``)
+    search_loss: float = math.nan
 
     @property
     def improvement(self) -> float:
         return self.loss_before - self.loss_after
+
+    @property
+    def evidence(self) -> float:
+        """The distance that weighs one species against another: the search's best.  The
+        outline step after it makes any species' tree follow the drawn outline, as far
+        as its form grows one (a maple takes a palm's outline), so its tree's distance
+        tells how far the outline was followed, not which species the drawing shows."""
+        return self.loss_after if math.isnan(self.search_loss) else self.search_loss
 
 
 class _Stop(Exception):
@@ -448,6 +459,7 @@ def _outline_searched(
         result,
         params=tree,
         loss_after=loss,
+        search_loss=result.loss_after,
         view_losses_after=losses if len(losses) > 1 else result.view_losses_after,
         outline_evaluations=used,
         seconds=time.perf_counter() - t0,

@@ -54,7 +54,7 @@ from typing import Any, Protocol
 import numpy as np
 from scipy import ndimage
 
-from render.reader import trunk_axis
+from render.reader import crown_axis
 
 from .envelope import envelope_of_ink, mask_iou
 from .prepare import prepare_sketch
@@ -123,13 +123,13 @@ def _drop_dust(ink: np.ndarray) -> np.ndarray:
 
 
 def _frame_by_height(ink: np.ndarray) -> np.ndarray:
-    """``ink`` moved and scaled so its base is on the bottom margin, its trunk axis on the
+    """``ink`` moved and scaled so its base is on the bottom margin, its axis on the
     centre line and its height fills the frame (its width only when it would not fit)."""
     side = ink.shape[0]
     ys = np.flatnonzero(ink.any(axis=1))
     xs = np.flatnonzero(ink.any(axis=0))
     top, bottom, left, right = ys[0], ys[-1], xs[0], xs[-1]
-    axis = trunk_axis(ink)
+    axis = crown_axis(ink)  # as refine.objective.framed frames it
     half = max(axis - left, right + 1 - axis, 0.5)
     scale = min((FRAME_BOTTOM - FRAME_EDGE) * side / (bottom - top + 1), 0.5 * side / half)
     rows = (np.arange(side) + 0.5 - FRAME_BOTTOM * side) / scale + bottom + 0.5

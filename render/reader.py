@@ -50,6 +50,7 @@ __all__ = [
     "ink_mask",
     "read_sketch",
     "tree_ink",
+    "crown_axis",
     "trunk_axis",
 ]
 
@@ -802,22 +803,78 @@ def _drop_ruled_lines(ink: np.ndarray) -> np.ndarray:
     return out
 
 
-# the trunk's foot: the ink of this much of the drawing's height above its lowest ink
-# (a trunk's two lines seldom end on one row)
-FOOT_RISE = 0.15
+# a trunk drawn as two lines, one ending lower than the other: its partner is looked for
+# up to this much of the drawing's height above the lowest ink, at most PARTNER_REACH of
+# the height beside it; a base narrower than SINGLE_LINE of the height is one line
+PARTNER_RISE = 0.15
+PARTNER_REACH = 0.7
+SINGLE_LINE = 0.05
+
+
+def _runs(row: np.ndarray) -> list[tuple[int, int]]:
+    """(first, last) columns of each run of ink in a row (gaps of one pixel bridged)."""
+    xs = np.flatnonzero(row)
+    if xs.size == 0:
+        return []
+    cut = np.flatnonzero(np.diff(xs) > 2)
+    return list(zip(xs[np.r_[0, cut + 1]], xs[np.r_[cut, xs.size - 1]], strict=True))
+
+
+def _gap(a: tuple[int, int], b: tuple[int, int]) -> int:
+    """Columns between two runs (0 when they touch or overlap)."""
+    return max(0, a[0] - b[1], b[0] - a[1])
 
 
 def trunk_axis(ink: np.ndarray) -> float:
-    """The column of the tree's axis (``ink`` bool, not blank): of the columns over the
-    trunk's foot (the ink of the lowest ``FOOT_RISE`` of the height, where a trunk's
-    two lines, its roots or a flared base end), the one the drawing is most nearly
-    mirror-symmetric about (each row filled between its leftmost and rightmost ink).
+    """The column of the trunk's axis at its base (``ink`` bool, not blank): the middle
+    of the lowest rows' ink.  People draw a trunk as two lines that seldom end on one
+    row: when the lowest rows hold one thin line, the axis is the middle of it and the
+    nearest line beside it a little higher up (the trunk's other side), not the line
+    alone (which would frame the tree half off the centre line)."""
+    ys = np.flatnonzero(ink.any(axis=1))
+    top, bottom = int(ys[0]), int(ys[-1])
+    h = bottom - top + 1
+    bx = np.flatnonzero(ink[max(top, bottom - max(2, (bottom - top) // 40)) : bottom + 1].any(0))
+    lo, hi = int(bx[0]), int(bx[-1])
+    if hi - lo + 1 <= SINGLE_LINE * h and len(_runs(ink[bottom])) <= 1:
+        reach, at = PARTNER_REACH * h, (lo, hi)  # the line followed up as it slants
+        for r in range(bottom - 1, max(top, bottom - int(PARTNER_RISE * h)) - 1, -1):
+            runs = _runs(ink[r])
+            mine = [u for u in runs if u[0] - 2 <= at[1] and u[1] + 2 >= at[0]]
+            if not mine:
+                break
+            at = (min(u[0] for u in mine), max(u[1] for u in mine))
+            other = [u for u in runs if u not in mine and _gap(u, at) < reach]
+            if other:
+                partner = min(other, key=lambda u: _gap(u, at))
+                axis = (min(at[0], partner[0]) + max(at[1], partner[1]) + 1) / 2.0
+                # the other side only when it puts the tree over its trunk: beside a
+                # trunk drawn as one line, the low leaves of a crown are not its side
+                above = np.flatnonzero(ink[top : r - int(PARTNER_RISE * h) + 1].any(axis=0))
+                middle = (above[0] + above[-1] + 1) / 2.0 if above.size else axis
+                if abs(middle - axis) < abs(middle - (lo + hi + 1) / 2.0):
+                    return axis
+                break
+    return (lo + hi + 1) / 2.0
+
+
+# the trunk's foot, for :func:`crown_axis`: the ink of this much of the drawing's height
+# above its lowest ink
+FOOT_RISE = 0.15
+
+
+def crown_axis(ink: np.ndarray) -> float:
+    """The column of the tree's axis as a grown tree would stand in the drawing (``ink``
+    bool, not blank): of the columns over the trunk's foot (the ink of the lowest
+    ``FOOT_RISE`` of the height, where a trunk's two lines, its roots or a flared base
+    end), the one the drawing is most nearly mirror-symmetric about (each row filled
+    between its leftmost and rightmost ink).
 
     People draw a trunk as two lines that seldom end on one row, flare one of them or
-    draw the crown a little to one side: the middle of the lowest ink alone sat the tree
-    on one of its lines, half off the centre line, and shrank it to fit.  A grown tree's
-    crown stands over its trunk, so the frame it is compared in is the one where the
-    drawn crown does too, as far as the drawn trunk's foot allows."""
+    draw the crown a little to one side: :func:`trunk_axis` then sits the tree on one of
+    its lines, half off the centre line, and shrinks it to fit.  A grown tree's crown
+    stands over its trunk, so the frame a tree's outline is compared with the drawn one
+    in is the one where the drawn crown does too, as far as the drawn foot allows."""
     ys = np.flatnonzero(ink.any(axis=1))
     top, bottom = int(ys[0]), int(ys[-1])
     h = bottom - top + 1
@@ -842,14 +899,16 @@ def trunk_axis(ink: np.ndarray) -> float:
     return float(c[best[np.argmin(np.abs(c[best] + 0.5 - middle))]] + 0.5)
 
 
-def _axis_and_box(ink: np.ndarray) -> tuple[int, int, int, int, float]:
+def _axis_and_box(ink: np.ndarray, over_crown: bool) -> tuple[int, int, int, int, float]:
     ys = np.flatnonzero(ink.any(axis=1))
     xs = np.flatnonzero(ink.any(axis=0))
     top, bottom, left, right = int(ys[0]), int(ys[-1]), int(xs[0]), int(xs[-1])
-    return top, bottom, left, right, trunk_axis(ink)
+    return top, bottom, left, right, (crown_axis if over_crown else trunk_axis)(ink)
 
 
-def normalise_drawing(img: np.ndarray, size: int = DRAWING_SIDE) -> np.ndarray:
+def normalise_drawing(
+    img: np.ndarray, size: int = DRAWING_SIDE, over_crown: bool = False
+) -> np.ndarray:
     """A drawing (grey ``uint8``, any size) -> ``(size, size)`` uint8 as the renderer
     frames a tree: paper white, strokes dark, trunk base on the bottom margin, trunk axis
     on the centre line, the drawing as large as the frame allows.
@@ -863,6 +922,10 @@ def normalise_drawing(img: np.ndarray, size: int = DRAWING_SIDE) -> np.ndarray:
     candidate's sketch the same way, so drawing and candidates always compare at one framing (the
     renderer's own frame fits a tree's width over all sides, not the drawn one).  Refuses
     blank and dark pages.
+
+    The axis is the trunk's (:func:`trunk_axis`), as the network learned its sketches;
+    ``over_crown``: where a grown tree would stand (:func:`crown_axis`), the frame
+    outlines are compared in.
     """
     from PIL import Image
 
@@ -882,7 +945,7 @@ def normalise_drawing(img: np.ndarray, size: int = DRAWING_SIDE) -> np.ndarray:
         raise SketchError(f"the page is almost all ink ({frac:.0%}): draw lines, not a fill")
     clean = np.where(ink, 0.0, 1.0)
 
-    top, bottom, left, right, axis = _axis_and_box(ink)
+    top, bottom, left, right, axis = _axis_and_box(ink, over_crown)
     h = bottom - top + 1
     half = max(axis - left, right + 1 - axis, 0.5)
     scale = min((FRAME_BOTTOM - FRAME_EDGE) * size / h, (0.5 - FRAME_EDGE) * size / half)

@@ -20,10 +20,12 @@ from render.reader import (
     MAX_PIXELS,
     SketchError,
     check_ink,
+    crown_axis,
     ink_mask,
     normalise_drawing,
     read_sketch,
     tree_ink,
+    trunk_axis,
 )
 
 
@@ -335,9 +337,7 @@ def test_a_low_wide_mound_under_the_tree_is_not_framed(
     xs, ys = (cols[0] + cols[-1]) / 2 + half * t, foot + rise * t**2
     mound = _drawn(page, lambda d: d.line(list(zip(xs, ys, strict=True)), fill=0, width=3))
     bare, framed = normalise_drawing(page), normalise_drawing(mound)
-    # within 6 px: taking the mound away takes a few pixels of a low crown's lowest tuft
-    # with it, and the frame fits the tree's wider half
-    assert np.abs(_box(framed) - _box(bare)).max() <= 6
+    assert np.abs(_box(framed) - _box(bare)).max() <= 5
 
 
 # not yet a low broad crown on a short trunk (a people-style cherry): tufts as tall as a
@@ -468,17 +468,30 @@ def test_a_trunk_whose_two_lines_end_apart_is_framed_on_its_middle(
 
 @pytest.mark.parametrize("side", [-1, 1])
 def test_a_crown_stands_over_a_trunk_whose_foot_flares_to_one_side(side: int) -> None:
-    # people flare one of a trunk's lines out at its foot: the lowest ink's middle sat
-    # the tree on that line, its crown 25 px off the centre line (issue 48); the frame
-    # puts the crown over the trunk, within the trunk's foot
+    # people flare one of a trunk's lines out at its foot: the trunk's axis (the lowest
+    # ink's middle, as the network learned its sketches) sits the tree on that line, its
+    # crown 25 px off the centre line (issue 48); framed over the crown, as outlines are
+    # compared, the crown stands over the trunk, within the trunk's foot
     im = Image.new("L", (300, 300), 255)
     d = ImageDraw.Draw(im)
     d.ellipse([70, 30, 230, 150], outline=0, width=3)
     d.line([(150 - 15 * side, 148), (150 - 18 * side, 230), (150 - 90 * side, 285)], 0, 3)
     d.line([(150 + 15 * side, 148), (150 + 18 * side, 270)], fill=0, width=3)
-    out = normalise_drawing(np.asarray(im), 256) < 128
-    cols = np.flatnonzero(out[:120].any(axis=0))
-    assert abs((cols[0] + cols[-1] + 1) / 2 - 128) <= 3, (cols[0], cols[-1])
+
+    def crown(out: np.ndarray) -> float:
+        cols = np.flatnonzero(out[:120].any(axis=0))
+        return (cols[0] + cols[-1] + 1) / 2
+
+    page = np.asarray(im)
+    assert abs(crown(normalise_drawing(page, 256, over_crown=True) < 128) - 128) <= 3
+    assert abs(crown(normalise_drawing(page, 256) < 128) - 128) > 15  # the network's frame
+
+
+def test_a_symmetric_tree_is_framed_alike_on_its_trunk_and_over_its_crown() -> None:
+    # a tree whose trunk ends on one row under a crown centred over it: both rules agree
+    for name, seed in (("oak", 2), ("pine", 5), ("poplar", 4)):
+        ink = tree_doodle(name, seed) < 128
+        assert abs(crown_axis(ink) - trunk_axis(ink)) <= 0.04 * ink.shape[1], name
 
 
 def test_a_trunk_drawn_as_one_line_keeps_its_axis() -> None:

@@ -116,7 +116,7 @@ class Result:
     losses: dict[str, float]  # "before", "after": sketch distance to the input
     timings: dict[str, float]  # seconds per stage
     yaw: float = 0.0
-    input_sketch: np.ndarray | None = None  # uint8, prepared (SKETCH_SIZE square)
+    input_sketch: np.ndarray | None = None  # uint8, prepared, framed as compared (as_drawn)
     estimator: str = "tsn"
     estimate: Estimate | None = None
     refinement: RefineResult | None = None

@@ -329,8 +329,8 @@ class SpeciesSearch:
 
     @property
     def tried(self) -> dict[str, float]:
-        """Each species tried and its best tree's distance."""
-        return {s: rr.loss_after for s, rr in self.refined.items()}
+        """Each species tried and its search's best distance (``RefineResult.evidence``)."""
+        return {s: rr.evidence for s, rr in self.refined.items()}
 
 
 def refine_species(
@@ -354,7 +354,7 @@ def refine_species(
         rr = _refine_one(read, first, name, share(cfg, i, len(names)), report, embedder, done)
         done += rr.evaluations
         refined[name] = rr
-    post = posterior(first.scores, {s: rr.loss_after for s, rr in refined.items()})
+    post = posterior(first.scores, {s: rr.evidence for s, rr in refined.items()})
     pick = first.chosen or max(refined, key=lambda s: post.get(s, 0.0))
     rr = refined[pick]
     start_yaw = refined[names[0]].start_yaw
@@ -451,13 +451,14 @@ def draw_views(read: ReadDrawings, first: FirstEstimate, search: SpeciesSearch) 
 
 
 def as_drawn(sketch: np.ndarray) -> np.ndarray:
-    """A tree's sketch framed as a drawing is (``render.reader.normalise_drawing``: trunk
-    base on the bottom margin, trunk axis on the centre line, as large as the frame
-    allows), the frame the refinement compares the drawing and the tree in.  The
+    """A sketch (a tree's, or the prepared drawing) framed as the refinement compares the
+    drawing and the tree (``render.reader.normalise_drawing`` ``over_crown``: base on the
+    bottom margin, the axis a grown tree would stand on at the centre line, as large as
+    the frame allows).  The
     renderer's own frame fits the tree's width over all sides, so beside the drawing a
     tree wider from another side looked smaller than drawn (issue 48)."""
     try:
-        return normalise_drawing(sketch, SKETCH_SIZE)
+        return normalise_drawing(sketch, SKETCH_SIZE, over_crown=True)
     except SketchError:  # nothing drawn (a bare tree seen edge on): the frame as rendered
         return sketch
 
@@ -475,13 +476,13 @@ def _sketch_views(
 
     after = sketch(draw1, yaw1)
     before = after if draw0 is draw1 else sketch(draw0, yaw0)
-    out = [ViewResult(0.0, read.images[0], before, after, math.nan, math.nan)]
+    out = [ViewResult(0.0, as_drawn(read.images[0]), before, after, math.nan, math.nan)]
     turns = view_turns(read.views, search.result, read.drawings, draw0, yaw0)
     for i, turn in enumerate(turns, start=1):
         b = sketch(draw0, yaw0 + turn)
         a = b if draw1 is draw0 else sketch(draw1, yaw1 + turn)
         searched = read.views[i].yaw is None
-        out.append(ViewResult(turn, read.images[i], b, a, math.nan, math.nan, searched))
+        out.append(ViewResult(turn, as_drawn(read.images[i]), b, a, math.nan, math.nan, searched))
     return out
 
 
