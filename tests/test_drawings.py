@@ -224,7 +224,8 @@ def test_one_tree_in_two_styles_is_closer_than_two_trees_of_a_species() -> None:
     b_sg, b_cloud = _drawn(2, "sg", 0), _drawn(2, "cloud", 1)
     same_tree = shape_distance(a_sg, a_cloud)
     assert shape_distance(a_sg, a_sg) == 0.0
-    assert same_tree == pytest.approx(shape_distance(a_cloud, a_sg), abs=1e-9)
+    # symmetric up to float32 rounding (the features are float32 sums)
+    assert same_tree == pytest.approx(shape_distance(a_cloud, a_sg), abs=1e-6)
     assert same_tree < 0.8 * shape_distance(a_sg, b_sg)
     assert same_tree < 0.8 * shape_distance(a_cloud, b_cloud)
 
