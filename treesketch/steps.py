@@ -454,9 +454,9 @@ def as_drawn(sketch: np.ndarray) -> np.ndarray:
     """A sketch (a tree's, or the prepared drawing) framed as the refinement compares the
     drawing and the tree (``render.reader.normalise_drawing`` ``over_crown``: base on the
     bottom margin, the axis a grown tree would stand on at the centre line, as large as
-    the frame allows).  The
-    renderer's own frame fits the tree's width over all sides, so beside the drawing a
-    tree wider from another side looked smaller than drawn (issue 48)."""
+    the frame allows).  The renderer's own frame fits the tree's width over all sides, so
+    beside the drawing a tree wider from another side looked smaller than drawn (issue
+    48)."""
     try:
         return normalise_drawing(sketch, SKETCH_SIZE, over_crown=True)
     except SketchError:  # nothing drawn (a bare tree seen edge on): the frame as rendered
