@@ -78,6 +78,10 @@ BEND_FRACTIONS = (-1.0, -0.5, 0.5, 1.0)
 # search gains more (a second species' half budget: RESULTS.md, "The trunk's bends tried
 # from the opposite side too")
 MIRROR_RESERVE = 2
+# a drawing with at least this share of its crown's inside in ink (``ShapeTarget.
+# inside_ink``: people's outlines about 0.06, the renderer's styles 0.1-0.7) keeps the
+# outline step's tree only where the search's distance did not rise too
+LINES_INSIDE = 0.1
 # objective penalty for a view turned from the front: 0.015 at 90 degrees, 0.06 at 180
 # (a view other than the front must fit clearly better; RESULTS.md, "Refinement")
 YAW_WEIGHT = 0.06
@@ -453,6 +457,15 @@ def _outline_searched(
     targets = [d.target for d in drawings]
     losses = tuple(run.obj.loss_of_sketch(s, t) for s, t in zip(sketches, targets, strict=True))
     loss = float(np.mean(losses))
+    inside = float(np.mean([d.shape.inside_ink for d in drawings]))
+    if inside >= LINES_INSIDE and loss > result.loss_after:
+        # the drawing shows its inside (branches, leaves within the crown): those lines
+        # are drawn as much as the outline, and the search's distance weighs them; an
+        # outline bought with them fitted the renderer's drawings' outlines past their
+        # own trees' (RESULTS.md, "The tree follows the drawing")
+        return dataclasses.replace(
+            result, outline_evaluations=used, seconds=time.perf_counter() - t0
+        )
     if run.on_best is not None:
         run.on_best(tree, result.yaw, loss)
     return dataclasses.replace(

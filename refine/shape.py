@@ -56,7 +56,7 @@ from scipy import ndimage
 
 from render.reader import crown_axis
 
-from .envelope import envelope_of_ink, mask_iou
+from .envelope import CLOSE_FRACTION, envelope_of_ink, mask_iou
 from .prepare import prepare_sketch
 
 __all__ = [
@@ -232,6 +232,16 @@ class ShapeTarget:
         """The sketch's envelope as framed (``refine.envelope``; not height-framed: where
         the tree stands in the frame counts)."""
         return envelope_of_ink(self.image < _DARK)
+
+    @cached_property
+    def inside_ink(self) -> float:
+        """The share of the envelope's inside (less a band of the closing radius along
+        its outline) that is ink: near 0 for a drawing of outlines only, more where
+        branches, leaves or shading are drawn within the crown."""
+        depth = max(1, round(CLOSE_FRACTION * self.size))
+        inner = ndimage.binary_erosion(self.envelope, iterations=depth)
+        n = int(np.count_nonzero(inner))
+        return 0.0 if n == 0 else int(np.count_nonzero(inner & (self.image < _DARK))) / n
 
     @property
     def stem(self) -> float:

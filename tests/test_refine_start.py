@@ -226,3 +226,64 @@ def test_a_tree_of_the_species_shape_is_refitted_to_the_drawn_outline() -> None:
         return envelope_overlap(img, tree_sketch(t, "oak", 0.0, SIZE))
 
     assert overlap(q) > overlap(p) + 0.05, (overlap(q), overlap(p))
+
+
+def branches_inside(img: np.ndarray) -> np.ndarray:
+    """``drawing("round", 0.5)`` with branches drawn inside its crown."""
+    im = Image.fromarray(img.copy())
+    d = ImageDraw.Draw(im)
+    for x_end, y_end in ((90, 60), (110, 40), (128, 30), (146, 40), (166, 60), (100, 90)):
+        d.line([(128, 130), (x_end, y_end)], fill=0, width=3)
+        d.line([(x_end, y_end), (x_end + 10, y_end - 12)], fill=0, width=2)
+    return np.asarray(im)
+
+
+def test_inside_ink_tells_an_outline_from_a_drawing_of_its_branches() -> None:
+    from refine.objective import PreparedDrawing
+    from refine.search import LINES_INSIDE
+
+    def inside(img: np.ndarray) -> float:
+        return PreparedDrawing.create(img, SIZE).shape.inside_ink
+
+    outline_only = drawing("round", 0.5)
+    assert inside(outline_only) < 0.5 * LINES_INSIDE
+    assert inside(branches_inside(outline_only)) > 1.5 * LINES_INSIDE
+    # the renderer's own sketch: branches and leaves inside its crown outline
+    assert inside(tree_sketch(species.sample("oak", 2), "oak", 0.0, 256)) > LINES_INSIDE
+    from refine.shape import ShapeTarget
+
+    assert ShapeTarget.from_image(np.full((SIZE, SIZE), 255, np.uint8), SIZE).inside_ink == 0.0
+
+
+def test_an_outline_bought_with_the_drawn_branches_is_not_kept(monkeypatch) -> None:
+    # the step after the search offers a tree far from the search's (its branches twice
+    # as long): kept for a drawing of outlines only, where the outline wins, but not for
+    # the same drawing with its branches drawn inside, where it costs the search's
+    # distance
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from pipeline_helpers import Fixed
+
+    import refine.search
+    from refine.start import cheap_sketches
+    from treesketch import Pipeline, RefineSettings
+
+    offered: list = []
+
+    def longer(p, wants, name, size, **_):
+        length = [float(v) for v in p["length"]]
+        length[1] *= 2.0
+        q = p.replace(length=length)
+        offered.append(q)
+        return q, cheap_sketches(q, name, size, [yaw for _, yaw in wants])
+
+    monkeypatch.setattr(refine.search, "polish", longer)
+    run = Pipeline(Fixed("oak", 1), RefineSettings(budget=10))
+    plain = run.run(drawing("round", 0.5))
+    assert plain.params == offered[-1]  # the outline wins
+    lined = run.run(branches_inside(drawing("round", 0.5)))
+    # the longer branches reach past the drawn ones: the search's tree is returned
+    assert lined.params != offered[-1]
+    assert np.isnan(lined.refinement.search_loss)  # no outline step's tree was taken
