@@ -38,7 +38,7 @@ from weberpenn import TreeParams, species
 from weberpenn.params import SPECS
 
 from .objective import METRICS, OtherView, PreparedDrawing, SearchSpace, SketchObjective
-from .start import FIT_BELOW, POLISH_BELOW, choose_start, fit_start, polish
+from .start import FIT_BELOW, LINES_INSIDE, POLISH_BELOW, choose_start, fit_start, polish
 
 __all__ = [
     "ALGORITHMS",
@@ -78,10 +78,6 @@ BEND_FRACTIONS = (-1.0, -0.5, 0.5, 1.0)
 # search gains more (a second species' half budget: RESULTS.md, "The trunk's bends tried
 # from the opposite side too")
 MIRROR_RESERVE = 2
-# a drawing with at least this share of its crown's inside in ink (``ShapeTarget.
-# inside_ink``: people's outlines about 0.06, the renderer's styles 0.1-0.7) keeps the
-# outline step's tree only where the search's distance did not rise too
-LINES_INSIDE = 0.1
 # objective penalty for a view turned from the front: 0.015 at 90 degrees, 0.06 at 180
 # (a view other than the front must fit clearly better; RESULTS.md, "Refinement")
 YAW_WEIGHT = 0.06
@@ -104,7 +100,7 @@ EMBEDDINGS = ("shipped", "none")  # RefineSettings.embedding's names (else a che
 
 Progress = Callable[[int, float], None]
 # told of each new best point: (its parameters, its yaw, its sketch distance)
-OnBest = Callable[[TreeParams, float, float], None]
+OnBest = Callable[[TreeParams, float, float, float], None]
 
 
 @dataclass(frozen=True)
@@ -328,8 +324,9 @@ def refine(
     ``yaw`` fixes the view (degrees) instead of searching it; ``progress(evaluations,
     best_loss)`` is called after each new evaluation; ``cancel()`` is asked before each
     one and raises :class:`Cancelled` when it returns True; ``on_best(params, yaw,
-    sketch_distance)`` is called whenever an evaluation is the best so far (what a caller
-    shows while the search runs).  ``loss_before`` /
+    sketch_distance, weight)`` is called whenever an evaluation is the best so far, and for
+    the outline step's tree (what a caller shows while the search runs; ``weight`` the
+    distance the species is weighed by, ``RefineResult.evidence``: the search's).  ``loss_before`` /
     ``loss_after`` are the sketch distance; the start point is always evaluated, whatever
     the time limit, so both are finite.
 
@@ -467,7 +464,7 @@ def _outline_searched(
             result, outline_evaluations=used, seconds=time.perf_counter() - t0
         )
     if run.on_best is not None:
-        run.on_best(tree, result.yaw, loss)
+        run.on_best(tree, result.yaw, loss, result.loss_after)
     return dataclasses.replace(
         result,
         params=tree,
@@ -540,7 +537,8 @@ class _Run:
         n_before, best_before = obj.evaluations, obj.best_loss
         loss = obj(x)
         if self.on_best is not None and obj.best_loss < best_before and obj.best_params is not None:
-            self.on_best(obj.best_params, obj.best_yaw, obj.best_sketch_loss)
+            loss = obj.best_sketch_loss
+            self.on_best(obj.best_params, obj.best_yaw, loss, loss)
         if self.progress is not None and obj.evaluations != n_before:
             self.progress(obj.evaluations, obj.best_loss)
         return loss

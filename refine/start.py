@@ -39,6 +39,7 @@ from .envelope import envelope_of_ink, mask_iou
 
 __all__ = [
     "DRAWN_KEYS",
+    "LINES_INSIDE",
     "POLISH_BELOW",
     "POLISH_EVALS",
     "Profile",
@@ -234,14 +235,19 @@ def choose_start(
     one (envelope overlap under ``FIT_BELOW``): where the network already reads the
     outline, its tree keeps the 3D shape it learned, which the 2D outline does not hold
     (RESULTS.md, "The tree follows the drawing": fitted anyway, the paper's published
-    trees lost mesh error).  It is kept when its sketch is nearer the drawing by the
-    refinement's distance."""
+    trees lost mesh error), and only for a drawing of outlines (``LINES_INSIDE``).  It is
+    kept when its sketch is nearer the drawing by the refinement's distance."""
     from .objective import framed
     from .shape import ShapeTarget
 
     def sketch(p: TreeParams) -> np.ndarray:
         return cheap_sketch(p, species, drawing.size, yaw)
 
+    if drawing.shape.inside_ink >= LINES_INSIDE:
+        # the drawn lines within the crown tell the search more than the outline the
+        # fitted start reads (a scribbled crown read twice as wide grew a willow twice as
+        # large: RESULTS.md, "The tree follows the drawing")
+        return params, ()
     first = sketch(params)
     seen = ShapeTarget.from_image(framed(first, drawing.size), drawing.size)
     if mask_iou(drawing.shape.envelope, seen.envelope) >= FIT_BELOW:
@@ -254,6 +260,11 @@ def choose_start(
     return params, ()
 
 
+# a drawing with at least this share of its crown's inside in ink (``ShapeTarget.
+# inside_ink``: people's outlines about 0.06, the renderer's styles 0.1-0.7) shows its
+# branches and leaves: the search starts from the network's tree, not the fitted start,
+# and keeps the outline step's tree only where the search's distance did not rise
+LINES_INSIDE = 0.1
 POLISH_EVALS = 24  # trees a fitted start's outline is searched with, after the search
 # after the search, any other tree's outline is searched for when it overlaps the drawn
 # one less than this (FIT_BELOW there: people's drawings 0.742 against 0.745, doodle

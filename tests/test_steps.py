@@ -54,7 +54,7 @@ def test_reporter_tells_stages_then_the_first_tree_and_cancels() -> None:
     assert seen[0].params is None and seen[0].budget == 10
     assert seen[1].species == "palm" and seen[1].version == 1 and seen[1].budget == 15
     assert seen[2].evaluations == 15  # never past the plan
-    best.offer(species.sample("pine", 1), 30.0, 0.5, "pine")
+    best.offer(species.sample("pine", 1), 30.0, 0.5, "pine", 0.5)
     assert best.species == "pine" and best.shown == 0.5 and best.version == 2
     stopping = Reporter(10, cancel=lambda: True)
     with pytest.raises(Cancelled, match="during read"):

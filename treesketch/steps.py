@@ -101,7 +101,8 @@ class CurrentBest:
 
     def __init__(self, scores: dict[str, float]) -> None:
         self.scores = scores
-        self.best: dict[str, tuple[TreeParams, float, float]] = {}  # species -> tree
+        # species -> its tree, yaw, distance and the distance it is weighed by
+        self.best: dict[str, tuple[TreeParams, float, float, float]] = {}
         self.params: TreeParams | None = None
         self.species: str | None = None
         self.yaw = 0.0
@@ -112,14 +113,18 @@ class CurrentBest:
         self.params, self.species, self.yaw = params, species, yaw
         self.version += 1
 
-    def offer(self, params: TreeParams, yaw: float, loss: float, species: str) -> None:
-        """A candidate's new best tree."""
-        if species in self.best and not loss < self.best[species][2]:
+    def offer(
+        self, params: TreeParams, yaw: float, loss: float, species: str, weight: float
+    ) -> None:
+        """A candidate's new best tree: ``loss`` its distance, ``weight`` the distance its
+        species is weighed by (the search's, as ``RefineResult.evidence``; the outline
+        step's tree comes with its search's and replaces the searched tree)."""
+        if species in self.best and weight > self.best[species][3]:
             return
-        self.best[species] = (params, yaw, loss)
-        post = posterior(self.scores, {s: v[2] for s, v in self.best.items()})
+        self.best[species] = (params, yaw, loss, weight)
+        post = posterior(self.scores, {s: v[3] for s, v in self.best.items()})
         pick = max(self.best, key=lambda s: post.get(s, 0.0))
-        p, y, d = self.best[pick]
+        p, y, d, _ = self.best[pick]
         if p is self.params and pick == self.species:
             return
         self.params, self.species, self.yaw = p, pick, y
@@ -382,7 +387,7 @@ def _refine_one(
         progress=lambda n, _loss: report.tell("refine", done + n),
         cancel=report.cancel,
         embedder=embedder,
-        on_best=None if best is None else lambda p, y, loss: best.offer(p, y, loss, name),
+        on_best=None if best is None else lambda p, y, d, w: best.offer(p, y, d, name, w),
         views=read.others,
     )
 

@@ -169,7 +169,7 @@ def one_tree(
             yaw=yaw,
             embedder=pipe.embedder,
             views=others,
-            on_best=lambda p, y, d: bests.append((p, y, d)),
+            on_best=lambda p, y, d, _w: bests.append((p, y, d)),
         )
         return r, bests
 
