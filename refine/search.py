@@ -99,7 +99,8 @@ MAX_TIME_LIMIT = 3600.0
 EMBEDDINGS = ("shipped", "none")  # RefineSettings.embedding's names (else a checkpoint path)
 
 Progress = Callable[[int, float], None]
-# told of each new best point: (its parameters, its yaw, its sketch distance)
+# told of each new best point: (its parameters, its yaw, its sketch distance, the distance
+# its species is weighed by: ``RefineResult.evidence``)
 OnBest = Callable[[TreeParams, float, float, float], None]
 
 
@@ -537,8 +538,8 @@ class _Run:
         n_before, best_before = obj.evaluations, obj.best_loss
         loss = obj(x)
         if self.on_best is not None and obj.best_loss < best_before and obj.best_params is not None:
-            loss = obj.best_sketch_loss
-            self.on_best(obj.best_params, obj.best_yaw, loss, loss)
+            d = obj.best_sketch_loss
+            self.on_best(obj.best_params, obj.best_yaw, d, d)
         if self.progress is not None and obj.evaluations != n_before:
             self.progress(obj.evaluations, obj.best_loss)
         return loss

@@ -75,6 +75,24 @@ def test_deterministic() -> None:
     assert a.params.to_dict() == b.params.to_dict()
 
 
+def test_a_caller_watching_the_best_changes_nothing() -> None:
+    # on_best only hears of the search's bests: the search, its view's penalty included
+    # (a tree seen 90 degrees round), goes exactly as without it
+    img, _gt, start = _case(name="maple", seed=2, yaw=90.0)
+    heard: list[tuple[float, float]] = []
+    a = refine(img, start, RefineSettings(budget=15), species="maple")
+    b = refine(
+        img,
+        start,
+        RefineSettings(budget=15),
+        species="maple",
+        on_best=lambda _p, _y, d, w: heard.append((d, w)),
+    )
+    assert heard and all(d == w for d, w in heard)
+    assert a.loss_after == b.loss_after and a.yaw == b.yaw and a.trace == b.trace
+    assert a.params.to_dict() == b.params.to_dict()
+
+
 def test_fast_and_full_sketch_start_alike() -> None:
     img, _gt, start = _case(name="maple", seed=4)
     fast = refine(img, start, RefineSettings(budget=1), species="maple", yaw=0.0)
