@@ -6,7 +6,8 @@ through the default pipeline twice, with the outline step (``refine.start.polish
 without it (``refine.start.POLISH_EVALS`` 0), and prints per drawing and in all: the mesh
 error against the ground truth (normalised max Hausdorff, each tree turned into the
 drawing's view), the envelope overlap of the drawing and the returned tree's sketch
-(``eval.envelope``), the search's distance and the outline step's, and the overlap of
+(``eval.envelope``), the search's distance and the outline step's, the drawing's
+``ShapeTarget.inside_ink`` (how much of its crown's inside is drawn), and the overlap of
 the drawing and the ground truth's own sketch at the drawn view (how far an outline can
 follow a drawing in these styles and still be the drawn tree's).  ``--people N`` adds
 the first N held-out people's tree drawings (overlaps and distances only: no truth).
@@ -29,10 +30,16 @@ from benchmarks.bench_drawings import tree_drawings
 from eval.envelope import envelope_overlap
 from eval.hausdorff import bbox_diagonal, hausdorff, rotate_about_trunk
 from eval.people import people_drawings
+from refine.objective import PreparedDrawing
 from refine.start import cheap_sketches
 from treesketch import Pipeline
 from treesketch.steps import as_drawn, prepare_input
 from weberpenn import build_mesh, grow, species
+
+
+def inside(img: np.ndarray) -> float:
+    """The drawing's ``inside_ink`` as the refinement sees it."""
+    return PreparedDrawing.create(prepare_input(img), 128).shape.inside_ink
 
 
 def run(pipe: Pipeline, img: np.ndarray, step: bool, truth: tuple | None, yaw: float) -> dict:
@@ -77,6 +84,7 @@ def main() -> None:
             "name": d["name"],
             "style": d["style"],
             "truth_overlap": envelope_overlap(as_drawn(prepare_input(d["image"])), as_drawn(own)),
+            "inside_ink": inside(d["image"]),
             "on": run(pipe, d["image"], True, truth, d["yaw"]),
             "off": run(pipe, d["image"], False, truth, d["yaw"]),
         }
@@ -90,7 +98,8 @@ def main() -> None:
         )
     for i, p in enumerate(people_drawings("held", ("strokes",), ("tree",))[: args.people]):
         img = np.asarray(p.image())
-        row = {"name": f"people/{i:02d}-{p.key}", "on": run(pipe, img, True, None, 0.0)}
+        row = {"name": f"people/{i:02d}-{p.key}", "inside_ink": inside(img)}
+        row["on"] = run(pipe, img, True, None, 0.0)
         row["off"] = run(pipe, img, False, None, 0.0)
         rows.append(row)
         print(
@@ -109,11 +118,17 @@ def main() -> None:
             )
         t = [r["truth_overlap"] for r in drawn]
         print(f"the truth's own overlap: median {np.median(t):.3f}, mean {np.mean(t):.3f}")
+        i = [r["inside_ink"] for r in drawn]
+        print(f"inside ink: median {np.median(i):.3f}, 10th percentile {np.percentile(i, 10):.3f}")
     people = [r for r in rows if r["name"].startswith("people/")]
     if people:
         for k in ("on", "off"):
             o = [r[k]["overlap"] for r in people]
             print(f"people, outline step {k:>3}: overlap median {np.median(o):.4f}")
+        i = [r["inside_ink"] for r in people]
+        print(
+            f"people's inside ink: median {np.median(i):.3f}, 90th percentile {np.percentile(i, 90):.3f}"
+        )
     if args.json is not None:
         args.json.write_text(json.dumps(rows, indent=1))
 
