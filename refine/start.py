@@ -272,48 +272,6 @@ POLISH_EVALS = 24  # trees a fitted start's outline is searched with, after the 
 POLISH_BELOW = 0.85
 
 
-# a drawn trunk's foot is at most this many times as wide as its trunk (roots drawn
-# spread out widen the envelope's lowest rows far more than any trunk flares)
-FLARE_LIMIT = 6.0
-
-
-def _foot(profile: Profile | None) -> float | None:
-    """The foot's width (the lowest height bin's) over the trunk's narrowest above it
-    (the bins up to a quarter of the height: a trunk under a crown, or the crown itself
-    where it comes down to the ground, which reads as no flare); None without a trunk."""
-    if profile is None:
-        return None
-    narrowest = float(profile.widths[1 : BINS // 4 + 1].min())
-    return None if narrowest <= 0 else float(profile.widths[0]) / narrowest
-
-
-def _flared(
-    q: TreeParams,
-    want: tuple[np.ndarray, float],
-    species: str,
-    size: int,
-    going: Callable[[], bool] | None,
-) -> tuple[TreeParams, int]:
-    """``q`` with its trunk's flare at the foot (``rootFlare``: the trunk's first point's
-    radius over its own) read from the drawn outline ``want`` (its envelope and yaw): the
-    drawn foot's width over the drawn trunk's, against the tree's own.  People draw most
-    trunks widening to the ground; a tree without the flare misses that foot whatever
-    its crown.  Returns it and the trees drawn for it (0 or 1)."""
-    drawn = _foot(profile_of(np.where(want[0], 0, 255).astype(np.uint8)))
-    if drawn is None:
-        return q, 0
-    if going is not None and not going():
-        import nlopt
-
-        raise nlopt.ForcedStop
-    seen = _foot(profile_of(cheap_sketch(q, species, size, want[1])))
-    if seen is None:
-        return q, 1
-    flare = float(q["rootFlare"]) * drawn / seen
-    flare = float(np.clip(flare, 1.0, min(FLARE_LIMIT, SPECS["rootFlare"].hi)))
-    return q.replace(rootFlare=flare), 1
-
-
 def polish(
     p: TreeParams,
     wants: Sequence[tuple[np.ndarray, float]],
@@ -325,13 +283,11 @@ def polish(
     refit: Callable[[TreeParams], TreeParams] | None = None,
 ) -> tuple[TreeParams, list[np.ndarray] | None]:
     """``p`` with its drawn values (``DRAWN_KEYS``: the custom shape, crown base, branch
-    reach, trunk thickness), its first branches' angle and bend (``downAngle[1]``, which
-    sets how far the low branches reach out under the crown, and ``curve[1]``, whether
-    they droop below it or rise into it) searched for the outlines nearest ``wants`` (each
-    a drawing's framed envelope and the yaw it is seen from), after the trunk's flare is
-    read from the first (:func:`_flared`): nlopt COBYLA on one minus the mean envelope
-    overlap, at most ``evals`` (default ``POLISH_EVALS``) trees, while ``going()`` (the
-    caller's time and cancel) says so.
+    reach, trunk thickness) and its first branches' angle (``downAngle[1]``, which sets
+    how far the low branches reach out under the crown) searched for the outlines
+    nearest ``wants`` (each a drawing's framed envelope and the yaw it is seen from): nlopt
+    COBYLA on one minus the mean envelope overlap, at most ``evals`` (default
+    ``POLISH_EVALS``) trees, while ``going()`` (the caller's time and cancel) says so.
     Returns the tree and its cheap sketch at each view, or ``p`` and None when it found
     no nearer outline or ``p``'s mean overlap is already ``below`` or more.
 
@@ -370,41 +326,33 @@ def polish(
     q = p if custom or refit is None else refit(p)
     if str(q["shape"]) != "8":
         return p, None
-    try:
-        q, drawn = _flared(q, wants[0], species, size, going)
-    except nlopt.ForcedStop:
-        return p, None
-    if evals - 1 - drawn < 1:  # nlopt reads a limit of 0 as none
-        return p, None
     length = [float(v) for v in q["length"]]
     down = [float(v) for v in q["downAngle"]]
-    curve = [float(v) for v in q["curve"]]
-    lo = np.array([SPECS["customShape"].lo] * 4 + [0.0, np.log(0.02), np.log(1e-3), 0.0, -90.0])
-    hi = np.array([SPECS["customShape"].hi] * 4 + [0.95, np.log(3.0), np.log(0.5), 140.0, 90.0])
+    lo = np.array([SPECS["customShape"].lo] * 4 + [0.0, np.log(0.02), np.log(1e-3), 0.0])
+    hi = np.array([SPECS["customShape"].hi] * 4 + [0.95, np.log(3.0), np.log(0.5), 140.0])
     x0 = np.array(
         [float(v) for v in q["customShape"]]
         + [float(q["baseSize"]), np.log(max(length[1], 1e-6))]
-        + [np.log(max(float(q["ratio"]), 1e-6)), down[1], curve[1]]
+        + [np.log(max(float(q["ratio"]), 1e-6)), down[1]]
     )
     u0 = (np.clip(x0, lo, hi) - lo) / (hi - lo)
 
     def make(u: np.ndarray) -> TreeParams:
         x = lo + np.clip(u, 0.0, 1.0) * (hi - lo)
-        ln, da, cv = list(length), list(down), list(curve)
-        ln[1], da[1], cv[1] = float(np.exp(x[5])), float(x[7]), float(x[8])
+        ln, da = list(length), list(down)
+        ln[1], da[1] = float(np.exp(x[5])), float(x[7])
         return q.replace(
             customShape=[float(v) for v in x[:4]],
             baseSize=float(x[4]),
             length=ln,
             ratio=float(np.exp(x[6])),
             downAngle=da,
-            curve=cv,
         )
 
     def gap(u: np.ndarray, grad: np.ndarray) -> float:
         t = make(u)
         v, sketches = outline(t)
-        if v < best[0] and (q is not p or np.any(u != u0)):
+        if v < best[0] and (not custom or np.any(u != u0)):
             best[:] = [v, t, sketches]
         return v
 
@@ -412,7 +360,7 @@ def polish(
     opt.set_lower_bounds(np.zeros(len(u0)))
     opt.set_upper_bounds(np.ones(len(u0)))
     opt.set_initial_step(np.full(len(u0), 0.1))
-    opt.set_maxeval(evals - 1 - drawn)  # ``p`` is one, the flare's reading another
+    opt.set_maxeval(evals - 1)  # ``p`` is one
     opt.set_min_objective(gap)
     with contextlib.suppress(RuntimeError, ValueError, nlopt.ForcedStop):  # the best seen
         opt.optimize(u0)

@@ -302,31 +302,3 @@ def test_a_drawing_of_its_branches_starts_from_the_network_tree() -> None:
     fitted, keep = choose_start(plain, start, "oak")
     assert fitted is not start and keep == species.DRAWN_KEYS
     assert choose_start(lined, start, "oak") == (start, ())
-
-
-def test_a_trunk_drawn_widening_to_the_ground_grows_a_flared_foot() -> None:
-    # people draw most trunks spreading out at the foot: the outline step reads the
-    # flare (``rootFlare``) from the drawn foot's width over the drawn trunk's
-    from refine.envelope import envelope_of_ink
-    from refine.start import polish
-
-    def with_foot(spread: int) -> np.ndarray:
-        im = Image.new("L", (256, 256), 255)
-        d = ImageDraw.Draw(im)
-        d.line([(120, 130), (120, 200), (120 - spread, 240)], fill=0, width=3)
-        d.line([(136, 130), (136, 200), (136 + spread, 240)], fill=0, width=3)
-        d.ellipse([60, 20, 196, 138], outline=0, width=3)
-        return framed(np.asarray(im), SIZE)
-
-    p = species.sample("birch", 3)
-    assert p["shape"] == "8"
-    flares = []
-    for spread in (0, 30):
-        img = with_foot(spread)
-        q, sketches = polish(p, [(envelope_of_ink(img < 128), 0.0)], "birch", SIZE, evals=4)
-        assert sketches is not None
-        flares.append(float(q["rootFlare"]))
-        if spread:
-            seen = profile_of(sketches[0])
-            assert seen.widths[0] > 1.5 * seen.trunk, (seen.widths[0], seen.trunk)
-    assert flares[0] < 1.5 <= flares[1], flares
