@@ -20,7 +20,7 @@ from render.sketch import SketchRenderer
 from render.styles import STYLES, Silhouettes, draw
 from weberpenn import build_mesh, grow, species
 
-__all__ = ["read_drawings", "styled_trees"]
+__all__ = ["accepted", "read_drawings", "styled_trees"]
 
 
 def styled_trees(seed0: int, n: int) -> tuple[list[np.ndarray], list[str]]:
@@ -39,6 +39,21 @@ def styled_trees(seed0: int, n: int) -> tuple[list[np.ndarray], list[str]]:
     return out, labels
 
 
+def accepted(
+    images: Sequence[Any], prepare: Callable[[Any], np.ndarray]
+) -> tuple[list[np.ndarray], np.ndarray]:
+    """The images the pipeline accepts, prepared (``prepare``: its reader and preparation;
+    a blank page is refused before the network sees it), and which they were (bool)."""
+    prepared, kept = [], []
+    for im in images:
+        try:
+            prepared.append(prepare(im))
+            kept.append(True)
+        except SketchError:
+            kept.append(False)
+    return prepared, np.asarray(kept, bool)
+
+
 def read_drawings(
     model: Any,
     images: Sequence[Any],
@@ -49,18 +64,12 @@ def read_drawings(
     kept (len(images),) bool)`` of the drawings the pipeline accepts (``prepare``: its reader and preparation;
     a blank page is refused before the network sees it, so it is left out here too);
     ``model`` is a ``tsn.predict.TSNModel``."""
-    prepared, kept = [], []
-    for im in images:
-        try:
-            prepared.append(prepare(im))
-            kept.append(True)
-        except SketchError:
-            kept.append(False)
+    prepared, kept = accepted(images, prepare)
     mats, pooled = [], []
     for i in range(0, len(prepared), batch):
         raw, feats = model.raw_and_features(prepared[i : i + batch])
         mats.append(model.normaliser.denormalise(raw))
         pooled.append(feats)
     if not prepared:
-        return np.zeros((0, 4, 62)), np.zeros((0, 0)), np.asarray(kept, bool)
-    return np.concatenate(mats), np.concatenate(pooled), np.asarray(kept, bool)
+        return np.zeros((0, 4, 62)), np.zeros((0, 0)), kept
+    return np.concatenate(mats), np.concatenate(pooled), kept

@@ -37,12 +37,13 @@ from fit_people import (  # noqa: E402
     HELD_SEEDS,
     calibrating,
     code_made,
+    detector_data,
     prepared,
     subset,
 )
 
+from eval.fitting import accepted  # noqa: E402
 from eval.people import LEFT_OUT_KINDS, people_drawings  # noqa: E402
-from render.reader import SketchError  # noqa: E402
 from tsn.model import EfficientNetLite0, load_pretrained_lite0  # noqa: E402
 from tsn.predict import load_model  # noqa: E402
 from tsn.tree_detect import TreeDetector  # noqa: E402
@@ -55,13 +56,7 @@ CHUNK = 256
 
 def readings(model, pretrained: EfficientNetLite0, images: list) -> dict[str, np.ndarray]:
     """The feature sets of the images the pipeline accepts, and which it accepted."""
-    keep, prep = [], []
-    for im in images:
-        try:
-            prep.append(prepared(im))
-            keep.append(True)
-        except SketchError:
-            keep.append(False)
+    prep, keep = accepted(images, prepared)
     out: dict[str, list] = {"heads": [], "stages": [], "pretrained": []}
     net = model.net
     with torch.no_grad():
@@ -77,7 +72,7 @@ def readings(model, pretrained: EfficientNetLite0, images: list) -> dict[str, np
             out["stages"].append(torch.cat(pooled, 1).numpy())
             out["pretrained"].append(pretrained.run_stages(x, 0, 18).mean(dim=(2, 3)).numpy())
     res = {k: np.concatenate(v) if v else np.zeros((0, 1)) for k, v in out.items()}
-    res["kept"] = np.asarray(keep, bool)
+    res["kept"] = keep
     return res
 
 
@@ -95,7 +90,7 @@ def read_cached(model, pretrained, path: Path, items: list, meta: dict[str, list
             kept = r.pop("kept")
             m = {k: np.asarray(v[i : i + CHUNK])[kept] for k, v in meta.items()}
             np.savez(part, **r, **m)
-            print(f"{path.name}: {i + CHUNK}/{len(items)} ({time.perf_counter() - t0:.0f} s)",
+            print(f"{path.name}: {min(i + CHUNK, len(items))}/{len(items)} ({time.perf_counter() - t0:.0f} s)",
                   flush=True)  # fmt: skip
         parts.append(part)
     loaded = [dict(np.load(p)) for p in parts]
@@ -133,17 +128,8 @@ def columns(d: dict, which: str) -> np.ndarray:
 
 def data(code: dict, people: dict, which: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``fit_people.detector_data`` with the left-out kinds left out, on ``which``."""
-    keep_c = np.array([lab.removeprefix("other:") not in LEFT_OUT_KINDS for lab in code["label"]])
-    keep_p = ~np.isin(people["kind"], LEFT_OUT_KINDS)
-    xc, xp = columns(code, which)[keep_c], columns(people, which)[keep_p]
-    yc = np.array([not lab.startswith("other:") for lab in code["label"][keep_c]])
-    yp = people["kind"][keep_p] == "tree"
-    wp = np.full(len(xp), len(xc) / max(1, len(xp)))
-    return (
-        np.concatenate([xc, xp]),
-        np.concatenate([yc, yp]),
-        np.concatenate([np.ones(len(xc)), wp]),
-    )
+    with_cols = [d | {"features": columns(d, which)} for d in (code, people)]
+    return detector_data(*with_cols, with_cols[0]["features"].shape[1], LEFT_OUT_KINDS)
 
 
 def main() -> None:
