@@ -44,6 +44,7 @@ __all__ = [
     "SearchSpace",
     "SketchObjective",
     "SketchTarget",
+    "draw_side",
     "framed",
     "make_target",
     "metric_distance",
@@ -191,6 +192,17 @@ def framed(img: Any, size: int) -> np.ndarray:
         a = np.round(prepare_sketch(img, max(8, min(np.shape(img)[:2]))) * 255).astype(np.uint8)
     big = normalise_drawing(a, 2 * size, over_crown=True)
     return big.reshape(size, 2, size, 2).min(axis=(1, 3))
+
+
+def draw_side(size: int) -> int:
+    """The side, in pixels, a candidate tree's sketch is drawn at to be compared at
+    ``size`` (:func:`framed` frames at twice ``size`` and pools any ink).  The renderer
+    draws a sketch smaller than its reference side at that side and box-averages it
+    down, so a 128 px sketch's one-pixel lines come out grey; framing thresholds them,
+    and its outline fell apart into dashes whose envelope misses whole bites of the
+    crown (RESULTS.md, "The tree follows the drawing").  Drawn at twice the size, the
+    lines are whole, as the drawing's are."""
+    return 2 * int(size)
 
 
 def make_target(img: Any, size: int, metric: str = "shape", embedder: Any = None) -> Any:
@@ -469,8 +481,9 @@ class SketchObjective:
         return tuple(round(float(v), self.decimals) for v in np.clip(x, 0.0, 1.0))
 
     def sketch_at(self, x: Sequence[float], turn: float = 0.0) -> np.ndarray:
-        """The uint8 sketch of the tree at ``x`` (at the target's size), seen from the
-        point's yaw turned by ``turn`` degrees (another view's)."""
+        """The uint8 sketch of the tree at ``x`` (drawn at :func:`draw_side` of the
+        target's size), seen from the point's yaw turned by ``turn`` degrees (another
+        view's)."""
         from render.sketch import SketchRenderer, sketch_mesh
 
         k = self.key(x)
@@ -484,7 +497,8 @@ class SketchObjective:
             else:
                 self._renderer = SketchRenderer(build_mesh(skeleton, species=name))
             self._scene_key = scene_key
-        return self._renderer.sketch((self.space.yaw(x) + turn) % 360.0, self.target.size)
+        yaw = (self.space.yaw(x) + turn) % 360.0
+        return self._renderer.sketch(yaw, draw_side(self.target.size))
 
     def loss_of_sketch(self, img: np.ndarray, target: Any = None) -> float:
         """Distance of a candidate's rendered sketch to the target (or another view's

@@ -38,7 +38,15 @@ from weberpenn import TreeParams, species
 from weberpenn.params import SPECS
 
 from .objective import METRICS, OtherView, PreparedDrawing, SearchSpace, SketchObjective
-from .start import FIT_BELOW, LINES_INSIDE, POLISH_BELOW, choose_start, fit_start, polish
+from .start import (
+    FIT_BELOW,
+    LINES_INSIDE,
+    POLISH_BELOW,
+    choose_start,
+    fit_start,
+    polish,
+    reseed,
+)
 
 __all__ = [
     "ALGORITHMS",
@@ -428,7 +436,16 @@ def _outline_searched(
 
     drawings = [drawing, *(v.drawing for v in views)]
     turns = [0.0, *result.view_yaws]
+    inside = float(np.mean([d.shape.inside_ink for d in drawings]))
     wants = [(d.shape.envelope, result.yaw + t) for d, t in zip(drawings, turns, strict=True)]
+    seeded = None
+    if inside < LINES_INSIDE:
+        # a drawing of outlines: the outline is all it shows, so the tree's own draws are
+        # chosen for it too (``refine.start.reseed``)
+        seeded = reseed(result.params, wants, result.species, drawing.size, going, below)
+    if seeded is not None:
+        result = dataclasses.replace(result, params=seeded[0], yaw=(result.yaw + seeded[1]) % 360.0)
+        wants = [(w, yaw + seeded[1]) for w, yaw in wants]
     tree, sketches = polish(
         result.params,
         wants,
@@ -448,6 +465,8 @@ def _outline_searched(
     # embedding): kept by the outline alone (kept only where the search's distance fell
     # too, people's outlines 0.723 against 0.740: RESULTS.md, "The tree follows the
     # drawing")
+    if sketches is None and seeded is not None:
+        tree, sketches = result.params, seeded[2]
     if sketches is None:
         return dataclasses.replace(
             result, outline_evaluations=used, seconds=time.perf_counter() - t0
@@ -455,7 +474,6 @@ def _outline_searched(
     targets = [d.target for d in drawings]
     losses = tuple(run.obj.loss_of_sketch(s, t) for s, t in zip(sketches, targets, strict=True))
     loss = float(np.mean(losses))
-    inside = float(np.mean([d.shape.inside_ink for d in drawings]))
     if inside >= LINES_INSIDE and loss > result.loss_after:
         # the drawing shows its inside (branches, leaves within the crown): those lines
         # are drawn as much as the outline, and the search's distance weighs them; an

@@ -49,6 +49,7 @@ __all__ = [
     "fit_start",
     "polish",
     "profile_of",
+    "reseed",
 ]
 
 # the estimate's outline overlapping the drawn one at least this much is kept as it is:
@@ -123,15 +124,18 @@ def _height(params: TreeParams) -> float:
 def cheap_sketches(
     params: TreeParams, species: str, size: int, yaws: Sequence[float]
 ) -> list[np.ndarray]:
-    """The tree's fast sketches (the search's own) at each of ``yaws``, ``size`` px."""
+    """The tree's fast sketches (the search's own) at each of ``yaws``, to be compared at
+    ``size`` px (drawn at ``refine.objective.draw_side(size)``)."""
     from render.sketch import SketchRenderer, sketch_mesh
 
+    from .objective import draw_side
+
     r = SketchRenderer(sketch_mesh(grow(params), size, species), engine="raster")
-    return [r.sketch(yaw % 360.0, size) for yaw in yaws]
+    return [r.sketch(yaw % 360.0, draw_side(size)) for yaw in yaws]
 
 
 def cheap_sketch(params: TreeParams, species: str, size: int, yaw: float) -> np.ndarray:
-    """The tree's fast sketch (the search's own) at ``yaw``, ``size`` px."""
+    """The tree's fast sketch (the search's own) at ``yaw``, to be compared at ``size`` px."""
     return cheap_sketches(params, species, size, (yaw,))[0]
 
 
@@ -365,3 +369,61 @@ def polish(
     with contextlib.suppress(RuntimeError, ValueError, nlopt.ForcedStop):  # the best seen
         opt.optimize(u0)
     return (best[1], best[2]) if best[0] < start else (p, None)
+
+
+# the tree's own random draws (``seed``) place its branches round the trunk, and people
+# draw crowns to one side of it: other seeds, each seen from a few turns either side of
+# the found view, may hold an outline nearer the drawn one (RESULTS.md, "The tree follows
+# the drawing")
+RESEED_SEEDS = 3  # other seeds tried
+RESEED_TURNS = (-30.0, -15.0, 0.0, 15.0, 30.0)  # degrees about the trunk from the found view
+RESEED_STEP = 1_000_003  # between the seeds tried
+
+
+def reseed(
+    p: TreeParams,
+    wants: Sequence[tuple[np.ndarray, float]],
+    species: str,
+    size: int,
+    going: Callable[[], bool] | None = None,
+    below: float | None = None,
+) -> tuple[TreeParams, float, list[np.ndarray]] | None:
+    """The tree among ``p`` and ``RESEED_SEEDS`` others differing only in their seed, and
+    the turn of ``RESEED_TURNS``, whose outlines overlap the drawn ones (``wants``, as
+    :func:`polish` takes them) most: (tree, turn in degrees, its cheap sketches), or None
+    when none is nearer than ``p`` at its own view, or ``p``'s overlap is already
+    ``below`` or more, or ``going()`` stopped it first (each seed and turn one tree)."""
+    from .objective import framed
+    from .shape import ShapeTarget
+
+    def overlap(sketches: list[np.ndarray]) -> float:
+        seen = [ShapeTarget.from_image(framed(s, size), size).envelope for s in sketches]
+        return float(np.mean([mask_iou(w, e) for (w, _), e in zip(wants, seen, strict=True)]))
+
+    if not wants or (going is not None and not going()):
+        return None
+    start = overlap(cheap_sketches(p, species, size, [yaw for _, yaw in wants]))
+    if below is not None and start >= below:
+        return None
+    best: tuple[float, TreeParams, float, list[np.ndarray]] | None = None
+    seed = int(p["seed"])
+    for k in range(RESEED_SEEDS + 1):
+        q = p if k == 0 else p.replace(seed=(seed + k * RESEED_STEP) % 2**31)
+        turns = []
+        for turn in RESEED_TURNS:
+            if k == 0 and turn == 0.0:
+                continue
+            if going is not None and not going():
+                break
+            turns.append(turn)
+        if turns:
+            yaws = [yaw + turn for turn in turns for _, yaw in wants]
+            sketches = cheap_sketches(q, species, size, yaws)
+            for i, turn in enumerate(turns):
+                seen = sketches[i * len(wants) : (i + 1) * len(wants)]
+                v = overlap(seen)
+                if v > start and (best is None or v > best[0]):
+                    best = (v, q, turn, seen)
+        if len(turns) < len(RESEED_TURNS) - (k == 0):
+            break
+    return None if best is None else (best[1], best[2], best[3])

@@ -302,3 +302,34 @@ def test_a_drawing_of_its_branches_starts_from_the_network_tree() -> None:
     fitted, keep = choose_start(plain, start, "oak")
     assert fitted is not start and keep == species.DRAWN_KEYS
     assert choose_start(lined, start, "oak") == (start, ())
+
+
+def test_reseed_finds_the_drawn_trees_own_draws_and_view() -> None:
+    # the drawn tree differs from the search's only in its random draws (where its
+    # branches go round the trunk) and is seen 30 degrees further round: the step finds
+    # both, its outline then the drawn one exactly
+    from refine.shape import ShapeTarget
+    from refine.start import RESEED_SEEDS, RESEED_STEP, RESEED_TURNS, cheap_sketch, reseed
+
+    assert RESEED_SEEDS >= 2 and 30.0 in RESEED_TURNS
+    p = species.sample("maple", 3)
+    drawn = p.replace(seed=(int(p["seed"]) + 2 * RESEED_STEP) % 2**31)
+    img = cheap_sketch(drawn, "maple", SIZE, 40.0)
+    want = ShapeTarget.from_image(framed(img, SIZE), SIZE).envelope
+    calls = []
+
+    def going() -> bool:
+        calls.append(1)
+        return True
+
+    got = reseed(p, [(want, 10.0)], "maple", SIZE, going=going)
+    assert got is not None
+    tree, turn, sketches = got
+    assert tree == drawn and turn == 30.0
+    seen = ShapeTarget.from_image(framed(sketches[0], SIZE), SIZE).envelope
+    assert np.array_equal(seen, want)
+    # one tree for the start, one per seed and turn
+    assert len(calls) == 1 + (RESEED_SEEDS + 1) * len(RESEED_TURNS) - 1
+    # already near enough, or stopped at once: no other tree
+    assert reseed(drawn, [(want, 40.0)], "maple", SIZE, below=0.9) is None
+    assert reseed(p, [(want, 10.0)], "maple", SIZE, going=lambda: False) is None

@@ -140,7 +140,7 @@ class TemplateEstimator:
         return {"seeds": self.seeds, "_templates": None}  # a worker builds its own
 
     def _build(self) -> list[tuple[str, int, float, Any]]:
-        from refine.objective import framed, make_target
+        from refine.objective import draw_side, framed, make_target
         from render.sketch import SketchRenderer
 
         out = []
@@ -148,7 +148,7 @@ class TemplateEstimator:
             for seed in range(self.seeds):
                 r = SketchRenderer(build_mesh(grow(species.sample(name, seed)), species=name))
                 for yaw in TEMPLATE_YAWS:
-                    img = r.sketch(yaw, TEMPLATE_SIZE)
+                    img = r.sketch(yaw, draw_side(TEMPLATE_SIZE))
                     target = make_target(framed(img, TEMPLATE_SIZE), TEMPLATE_SIZE)
                     out.append((name, seed, yaw, target))
         return out

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from refine.objective import OtherView, PreparedDrawing
+from refine.objective import OtherView, PreparedDrawing, draw_side
 from refine.search import Cancelled, RefineResult, RefineSettings
 from refine.search import refine as refine_search
 from render.reader import DRAWING_SIDE, SketchError, normalise_drawing, read_sketch
@@ -435,7 +435,7 @@ def view_turns(
         if v.yaw is not None:
             out.append(float(v.yaw))
             continue
-        dist = [d.distance(r.sketch((yaw + t) % 360.0, d.size)) for t in START_YAWS]
+        dist = [d.distance(r.sketch((yaw + t) % 360.0, draw_side(d.size))) for t in START_YAWS]
         out.append(START_YAWS[int(np.argmin(dist))])
     return out
 
