@@ -11,9 +11,11 @@ the time limit or nlopt's tolerances, and returns the best point seen, so the se
 loss after is never above the loss before.  When the search started from the drawn outline
 (``refine.start.choose_start``, whose values it holds), or its tree grows from a custom
 shape and still misses the drawn outline, those values are then searched for the drawn
-outlines alone, every view's (``refine.start.polish``, up to ``POLISH_EVALS`` more trees),
-and that tree kept when its outlines are nearer the drawn ones: there the drawn outline
-wins over the distance's other terms, and ``loss_after`` is that tree's.
+outlines alone, every view's (``refine.start.polish``, up to ``POLISH_EVALS`` more trees;
+for a drawing of outlines first the tree's own random draws and a turn of the view,
+``refine.start.reseed``, up to ``RESEED_TREES``), and that tree kept when its outlines are
+nearer the drawn ones: there the drawn outline wins over the distance's other terms, and
+``loss_after`` is that tree's.
 
 Studies measured to give nothing and removed (their numbers stay in
 ``docs/history/results-2026-12-05.md``, "Options measured and removed"; the code last lived at commit
@@ -418,8 +420,9 @@ def _outline_searched(
     below: float | None = None,
 ) -> RefineResult:
     """``result`` with its drawn values searched for the drawn outlines, every view's
-    (``refine.start.polish``, up to ``POLISH_EVALS`` trees, told in
-    ``outline_evaluations``), kept when its outlines are nearer the drawn ones (its
+    (``refine.start.polish``, up to ``POLISH_EVALS`` trees, after ``refine.start.reseed``
+    for a drawing of outlines, up to ``RESEED_TREES``; told in ``outline_evaluations``),
+    kept when its outlines are nearer the drawn ones (its
     ``loss_after`` then the search's distance of that tree, the mean over the views, which
     may be above the search's best).  ``below``: only when the tree's outlines overlap the
     drawn ones less than this (one tree to see)."""

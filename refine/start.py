@@ -43,6 +43,10 @@ __all__ = [
     "POLISH_BELOW",
     "POLISH_EVALS",
     "Profile",
+    "RESEED_SEEDS",
+    "RESEED_STEP",
+    "RESEED_TREES",
+    "RESEED_TURNS",
     "cheap_sketch",
     "cheap_sketches",
     "choose_start",
@@ -378,6 +382,7 @@ def polish(
 RESEED_SEEDS = 3  # other seeds tried
 RESEED_TURNS = (-30.0, -15.0, 0.0, 15.0, 30.0)  # degrees about the trunk from the found view
 RESEED_STEP = 1_000_003  # between the seeds tried
+RESEED_TREES = (RESEED_SEEDS + 1) * len(RESEED_TURNS)  # at most: the start and each other
 
 
 def reseed(

@@ -123,6 +123,7 @@ def test_the_drawn_outline_is_searched_after_the_search(monkeypatch) -> None:
     sys.path.insert(0, str(Path(__file__).parent))
     from pipeline_helpers import Fixed
 
+    import refine.search
     import refine.start
     from eval.envelope import envelope_overlap
     from treesketch import Pipeline, RefineSettings
@@ -130,8 +131,9 @@ def test_the_drawn_outline_is_searched_after_the_search(monkeypatch) -> None:
     img = drawing("round", 0.5)
     run = Pipeline(Fixed("oak", 1), RefineSettings(budget=40))
     searched = run.run(img)
-    trees = refine.start.POLISH_EVALS
-    monkeypatch.setattr(refine.start, "POLISH_EVALS", 0)  # the step off
+    trees = refine.start.POLISH_EVALS + refine.start.RESEED_TREES
+    monkeypatch.setattr(refine.start, "POLISH_EVALS", 0)  # the steps off
+    monkeypatch.setattr(refine.search, "reseed", lambda *a, **k: None)
     held = run.run(img)
     assert searched.refinement.evaluations <= 40
     assert 0 < searched.refinement.outline_evaluations <= trees
@@ -154,6 +156,7 @@ def test_with_two_drawings_every_view_outline_is_searched(monkeypatch) -> None:
     sys.path.insert(0, str(Path(__file__).parent))
     from pipeline_helpers import Fixed
 
+    import refine.search
     import refine.start
     from eval.envelope import envelope_overlap
     from treesketch import Pipeline, RefineSettings
@@ -161,7 +164,8 @@ def test_with_two_drawings_every_view_outline_is_searched(monkeypatch) -> None:
     img = drawing("round", 0.5)
     run = Pipeline(Fixed("oak", 1), RefineSettings(budget=40))
     searched = run.run([img, (img, 90.0)])
-    monkeypatch.setattr(refine.start, "POLISH_EVALS", 0)  # the step off
+    monkeypatch.setattr(refine.start, "POLISH_EVALS", 0)  # the steps off
+    monkeypatch.setattr(refine.search, "reseed", lambda *a, **k: None)
     held = run.run([img, (img, 90.0)])
     assert searched.refinement.outline_evaluations > 0
     assert held.refinement.outline_evaluations == 0
@@ -309,7 +313,14 @@ def test_reseed_finds_the_drawn_trees_own_draws_and_view() -> None:
     # branches go round the trunk) and is seen 30 degrees further round: the step finds
     # both, its outline then the drawn one exactly
     from refine.shape import ShapeTarget
-    from refine.start import RESEED_SEEDS, RESEED_STEP, RESEED_TURNS, cheap_sketch, reseed
+    from refine.start import (
+        RESEED_SEEDS,
+        RESEED_STEP,
+        RESEED_TREES,
+        RESEED_TURNS,
+        cheap_sketch,
+        reseed,
+    )
 
     assert RESEED_SEEDS >= 2 and 30.0 in RESEED_TURNS
     p = species.sample("maple", 3)
@@ -328,8 +339,30 @@ def test_reseed_finds_the_drawn_trees_own_draws_and_view() -> None:
     assert tree == drawn and turn == 30.0
     seen = ShapeTarget.from_image(framed(sketches[0], SIZE), SIZE).envelope
     assert np.array_equal(seen, want)
-    # one tree for the start, one per seed and turn
-    assert len(calls) == 1 + (RESEED_SEEDS + 1) * len(RESEED_TURNS) - 1
+    # one tree for the start, one per other seed and turn
+    assert len(calls) == RESEED_TREES
     # already near enough, or stopped at once: no other tree
     assert reseed(drawn, [(want, 40.0)], "maple", SIZE, below=0.9) is None
     assert reseed(p, [(want, 10.0)], "maple", SIZE, going=lambda: False) is None
+
+
+def test_the_search_sees_the_outline_the_page_shows() -> None:
+    # a candidate's sketch drawn at the search's size came out grey (the renderer
+    # box-averages a smaller sketch), and framing broke its outline into dashes: the
+    # search saw bites out of the crown that the page's outline (the tree's sketch at
+    # full size, ``eval.envelope``) does not have
+    from eval.envelope import envelope
+    from refine.envelope import mask_iou
+    from refine.shape import ShapeTarget
+    from refine.start import cheap_sketch
+    from render.sketch import SketchRenderer, sketch_mesh
+    from treesketch.steps import as_drawn
+    from weberpenn import grow
+
+    for name, seed, yaw in (("poplar", 2, 0.0), ("palm", 1, 90.0)):
+        p = species.sample(name, seed)
+        seen = ShapeTarget.from_image(framed(cheap_sketch(p, name, SIZE, yaw), SIZE), SIZE)
+        r = SketchRenderer(sketch_mesh(grow(p), SIZE, name), engine="raster")
+        page = envelope(as_drawn(r.sketch(yaw, 256)))
+        shown = np.asarray(Image.fromarray(page).resize((SIZE, SIZE), Image.NEAREST))
+        assert mask_iou(seen.envelope, shown) > 0.95, (name, mask_iou(seen.envelope, shown))
