@@ -54,6 +54,7 @@ __all__ = [
     "polish",
     "profile_of",
     "reseed",
+    "seen_envelope",
 ]
 
 # the estimate's outline overlapping the drawn one at least this much is kept as it is:
@@ -141,6 +142,16 @@ def cheap_sketches(
 def cheap_sketch(params: TreeParams, species: str, size: int, yaw: float) -> np.ndarray:
     """The tree's fast sketch (the search's own) at ``yaw``, to be compared at ``size`` px."""
     return cheap_sketches(params, species, size, (yaw,))[0]
+
+
+def seen_envelope(sketch: np.ndarray, size: int) -> np.ndarray:
+    """A tree's sketch's envelope as the search compares it at ``size`` px
+    (``refine.shape.ShapeTarget.envelope`` of the framed sketch), without the shape
+    features the distance needs."""
+    from .objective import framed
+    from .prepare import prepare_sketch
+
+    return envelope_of_ink(prepare_sketch(framed(sketch, size), size) < _DARK)
 
 
 def _render_profile(params: TreeParams, species: str, size: int, yaw: float) -> Profile | None:
@@ -245,8 +256,6 @@ def choose_start(
     (RESULTS.md, "The tree follows the drawing": fitted anyway, the paper's published
     trees lost mesh error), and only for a drawing of outlines (``LINES_INSIDE``).  It is
     kept when its sketch is nearer the drawing by the refinement's distance."""
-    from .objective import framed
-    from .shape import ShapeTarget
 
     def sketch(p: TreeParams) -> np.ndarray:
         return cheap_sketch(p, species, drawing.size, yaw)
@@ -257,8 +266,7 @@ def choose_start(
         # large: RESULTS.md, "The tree follows the drawing")
         return params, ()
     first = sketch(params)
-    seen = ShapeTarget.from_image(framed(first, drawing.size), drawing.size)
-    if mask_iou(drawing.shape.envelope, seen.envelope) >= FIT_BELOW:
+    if mask_iou(drawing.shape.envelope, seen_envelope(first, drawing.size)) >= FIT_BELOW:
         return params, ()
     fitted = fit_start(drawing.target.image, params, species, drawing.size, yaw, seen=first)
     if fitted is params:
@@ -307,9 +315,6 @@ def polish(
     after it (COBYLA: its first model costs one tree per value, BOBYQA's two)."""
     import nlopt
 
-    from .objective import framed
-    from .shape import ShapeTarget
-
     evals = POLISH_EVALS if evals is None else int(evals)
     custom = str(p["shape"]) == "8"
     if evals < 2 or not wants or not (custom or refit is not None):
@@ -321,7 +326,7 @@ def polish(
         if going is not None and not going():
             raise nlopt.ForcedStop
         sketches = cheap_sketches(q, species, size, [yaw for _, yaw in wants])
-        seen = [ShapeTarget.from_image(framed(s, size), size).envelope for s in sketches]
+        seen = [seen_envelope(s, size) for s in sketches]
         v = 1.0 - float(np.mean([mask_iou(w, e) for (w, _), e in zip(wants, seen, strict=True)]))
         return v, sketches
 
@@ -398,11 +403,9 @@ def reseed(
     :func:`polish` takes them) most: (tree, turn in degrees, its cheap sketches), or None
     when none is nearer than ``p`` at its own view, or ``p``'s overlap is already
     ``below`` or more, or ``going()`` stopped it first (each seed and turn one tree)."""
-    from .objective import framed
-    from .shape import ShapeTarget
 
     def overlap(sketches: list[np.ndarray]) -> float:
-        seen = [ShapeTarget.from_image(framed(s, size), size).envelope for s in sketches]
+        seen = [seen_envelope(s, size) for s in sketches]
         return float(np.mean([mask_iou(w, e) for (w, _), e in zip(wants, seen, strict=True)]))
 
     if not wants or (going is not None and not going()):
