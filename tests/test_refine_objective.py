@@ -98,7 +98,8 @@ def test_objective_deterministic_cached_and_zero_at_truth() -> None:
     from render.sketch import SketchRenderer
 
     gt = species.sample("palm", 2)
-    img = SketchRenderer(build_mesh(grow(gt), species="palm")).sketch(90.0, 128)
+    # drawn as the search draws its candidates (``draw_side(128)``): 0 at the truth
+    img = SketchRenderer(build_mesh(grow(gt), species="palm")).sketch(90.0, 256)
     sp = SearchSpace.create("palm", gt)
     obj = SketchObjective(make_target(framed(img, 128), 128), sp)
     x = sp.from_params(gt, 90.0)

@@ -16,7 +16,9 @@ def _case(name: str = "palm", seed: int = 3, yaw: float = 0.0, shift: float = 0.
     from render.sketch import SketchRenderer
 
     gt = species.sample(name, seed)
-    img = SketchRenderer(build_mesh(grow(gt), species=name)).sketch(yaw, 128)
+    # drawn as the search draws its candidates (``refine.objective.draw_side(128)``), so
+    # the truth's own sketch is at distance 0
+    img = SketchRenderer(build_mesh(grow(gt), species=name)).sketch(yaw, 256)
     sp = SearchSpace.create(name, gt)
     x = sp.from_params(gt, yaw)
     rng = np.random.default_rng(seed)
@@ -100,7 +102,10 @@ def test_fast_and_full_sketch_start_alike() -> None:
     fast = refine(img, start, RefineSettings(budget=1), species="maple", yaw=0.0)
     cfg = RefineSettings(budget=1, fast_sketch=False)
     full = refine(img, start, cfg, species="maple", yaw=0.0)
-    assert fast.loss_before == pytest.approx(full.loss_before, abs=0.005)
+    # the fast mesh leaves out the stems thinner than half a pixel at the comparison's
+    # 128 px (``render.sketch.sketch_mesh``), which the full mesh, drawn at twice that
+    # (``refine.objective.draw_side``), shows as one-pixel twigs: 0.03 here
+    assert fast.loss_before == pytest.approx(full.loss_before, abs=0.05)
     with pytest.raises(ValueError, match="fast_sketch must be True or False"):
         RefineSettings(fast_sketch=1).validate()  # type: ignore[arg-type]
 
