@@ -70,6 +70,7 @@ __all__ = [
     "ink_pyramid",
     "line_distance",
     "outline_gap",
+    "prepared_envelope",
     "pyramid_distance",
     "shape_distance",
 ]
@@ -231,7 +232,7 @@ class ShapeTarget:
     def envelope(self) -> np.ndarray:
         """The sketch's envelope as framed (``refine.envelope``; not height-framed: where
         the tree stands in the frame counts)."""
-        return envelope_of_ink(self.image < _DARK)
+        return prepared_envelope(self.image)
 
     @cached_property
     def inside_ink(self) -> float:
@@ -290,6 +291,13 @@ def target_shape_distance(a: ShapeTarget, b: ShapeTarget) -> float:
     if a.embedding is not None and b.embedding is not None:
         d += EMBED_WEIGHT * embedding_distance(a.embedding, b.embedding)
     return d
+
+
+def prepared_envelope(image: np.ndarray) -> np.ndarray:
+    """The envelope (``refine.envelope``) of a prepared sketch (float 0..1, paper white,
+    as ``refine.prepare.prepare_sketch`` gives it): ``ShapeTarget.envelope`` without the
+    shape features built first."""
+    return envelope_of_ink(image < _DARK)
 
 
 def outline_gap(a: ShapeTarget, b: ShapeTarget) -> float:

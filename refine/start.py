@@ -126,17 +126,25 @@ def _height(params: TreeParams) -> float:
     return float(z.max() - min(0.0, z.min()))
 
 
-def cheap_sketches(
-    params: TreeParams, species: str, size: int, yaws: Sequence[float]
-) -> list[np.ndarray]:
-    """The tree's fast sketches (the search's own) at each of ``yaws``, to be compared at
-    ``size`` px (drawn at ``refine.objective.draw_side(size)``)."""
+def _sketcher(
+    params: TreeParams, species: str, size: int
+) -> Callable[[Sequence[float]], list[np.ndarray]]:
+    """The tree grown and meshed once: yaws -> its fast sketches at each, to be compared
+    at ``size`` px (drawn at ``refine.objective.draw_side(size)``)."""
     from render.sketch import SketchRenderer, sketch_mesh
 
     from .objective import draw_side
 
     r = SketchRenderer(sketch_mesh(grow(params), size, species), engine="raster")
-    return [r.sketch(yaw % 360.0, draw_side(size)) for yaw in yaws]
+    return lambda yaws: [r.sketch(yaw % 360.0, draw_side(size)) for yaw in yaws]
+
+
+def cheap_sketches(
+    params: TreeParams, species: str, size: int, yaws: Sequence[float]
+) -> list[np.ndarray]:
+    """The tree's fast sketches (the search's own) at each of ``yaws``, to be compared at
+    ``size`` px (drawn at ``refine.objective.draw_side(size)``)."""
+    return _sketcher(params, species, size)(yaws)
 
 
 def cheap_sketch(params: TreeParams, species: str, size: int, yaw: float) -> np.ndarray:
@@ -150,8 +158,9 @@ def seen_envelope(sketch: np.ndarray, size: int) -> np.ndarray:
     features the distance needs."""
     from .objective import framed
     from .prepare import prepare_sketch
+    from .shape import prepared_envelope
 
-    return envelope_of_ink(prepare_sketch(framed(sketch, size), size) < _DARK)
+    return prepared_envelope(prepare_sketch(framed(sketch, size), size))
 
 
 def _render_profile(params: TreeParams, species: str, size: int, yaw: float) -> Profile | None:
@@ -410,14 +419,15 @@ def reseed(
 
     if not wants or (going is not None and not going()):
         return None
-    start = overlap(cheap_sketches(p, species, size, [yaw for _, yaw in wants]))
+    own = _sketcher(p, species, size)  # grown once: its start and its other turns
+    start = overlap(own([yaw for _, yaw in wants]))
     if below is not None and start >= below:
         return None
     best: tuple[float, TreeParams, float, list[np.ndarray]] | None = None
     seed = int(p["seed"])
     for k in range(RESEED_SEEDS + 1):
         q = p if k == 0 else p.replace(seed=(seed + k * RESEED_STEP) % 2**31)
-        turns = []
+        turns: list[float] = []
         for turn in RESEED_TURNS:
             if k == 0 and turn == 0.0:
                 continue
@@ -426,7 +436,7 @@ def reseed(
             turns.append(turn)
         if turns:
             yaws = [yaw + turn for turn in turns for _, yaw in wants]
-            sketches = cheap_sketches(q, species, size, yaws)
+            sketches = (own if k == 0 else _sketcher(q, species, size))(yaws)
             for i, turn in enumerate(turns):
                 seen = sketches[i * len(wants) : (i + 1) * len(wants)]
                 v = overlap(seen)
