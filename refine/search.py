@@ -44,10 +44,13 @@ from .start import (
     FIT_BELOW,
     LINES_INSIDE,
     POLISH_BELOW,
+    cheap_sketches,
     choose_start,
     fit_start,
     polish,
     reseed,
+    same_size,
+    tree_height,
 )
 
 __all__ = [
@@ -474,6 +477,11 @@ def _outline_searched(
         return dataclasses.replace(
             result, outline_evaluations=used, seconds=time.perf_counter() - t0
         )
+    # as tall as the searched tree: the step moves proportions, not the tree's size
+    sized = same_size(tree, tree_height(result.params))
+    if sized is not tree:
+        tree = sized
+        sketches = cheap_sketches(tree, result.species, drawing.size, [yaw for _, yaw in wants])
     targets = [d.target for d in drawings]
     losses = tuple(run.obj.loss_of_sketch(s, t) for s, t in zip(sketches, targets, strict=True))
     loss = float(np.mean(losses))

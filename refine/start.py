@@ -54,7 +54,9 @@ __all__ = [
     "polish",
     "profile_of",
     "reseed",
+    "same_size",
     "seen_envelope",
+    "tree_height",
 ]
 
 # the estimate's outline overlapping the drawn one at least this much is kept as it is:
@@ -117,13 +119,33 @@ def _clamp(key: str, value: float) -> float:
     return float(np.clip(value, float(spec.lo), float(spec.hi)))
 
 
-def _height(params: TreeParams) -> float:
+def tree_height(params: TreeParams) -> float:
     """The grown tree's height (metres): its stems' and leaves' highest point."""
     sk = grow(params)
     z = np.asarray(sk.points)[:, 2]
     if len(sk.leaf_positions):
         z = np.concatenate([z, np.asarray(sk.leaf_positions)[:, 2]])
     return float(z.max() - min(0.0, z.min()))
+
+
+def same_size(p: TreeParams, height: float) -> TreeParams:
+    """``p`` grown ``height`` metres tall, otherwise the same tree: its size (``scale``,
+    ``scaleV``) and its leaves' (``leafScale``: Weber-Penn's leaves do not grow with the
+    tree) times one factor, so its sketches, framed, are the same.  The outline step
+    moves the tree's proportions to the drawn ones, and a longer reach grew a willow's
+    crown over the trunk's top, the tree 17 m -> 29 m; a drawing shows no size, so the
+    step keeps the tree's (RESULTS.md, "The tree follows the drawing")."""
+    now = tree_height(p)
+    if not (now > 0 and height > 0 and np.isfinite(now) and np.isfinite(height)):
+        return p
+    f = height / now
+    if abs(f - 1.0) < 1e-3:
+        return p
+    return p.replace(
+        scale=_clamp("scale", float(p["scale"]) * f),
+        scaleV=_clamp("scaleV", float(p["scaleV"]) * f),
+        leafScale=_clamp("leafScale", float(p["leafScale"]) * f),
+    )
 
 
 def _sketcher(
@@ -204,7 +226,7 @@ def fit_start(
     got = profile_of(cheap_sketch(params, species, size, yaw) if seen is None else seen)
     if want is None or got is None or int(params["levels"]) < 2:
         return params
-    height = _height(params)
+    height = tree_height(params)
     sv = float(params["scale"]) + float(params["scaleV"])
     length = [float(v) for v in params["length"]]
     trunk = max(sv * length[0], 1e-6)

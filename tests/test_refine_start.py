@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from PIL import Image, ImageDraw
 
 from refine.objective import framed
@@ -367,3 +368,54 @@ def test_the_search_sees_the_outline_the_page_shows() -> None:
         page = envelope(as_drawn(r.sketch(yaw, 256)))
         shown = np.asarray(Image.fromarray(page).resize((SIZE, SIZE), Image.NEAREST))
         assert mask_iou(seen.envelope, shown) > 0.95, (name, mask_iou(seen.envelope, shown))
+
+
+def test_same_size_is_the_same_tree_at_another_height() -> None:
+    # a willow made 0.6 times as tall: every point of it and its leaves scale together,
+    # so its sketch, framed, is the same tree's
+    from refine.envelope import mask_iou
+    from refine.start import cheap_sketch, same_size, seen_envelope, tree_height
+
+    p = species.sample("willow", 3)
+    h = tree_height(p)
+    q = same_size(p, 0.6 * h)
+    assert abs(tree_height(q) - 0.6 * h) <= 1e-6 * h
+    assert float(q["leafScale"]) == pytest.approx(0.6 * float(p["leafScale"]), rel=1e-6)
+    a, b = (seen_envelope(cheap_sketch(t, "willow", SIZE, 30.0), SIZE) for t in (p, q))
+    assert mask_iou(a, b) >= 0.98
+    assert same_size(p, h) is p
+    assert same_size(p, float("nan")) is p
+
+
+def test_the_outline_step_keeps_the_searched_trees_size(monkeypatch) -> None:
+    # the outline step doubles the branches' reach (a willow's crown then rises over its
+    # trunk's top): the tree returned has the reach, and the searched tree's height
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from pipeline_helpers import Fixed
+
+    import refine.search
+    from refine.start import cheap_sketches, tree_height
+    from treesketch import Pipeline, RefineSettings
+
+    given = []
+
+    def polish(p, wants, name, size, **kw):
+        given.append(p)
+        length = [float(v) for v in p["length"]]
+        length[1] *= 2.5
+        q = p.replace(length=length)
+        return q, cheap_sketches(q, name, size, [yaw for _, yaw in wants])
+
+    monkeypatch.setattr(refine.search, "polish", polish)
+    monkeypatch.setattr(refine.search, "reseed", lambda *a, **k: None)
+    res = Pipeline(Fixed("willow", 2), RefineSettings(budget=6)).run(drawing("round", 0.3))
+    assert len(given) == 1
+    searched = given[0]
+    reach = 2.5 * float(searched["length"][1])
+    assert float(res.params["length"][1]) == pytest.approx(reach, rel=1e-6)
+    grown = searched.replace(length=[float(v) for v in res.params["length"]])
+    assert tree_height(grown) > 1.2 * tree_height(searched)  # the reach alone grows it
+    assert abs(tree_height(res.params) - tree_height(searched)) <= 1e-3 * tree_height(searched)
