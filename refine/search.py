@@ -14,7 +14,8 @@ shape and still misses the drawn outline, those values are then searched for the
 outlines alone, every view's (``refine.start.polish``, up to ``POLISH_EVALS`` more trees;
 for a drawing of outlines first the tree's own random draws and a turn of the view,
 ``refine.start.reseed``, up to ``RESEED_TREES``), and that tree kept when its outlines are
-nearer the drawn ones: there the drawn outline wins over the distance's other terms, and
+nearer the drawn ones, as tall as the searched tree (``refine.start.same_size``: a drawing
+shows no size): there the drawn outline wins over the distance's other terms, and
 ``loss_after`` is that tree's.
 
 Studies measured to give nothing and removed (their numbers stay in

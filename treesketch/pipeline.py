@@ -196,7 +196,8 @@ def rescale_height(params: TreeParams, height: float, current: float | None = No
         raise ValueError("the tree has no height to rescale")
     f = height / current
     out = params.replace(scale=float(params["scale"]) * f, scaleV=float(params["scaleV"]) * f)
-    # leaf size and radii follow scale in Weber-Penn; one correction pass for any
+    # radii follow scale in Weber-Penn, leaves keep their size (``leafScale`` is in
+    # metres: a taller tree of one kind has the same leaves); one correction pass for any
     # non-linearity (e.g. a clipped value)
     again = tree_height(out)
     if again > 0 and abs(again - height) / height > 0.01:
