@@ -526,6 +526,16 @@ def follow_cases(args: argparse.Namespace) -> list[tuple[str, Any]]:
     return cases
 
 
+def inside_ink(img: Any) -> float:
+    """How much of a drawing's crown's inside is drawn (``ShapeTarget.inside_ink``), as
+    the refinement sees it: under ``refine.start.LINES_INSIDE`` a drawing of outlines,
+    searched for its outline; at or above it one that shows its inside."""
+    from refine.objective import PreparedDrawing
+    from treesketch.steps import prepare_input
+
+    return PreparedDrawing.create(prepare_input(img), 128).shape.inside_ink
+
+
 def part_follow(args: argparse.Namespace) -> dict:
     from eval.envelope import envelope_overlap
 
@@ -551,6 +561,7 @@ def part_follow(args: argparse.Namespace) -> dict:
             "refine_seconds": res.timings["refine"],
             "seconds": time.perf_counter() - t,
             "yaw": res.yaw,
+            "inside_ink": inside_ink(img[0] if isinstance(img, list) else img),
             "params": res.params.to_dict(),
         }
         records.append(rec)
@@ -574,8 +585,12 @@ def part_follow(args: argparse.Namespace) -> dict:
 
 def follow_summary(records: list[dict]) -> dict:
     """Per set (people's, the paper's): the median overlap of the first estimate and of
-    the returned tree, the share of drawings whose overlap the refinement raised, and the
-    median seconds (first tree, refinement, whole run)."""
+    the returned tree, the share of drawings whose overlap the refinement raised, the
+    median seconds (first tree, refinement, whole run), and the returned trees' median
+    overlap for the drawings of outlines and those that show their inside
+    (``inside_ink`` under ``refine.start.LINES_INSIDE`` or not; ``[n, median]``)."""
+    from refine.start import LINES_INSIDE
+
     out = {}
     for group in ("people", "paper", "pairs"):
         rs = [r for r in records if r["name"].startswith(group + "/")]
@@ -605,6 +620,10 @@ def follow_summary(records: list[dict]) -> dict:
             "refine_seconds": med("refine_seconds"),
             "seconds": med("seconds"),
         }
+        if all("inside_ink" in r for r in rs):
+            for key, pick in (("outlines", True), ("insides", False)):
+                sub = [r["overlap_after"] for r in rs if (r["inside_ink"] < LINES_INSIDE) == pick]
+                out[group][key] = [len(sub), float(statistics.median(sub)) if sub else math.nan]
     return out
 
 
