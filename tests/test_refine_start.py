@@ -244,6 +244,23 @@ def branches_inside(img: np.ndarray) -> np.ndarray:
     return np.asarray(im)
 
 
+def leaves_inside(img: np.ndarray) -> np.ndarray:
+    """``img`` with leaves drawn all over its crown (``drawing("round", ...)``'s), as the
+    paper's drawings and the renderer's styles draw them."""
+    im = Image.fromarray(img.copy())
+    d = ImageDraw.Draw(im)
+    rng = np.random.default_rng(1)
+    for _ in range(120):
+        x, y = rng.uniform(88, 168), rng.uniform(36, 128)
+        d.ellipse([x - 4, y - 3, x + 4, y + 3], outline=0, width=2)
+    return np.asarray(im)
+
+
+def shows_inside(img: np.ndarray) -> np.ndarray:
+    """``img`` with its crown's branches and leaves drawn."""
+    return leaves_inside(branches_inside(img))
+
+
 def test_inside_ink_tells_an_outline_from_a_drawing_of_its_branches() -> None:
     from refine.objective import PreparedDrawing
     from refine.start import LINES_INSIDE
@@ -253,7 +270,10 @@ def test_inside_ink_tells_an_outline_from_a_drawing_of_its_branches() -> None:
 
     outline_only = drawing("round", 0.5)
     assert inside(outline_only) < 0.5 * LINES_INSIDE
-    assert inside(branches_inside(outline_only)) > 1.5 * LINES_INSIDE
+    # a few branches drawn in the crown, as people draw them: still searched for its
+    # outline; branches and leaves all over it: a drawing that shows its inside
+    assert inside(branches_inside(outline_only)) < LINES_INSIDE
+    assert inside(shows_inside(outline_only)) > 1.5 * LINES_INSIDE
     # the renderer's own sketch: branches and leaves inside its crown outline
     assert inside(tree_sketch(species.sample("oak", 2), "oak", 0.0, 256)) > LINES_INSIDE
     from refine.shape import ShapeTarget
@@ -294,7 +314,7 @@ def test_an_outline_bought_with_the_drawn_branches_is_not_kept(monkeypatch) -> N
     run = Pipeline(Fixed("oak", 1), RefineSettings(budget=10))
     plain = run.run(drawing("round", 0.5))
     assert unsized(plain.params) == unsized(offered[-1])  # the outline wins
-    lined = run.run(branches_inside(drawing("round", 0.5)))
+    lined = run.run(shows_inside(drawing("round", 0.5)))
     # the longer branches reach past the drawn ones: the search's tree is returned
     assert unsized(lined.params) != unsized(offered[-1])
     assert np.isnan(lined.refinement.search_loss)  # no outline step's tree was taken
@@ -302,16 +322,17 @@ def test_an_outline_bought_with_the_drawn_branches_is_not_kept(monkeypatch) -> N
 
 def test_a_drawing_of_its_branches_starts_from_the_network_tree() -> None:
     # the fitted start reads only the outline: for the lollipop drawn as an outline it is
-    # tried (an oak's round habit misses the long stick), for the same drawing with its
-    # branches drawn inside the search starts from the network's tree
+    # tried (an oak's round habit misses the long stick), and for it with a few branches
+    # drawn in, as people draw them; for the same drawing with its branches and leaves
+    # drawn all over the crown the search starts from the network's tree
     from refine.objective import PreparedDrawing
     from refine.start import choose_start
 
     start = species.base("oak")
-    plain = PreparedDrawing.create(drawing("round", 0.5), SIZE)
-    lined = PreparedDrawing.create(branches_inside(drawing("round", 0.5)), SIZE)
-    fitted, keep = choose_start(plain, start, "oak")
-    assert fitted is not start and keep == species.DRAWN_KEYS
+    for outline in (drawing("round", 0.5), branches_inside(drawing("round", 0.5))):
+        fitted, keep = choose_start(PreparedDrawing.create(outline, SIZE), start, "oak")
+        assert fitted is not start and keep == species.DRAWN_KEYS
+    lined = PreparedDrawing.create(shows_inside(drawing("round", 0.5)), SIZE)
     assert choose_start(lined, start, "oak") == (start, ())
 
 
