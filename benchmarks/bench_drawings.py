@@ -526,6 +526,12 @@ def follow_cases(args: argparse.Namespace) -> list[tuple[str, Any]]:
     return cases
 
 
+def as_list(img: Any) -> list:
+    """A follow case's drawings: ``[img]`` for one, the list (``[front, (side, yaw)]``)
+    for two."""
+    return img if isinstance(img, list) else [img]
+
+
 def inside_ink(img: Any) -> float:
     """How much of a drawing's crown's inside is drawn (``ShapeTarget.inside_ink``), as
     the refinement sees it: under ``refine.start.LINES_INSIDE`` a drawing of outlines,
@@ -561,7 +567,10 @@ def part_follow(args: argparse.Namespace) -> dict:
             "refine_seconds": res.timings["refine"],
             "seconds": time.perf_counter() - t,
             "yaw": res.yaw,
-            "inside_ink": inside_ink(img[0] if isinstance(img, list) else img),
+            # over the drawn views, as the refinement reads them
+            "inside_ink": float(
+                np.mean([inside_ink(v[0] if isinstance(v, tuple) else v) for v in as_list(img)])
+            ),
             "params": res.params.to_dict(),
         }
         records.append(rec)
