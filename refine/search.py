@@ -48,10 +48,10 @@ from .start import (
     cheap_sketches,
     choose_start,
     fit_start,
+    grown_height,
     polish,
     reseed,
     same_size,
-    tree_height,
 )
 
 __all__ = [
@@ -479,7 +479,7 @@ def _outline_searched(
             result, outline_evaluations=used, seconds=time.perf_counter() - t0
         )
     # as tall as the searched tree: the step moves proportions, not the tree's size
-    sized = same_size(tree, tree_height(result.params))
+    sized = same_size(tree, grown_height(result.params))
     if sized is not tree:
         tree = sized
         sketches = cheap_sketches(tree, result.species, drawing.size, [yaw for _, yaw in wants])

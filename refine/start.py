@@ -51,12 +51,12 @@ __all__ = [
     "cheap_sketches",
     "choose_start",
     "fit_start",
+    "grown_height",
     "polish",
     "profile_of",
     "reseed",
     "same_size",
     "seen_envelope",
-    "tree_height",
 ]
 
 # the estimate's outline overlapping the drawn one at least this much is kept as it is:
@@ -119,8 +119,9 @@ def _clamp(key: str, value: float) -> float:
     return float(np.clip(value, float(spec.lo), float(spec.hi)))
 
 
-def tree_height(params: TreeParams) -> float:
-    """The grown tree's height (metres): its stems' and leaves' highest point."""
+def grown_height(params: TreeParams) -> float:
+    """The grown tree's height (metres): its stems' and leaves' highest point, from the
+    skeleton alone (``weberpenn.controls.tree_height`` measures the built mesh)."""
     sk = grow(params)
     z = np.asarray(sk.points)[:, 2]
     if len(sk.leaf_positions):
@@ -135,7 +136,7 @@ def same_size(p: TreeParams, height: float) -> TreeParams:
     moves the tree's proportions to the drawn ones, and a longer reach grew a willow's
     crown over the trunk's top, the tree 17 m -> 29 m; a drawing shows no size, so the
     step keeps the tree's (RESULTS.md, "The tree follows the drawing")."""
-    now = tree_height(p)
+    now = grown_height(p)
     if not (now > 0 and height > 0 and np.isfinite(now) and np.isfinite(height)):
         return p
     f = height / now
@@ -226,7 +227,7 @@ def fit_start(
     got = profile_of(cheap_sketch(params, species, size, yaw) if seen is None else seen)
     if want is None or got is None or int(params["levels"]) < 2:
         return params
-    height = tree_height(params)
+    height = grown_height(params)
     sv = float(params["scale"]) + float(params["scaleV"])
     length = [float(v) for v in params["length"]]
     trunk = max(sv * length[0], 1e-6)
@@ -312,8 +313,8 @@ def choose_start(
 # and leaves: the search starts from the network's tree, not the fitted start, and keeps
 # the outline step's tree only where the search's distance did not rise.  Under it,
 # people's outlines (about 0.06) and their crowns with a few branches drawn in (0.1-0.3,
-# 45 of 143 held-out drawings) are searched for their outline; at 0.1 those 45 kept the
-# network's habit (median overlap 0.687, 0.756 at 0.3), and since the outline step keeps
+# 43 of 143 held-out drawings) are searched for their outline; at 0.1 those 43 kept the
+# network's habit (median overlap 0.687, 0.759 at 0.3), and since the outline step keeps
 # the tree's size the renderer's styles there lose no mesh error (RESULTS.md, "The tree
 # follows the drawing")
 LINES_INSIDE = 0.3

@@ -400,12 +400,12 @@ def test_same_size_is_the_same_tree_at_another_height() -> None:
     # a willow made 0.6 times as tall: every point of it and its leaves scale together,
     # so its sketch, framed, is the same tree's
     from refine.envelope import mask_iou
-    from refine.start import cheap_sketch, same_size, seen_envelope, tree_height
+    from refine.start import cheap_sketch, grown_height, same_size, seen_envelope
 
     p = species.sample("willow", 3)
-    h = tree_height(p)
+    h = grown_height(p)
     q = same_size(p, 0.6 * h)
-    assert abs(tree_height(q) - 0.6 * h) <= 1e-6 * h
+    assert abs(grown_height(q) - 0.6 * h) <= 1e-6 * h
     assert float(q["leafScale"]) == pytest.approx(0.6 * float(p["leafScale"]), rel=1e-6)
     a, b = (seen_envelope(cheap_sketch(t, "willow", SIZE, 30.0), SIZE) for t in (p, q))
     assert mask_iou(a, b) >= 0.98
@@ -423,7 +423,7 @@ def test_the_outline_step_keeps_the_searched_trees_size(monkeypatch) -> None:
     from pipeline_helpers import Fixed
 
     import refine.search
-    from refine.start import cheap_sketches, tree_height
+    from refine.start import cheap_sketches, grown_height
     from treesketch import Pipeline, RefineSettings
 
     given = []
@@ -443,5 +443,5 @@ def test_the_outline_step_keeps_the_searched_trees_size(monkeypatch) -> None:
     reach = 2.5 * float(searched["length"][1])
     assert float(res.params["length"][1]) == pytest.approx(reach, rel=1e-6)
     grown = searched.replace(length=[float(v) for v in res.params["length"]])
-    assert tree_height(grown) > 1.2 * tree_height(searched)  # the reach alone grows it
-    assert abs(tree_height(res.params) - tree_height(searched)) <= 1e-3 * tree_height(searched)
+    assert grown_height(grown) > 1.2 * grown_height(searched)  # the reach alone grows it
+    assert abs(grown_height(res.params) - grown_height(searched)) <= 1e-3 * grown_height(searched)
