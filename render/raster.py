@@ -1,4 +1,4 @@
-"""Silhouette coverage without a ray-tracing scene: a numpy scanline rasteriser.
+"""Silhouette coverage without a ray-tracing scene: a compiled scanline rasteriser.
 
 Orthographic ``ray_test`` rays that all travel along one direction hit a mesh exactly
 where their start point, projected on the image plane, lies inside the projection of
@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import numba
 import numpy as np
 
 from .camera import Camera, Framing
@@ -45,135 +46,162 @@ def hit_mask(
     a convex quad seen from the camera (a leaf, a tube's side) are drawn as that quad,
     which spans the rows once instead of twice.
     """
-    out = np.zeros((n, n), dtype=bool)
-    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    f = np.asarray(faces).reshape(-1, 3)
     if len(f) == 0:
-        return out
+        return np.zeros((n, n), dtype=bool)
+    v = np.asarray(vertices).reshape(-1, 3)
+    if f.dtype.kind not in "iu" or int(f.min()) < 0 or int(f.max()) >= len(v):
+        raise IndexError(f"faces must index the {len(v)} vertices")
     right, up, _ = camera.basis()
     s = camera.framing.span
-    d = np.asarray(vertices, dtype=np.float64).reshape(-1, 3) - camera.framing.centre
     # sample k sits at ((k + 0.5) / n - 0.5) * s: column k <-> x, row k <-> -y
-    # (not ``d @ right``: a BLAS call per 3-vector is slower than three products)
-    px = (d[:, 0] * right[0] + d[:, 1] * right[1] + d[:, 2] * right[2]) * (n / s) + (0.5 * n - 0.5)
-    py = (0.5 * n - 0.5) - (d[:, 0] * up[0] + d[:, 1] * up[1] + d[:, 2] * up[2]) * (n / s)
-    quads, tris = _pair_quads(f, px, py, front_only)
-    runs = [_convex_runs([px[q] for q in quads.T], [py[q] for q in quads.T], n)]
-    if len(tris):
-        xs, ys = [px[t] for t in tris.T], [py[t] for t in tris.T]
-        if front_only:  # rows grow downwards: facing the camera = negative signed area
-            facing = _cross(xs, ys, 0) < 0
-            xs, ys = [x[facing] for x in xs], [y[facing] for y in ys]
-        runs.append(_convex_runs(xs, ys, n))
-    row = np.concatenate([r[0] for r in runs])
-    c0 = np.concatenate([r[1] for r in runs])
-    c1 = np.concatenate([r[2] for r in runs])
-    m = n + 1  # one spare column for the run ends
-    cover = np.bincount(row * m + c0, minlength=n * m)
-    cover -= np.bincount(row * m + c1 + 1, minlength=n * m)
-    return np.cumsum(cover.reshape(n, m), axis=1)[:, :n] > 0
-
-
-def _cross(xs: list[np.ndarray], ys: list[np.ndarray], i: int) -> np.ndarray:
-    """Signed turn at corner ``i + 1`` of polygons given corner by corner."""
-    k = len(xs)
-    a, b, c = i % k, (i + 1) % k, (i + 2) % k
-    return (xs[b] - xs[a]) * (ys[c] - ys[b]) - (ys[b] - ys[a]) * (xs[c] - xs[b])
-
-
-def _pair_quads(
-    f: np.ndarray, px: np.ndarray, py: np.ndarray, front_only: bool
-) -> tuple[np.ndarray, np.ndarray]:
-    """(Q, 4) quads made of consecutive triangle pairs (a, b, c), (a, c, d) that are
-    strictly convex on screen (and facing the camera when ``front_only``), and the
-    (T, 3) triangles left over."""
-    even = len(f) - len(f) % 2
-    t0, t1 = f[0:even:2], f[1:even:2]
-    pair = (t0[:, 0] == t1[:, 0]) & (t0[:, 2] == t1[:, 1])
-    quad = np.column_stack([t0[:, 0], t0[:, 1], t0[:, 2], t1[:, 2]])
-    xs, ys = [px[q] for q in quad.T], [py[q] for q in quad.T]
-    turns = [_cross(xs, ys, i) for i in range(4)]
-    neg = (turns[0] < 0) & (turns[1] < 0) & (turns[2] < 0) & (turns[3] < 0)
-    convex = (
-        neg
-        if front_only
-        else neg | ((turns[0] > 0) & (turns[1] > 0) & (turns[2] > 0) & (turns[3] > 0))
+    centre = np.asarray(camera.framing.centre, dtype=np.float64)
+    px, py = _project(
+        v, centre, np.asarray(right, np.float64), np.asarray(up, np.float64), n / s, 0.5 * n - 0.5
     )
-    # a pair facing away (front_only) is dropped whole, like its two triangles would be
-    away = front_only & pair & (turns[0] > 0) & (turns[1] > 0) & (turns[2] > 0) & (turns[3] > 0)
-    take = pair & convex
-    rest = ~(take | away)
-    tris = np.concatenate([t0[rest], t1[rest], f[even:]])
-    return quad[take], tris
+    return _fill(px, py, np.ascontiguousarray(f), bool(front_only), int(n))
 
 
-def _convex_runs(
-    xs: list[np.ndarray], ys: list[np.ndarray], n: int
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(row, first column, last column) of the samples inside each convex polygon
-    (corners ``xs[i], ys[i]`` in order, either winding; triangles included).
+# The scanline loops run compiled (numba): a tree's mesh has tens of thousands of small
+# polygons a few rows tall, where numpy's per-row passes over all of them cost 2-3 times
+# as much (RESULTS.md, "The refinement's time").  ``cache``: compiled once per machine.
 
-    A convex polygon is where every edge's inner half-plane meets: on a row, the
-    run starts at the rightmost left-hand edge and ends at the leftmost right-hand one.
+
+@numba.njit(cache=True)
+def _project(
+    v: np.ndarray, centre: np.ndarray, right: np.ndarray, up: np.ndarray, k: float, o: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each vertex's column and row on the sample grid (``k`` samples per unit, ``o`` the
+    grid's centre sample)."""
+    px, py = np.empty(len(v)), np.empty(len(v))
+    for i in range(len(v)):
+        d0 = np.float64(v[i, 0]) - centre[0]
+        d1 = np.float64(v[i, 1]) - centre[1]
+        d2 = np.float64(v[i, 2]) - centre[2]
+        px[i] = (d0 * right[0] + d1 * right[1] + d2 * right[2]) * k + o
+        py[i] = o - (d0 * up[0] + d1 * up[1] + d2 * up[2]) * k
+    return px, py
+
+
+@numba.njit(cache=True)
+def _cross(x0: float, y0: float, x1: float, y1: float, x2: float, y2: float) -> float:
+    """Signed turn at corner 1 of the corners 0, 1, 2 (> 0: clockwise on screen)."""
+    return (x1 - x0) * (y2 - y1) - (y1 - y0) * (x2 - x1)
+
+
+@numba.njit(cache=True)
+def _fill_convex(
+    xs: np.ndarray, ys: np.ndarray, k: int, n: int, cover: np.ndarray, edges: np.ndarray
+) -> None:
+    """Add the samples inside the convex polygon ``xs[:k], ys[:k]`` (corners in order,
+    either winding) to ``cover``, a (n, n + 1) difference image: +1 where a row's run
+    starts, -1 after it ends.  ``edges``: (4, 4) scratch space.
+
+    A convex polygon is where every edge's inner half-plane meets: on a row, the run
+    starts at the rightmost left-hand edge and ends at the leftmost right-hand one.
+    Only a polygon whose box holds a sample centre can cover one; one seen edge-on (no
+    area) covers none, as no ray along its plane hits it.
     """
-    empty = np.zeros(0, dtype=np.int64)
-    if len(xs[0]) == 0:
-        return empty, empty, empty
-    k = len(xs)
     x_min, x_max, y_min, y_max = xs[0], xs[0], ys[0], ys[0]
-    for x, y in zip(xs[1:], ys[1:], strict=True):
-        x_min, x_max = np.minimum(x_min, x), np.maximum(x_max, x)
-        y_min, y_max = np.minimum(y_min, y), np.maximum(y_max, y)
-    first_row = np.maximum(np.ceil(y_min), 0)
-    rows = np.minimum(np.floor(y_max), n - 1) - first_row + 1
-    # only polygons whose box holds a sample centre can cover one; one seen edge-on
-    # (no area) covers none, as no ray along its plane hits it
-    turn = _cross(xs, ys, 0)  # the winding: > 0 when the corners go clockwise on screen
-    live = (rows > 0) & (np.maximum(np.ceil(x_min), 0) <= np.minimum(np.floor(x_max), n - 1))
-    live &= turn != 0
-    if not live.any():
-        return empty, empty, empty
-    h = rows[live].astype(np.int64)
-    y0 = first_row[live].astype(np.int64)
-    xs, ys, turn = [x[live] for x in xs], [y[live] for y in ys], turn[live]
+    for i in range(1, k):
+        x_min, x_max = min(x_min, xs[i]), max(x_max, xs[i])
+        y_min, y_max = min(y_min, ys[i]), max(y_max, ys[i])
+    first_row = max(np.ceil(y_min), 0.0)
+    rows = min(np.floor(y_max), n - 1.0) - first_row + 1.0
+    if not rows > 0 or not max(np.ceil(x_min), 0.0) <= min(np.floor(x_max), n - 1.0):
+        return
+    turn = _cross(xs[0], ys[0], xs[1], ys[1], xs[2], ys[2])
+    if turn == 0:
+        return
     # each edge as x = c + slope * row, bounding the run from the left (x >= line) or
     # the right, by its direction and the winding (a sliver whose winding rounding got
     # wrong gets its bounds swapped: an empty run); a flat edge bounds only the rows,
     # which first_row..y_max already do
-    left, right = [], []
+    lc, ls, rc, rs = edges[0], edges[1], edges[2], edges[3]
     for i in range(k):
         j = (i + 1) % k
         dy = ys[j] - ys[i]
         flat = dy == 0
-        slope = np.where(flat, 0.0, (xs[j] - xs[i]) / np.where(flat, 1.0, dy))
+        slope = 0.0 if flat else (xs[j] - xs[i]) / dy
         c = xs[i] - ys[i] * slope
         is_left = dy * turn < 0
-        left.append((np.where(flat | ~is_left, -np.inf, c), np.where(is_left, slope, 0.0)))
-        right.append((np.where(flat | is_left, np.inf, c), np.where(is_left, 0.0, slope)))
-    # row j of every polygon spanning more than j rows at once: with the polygons in
-    # order of falling row count those are a prefix, so each pass works on slices
-    order = np.argsort((n - h).astype(np.uint16), kind="stable")  # a radix sort
-    h, y0 = h[order], y0[order]
-    left = [(c[order], sl[order]) for c, sl in left]
-    right = [(c[order], sl[order]) for c, sl in right]
-    counts = np.searchsorted(-h, -np.arange(1, int(h[0]) + 1), side="right")
-    out_rows, out_lo, out_hi = [], [], []
-    for j, m in enumerate(counts):
-        r = y0[:m] + j
-        ry = r.astype(np.float64)
-        lo = left[0][0][:m] + ry * left[0][1][:m]
-        hi = right[0][0][:m] + ry * right[0][1][:m]
-        for c, sl in left[1:]:
-            lo = np.maximum(lo, c[:m] + ry * sl[:m])
-        for c, sl in right[1:]:
-            hi = np.minimum(hi, c[:m] + ry * sl[:m])
-        out_rows.append(r)
-        out_lo.append(lo)
-        out_hi.append(hi)
-    row = np.concatenate(out_rows)
-    c0 = np.maximum(np.ceil(np.concatenate(out_lo)), 0)
-    c1 = np.minimum(np.floor(np.concatenate(out_hi)), n - 1)
-    keep = c1 >= c0
-    return row[keep], c0[keep].astype(np.int64), c1[keep].astype(np.int64)
+        lc[i] = -np.inf if (flat or not is_left) else c
+        ls[i] = slope if is_left else 0.0
+        rc[i] = np.inf if (flat or is_left) else c
+        rs[i] = 0.0 if is_left else slope
+    y0 = np.int64(first_row)
+    for r in range(y0, y0 + np.int64(rows)):
+        ry = np.float64(r)
+        lo = lc[0] + ry * ls[0]
+        hi = rc[0] + ry * rs[0]
+        for e in range(1, k):
+            lo = max(lo, lc[e] + ry * ls[e])
+            hi = min(hi, rc[e] + ry * rs[e])
+        c0 = max(np.ceil(lo), 0.0)
+        c1 = min(np.floor(hi), n - 1.0)
+        if c1 >= c0:
+            cover[r, np.int64(c0)] += 1
+            cover[r, np.int64(c1) + 1] -= 1
+
+
+@numba.njit(cache=True)
+def _fill_triangle(
+    px: np.ndarray,
+    py: np.ndarray,
+    face: np.ndarray,
+    front_only: bool,
+    n: int,
+    xs: np.ndarray,
+    ys: np.ndarray,
+    cover: np.ndarray,
+    edges: np.ndarray,
+) -> None:
+    """Add one triangle to ``cover``; with ``front_only`` only when it faces the camera
+    (rows grow downwards: facing = a negative signed area)."""
+    for i in range(3):
+        xs[i], ys[i] = px[face[i]], py[face[i]]
+    if front_only and not _cross(xs[0], ys[0], xs[1], ys[1], xs[2], ys[2]) < 0:
+        return
+    _fill_convex(xs, ys, 3, n, cover, edges)
+
+
+@numba.njit(cache=True)
+def _fill(px: np.ndarray, py: np.ndarray, f: np.ndarray, front_only: bool, n: int) -> np.ndarray:
+    """The hit mask of the faces ``f`` over the projected corners ``px, py``: consecutive
+    triangles (a, b, c), (a, c, d) strictly convex on screen (and facing the camera when
+    ``front_only``) drawn as one quad, a pair facing away dropped whole, the rest as
+    triangles."""
+    cover = np.zeros((n, n + 1), np.int32)
+    xs, ys, edges = np.empty(4), np.empty(4), np.empty((4, 4))
+    even = len(f) - len(f) % 2
+    for p in range(0, even, 2):
+        a, b = f[p], f[p + 1]
+        take = away = False
+        if a[0] == b[0] and a[2] == b[1]:
+            quad = (a[0], a[1], a[2], b[2])
+            for i in range(4):
+                xs[i], ys[i] = px[quad[i]], py[quad[i]]
+            neg = pos = True
+            for i in range(4):
+                j, m = (i + 1) % 4, (i + 2) % 4
+                t = _cross(xs[i], ys[i], xs[j], ys[j], xs[m], ys[m])
+                neg, pos = neg and t < 0, pos and t > 0
+            take = neg or (pos and not front_only)
+            away = front_only and pos
+        if take:
+            _fill_convex(xs, ys, 4, n, cover, edges)
+        elif not away:
+            _fill_triangle(px, py, a, front_only, n, xs, ys, cover, edges)
+            _fill_triangle(px, py, b, front_only, n, xs, ys, cover, edges)
+    for g in range(even, len(f)):
+        _fill_triangle(px, py, f[g], front_only, n, xs, ys, cover, edges)
+    out = np.empty((n, n), np.bool_)
+    for r in range(n):
+        run = 0
+        for c in range(n):
+            run += cover[r, c]
+            out[r, c] = run > 0
+    return out
 
 
 class RasterScene(CoverageScene):

@@ -40,6 +40,35 @@ def test_hit_mask_covers_exactly_the_sample_centres_inside() -> None:
     assert not hit_mask(flat, np.array([[0, 1, 2]]), cam, n).any()
 
 
+def test_hit_mask_of_many_triangles_is_every_sample_inside_any() -> None:
+    # a soup of random triangles (float32 corners and uint32 faces, as meshes hold them)
+    # against the brute-force test of each sample centre against each triangle's three
+    # edges (edges inclusive, no area covers nothing)
+    fr = Framing(0.0, 1.0, 0.5, margin_bottom=0.0, margin_top=0.0, margin_side=0.0)
+    cam = Camera(fr, 0.0)
+    n = 24
+    rng = np.random.default_rng(7)
+    v = np.column_stack(
+        [rng.uniform(-0.6, 0.6, 90), np.zeros(90), rng.uniform(-0.1, 1.1, 90)]
+    ).astype(np.float32)
+    f = rng.permutation(90).reshape(30, 3).astype(np.uint32)
+    t = (np.arange(n) + 0.5) / n - 0.5
+    x, z = np.broadcast_arrays(t[None, :], 0.5 - t[:, None])
+    want = np.zeros((n, n), bool)
+    for a, b, c in v[f][:, :, [0, 2]].astype(np.float64):
+        area = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+        if area == 0:
+            continue
+        inside = np.ones((n, n), bool)
+        for p, q in ((a, b), (b, c), (c, a)):
+            side = (q[0] - p[0]) * (z - p[1]) - (q[1] - p[1]) * (x - p[0])
+            inside &= side * area >= 0
+        want |= inside
+    assert want.sum() > 50 and np.array_equal(hit_mask(v, f, cam, n), want)
+    with pytest.raises(IndexError, match="90 vertices"):
+        hit_mask(v, np.array([[0, 1, 90]]), cam, n)
+
+
 def test_triangle_pairs_drawn_as_quads_cover_what_their_triangles_cover() -> None:
     fr = Framing(0.0, 1.0, 0.5, margin_bottom=0.0, margin_top=0.0, margin_side=0.0)
     cam = Camera(fr, 20.0, 10.0)
