@@ -4,15 +4,13 @@ The network's estimate gives a tree of the right kind, but its outline is the sp
 habit: a round crown for a flat one, a low crown base for a lollipop's long stick, a thin
 trunk for a thick one.  Weber-Penn can grow those outlines: the first-level branches'
 lengths up the trunk (``shape`` 8, the custom shape: ``customShape``), the crown base
-(``baseSize``), the trunk's thickness (``ratio``) and its flared foot (``rootFlare``), and
-the branches' reach (``length[1]``).
+(``baseSize``), the trunk's thickness (``ratio``) and the branches' reach (``length[1]``).
 (The pruning envelope, ``prune*``, fits as well but a pruned tree grows 3-7 times slower:
 RESULTS.md, "The tree follows the drawing".)
 
 :func:`fit_start` reads the drawing's envelope (``refine.envelope``: ink closed, rows
 filled) as a width profile up its height, with its crown base (going down from the widest
-row, where the width falls under ``TRUNK_FRACTION`` of it), its trunk's width and its foot's
-(the bottom ``FOOT_SHARE`` of the height: people draw trunks flaring into roots), and sets
+row, where the width falls under ``TRUNK_FRACTION`` of it) and its trunk's width, and sets
 those values so the tree's own envelope follows it, then corrects them twice from the
 tree's cheap sketch.  Values are clamped to the parameter table's valid ranges
 (``weberpenn.params``), not to the species' ranges: where the drawing asks for more than
@@ -71,11 +69,6 @@ TRUNK_FRACTION = 0.3  # of the widest row: narrower rows at the bottom are the t
 REACH_STEP = 3.0  # the branches are made at most this many times longer or shorter
 CORRECTIONS = 2  # rounds of correction from the tree's own outline
 TRUNK_STEP = 2.0  # the trunk is made at most this many times thicker or thinner per round
-# the bottom of the drawn height read as the trunk's foot: Weber-Penn flares the trunk over
-# its first segment (``rootFlare``: the radius at the ground over the trunk's), an eighth of
-# the trunk's length at the species' usual ``curveRes[0]`` of 8
-FOOT_SHARE = 1 / 16
-FLARE_MAX = 4.0  # a ground line drawn under the trunk reads as a wide foot: no wider than this
 _DARK = 0.5
 
 
@@ -83,19 +76,12 @@ _DARK = 0.5
 class Profile:
     """An envelope's outline: ``widths`` (BINS, bottom to top) the full width of each
     height bin over the height; ``crown_base`` the trunk's share of the height;
-    ``trunk`` the trunk's width over the height (0: none seen); ``foot`` the widest row
-    of the bottom ``FOOT_SHARE`` of the height over the height; ``aspect`` the widest row
-    over the height."""
+    ``trunk`` the trunk's width over the height (0: none seen); ``aspect`` the widest
+    row over the height."""
 
     widths: np.ndarray
     crown_base: float
     trunk: float
-    foot: float
-
-    @property
-    def flare(self) -> float:
-        """The foot's width over the trunk's (1: a straight trunk; 0: no trunk seen)."""
-        return self.foot / self.trunk if self.trunk > 0 else 0.0
 
     @property
     def aspect(self) -> float:
@@ -125,8 +111,7 @@ def profile_of(img: np.ndarray) -> Profile | None:
     # each bin's widest row (a drawing shorter than BINS rows repeats rows)
     starts = np.minimum((np.arange(BINS) * len(w)) // BINS, len(w) - 1)
     widths = np.maximum.reduceat(w, starts) if len(w) >= BINS else w[starts]
-    foot = float(w[: max(2, int(round(h * FOOT_SHARE)))].max())
-    return Profile(widths, k / h, trunk, foot)
+    return Profile(widths, k / h, trunk)
 
 
 def _clamp(key: str, value: float) -> float:
@@ -270,17 +255,12 @@ def _step(want: float, got: float, limit: float) -> float:
 
 
 def _trunk_like(p: TreeParams, want: Profile, got: Profile, ratio: float) -> TreeParams:
-    """``p`` with its trunk's thickness and its foot's flare moved towards the drawn ones
-    (``got``: the tree's outline at ``ratio`` and ``p``'s flare); at most ``TRUNK_STEP``
-    times thicker or thinner per step (the sketch's line width makes the drawn width of a
-    thin trunk a poor guide)."""
+    """``p`` with its trunk's thickness moved towards the drawn one (``got``: the tree's
+    outline at ``ratio``); at most ``TRUNK_STEP`` times thicker or thinner per step (the
+    sketch's line width makes the drawn width of a thin trunk a poor guide)."""
     if want.trunk <= 0 or got.trunk <= 0:
         return p
-    flare = float(p["rootFlare"]) * _step(want.flare, got.flare, TRUNK_STEP)
-    return p.replace(
-        ratio=_clamp("ratio", ratio * _step(want.trunk, got.trunk, TRUNK_STEP)),
-        rootFlare=float(np.clip(flare, 1.0, FLARE_MAX)),
-    )
+    return p.replace(ratio=_clamp("ratio", ratio * _step(want.trunk, got.trunk, TRUNK_STEP)))
 
 
 def _corrected(p: TreeParams, want: Profile, now: Profile) -> TreeParams:
@@ -356,7 +336,7 @@ def polish(
     refit: Callable[[TreeParams], TreeParams] | None = None,
 ) -> tuple[TreeParams, list[np.ndarray] | None]:
     """``p`` with its drawn values (``DRAWN_KEYS``: the custom shape, crown base, branch
-    reach, trunk thickness and foot) and its first branches' angle (``downAngle[1]``, which sets
+    reach, trunk thickness) and its first branches' angle (``downAngle[1]``, which sets
     how far the low branches reach out under the crown) searched for the outlines
     nearest ``wants`` (each a drawing's framed envelope and the yaw it is seen from): nlopt
     COBYLA on one minus the mean envelope overlap, at most ``evals`` (default
@@ -398,14 +378,12 @@ def polish(
         return p, None
     length = [float(v) for v in q["length"]]
     down = [float(v) for v in q["downAngle"]]
-    lo = np.array([SPECS["customShape"].lo] * 4 + [0.0, np.log(0.02), np.log(1e-3), 0.0, 0.0])
-    hi = np.array(
-        [SPECS["customShape"].hi] * 4 + [0.95, np.log(3.0), np.log(0.5), 140.0, np.log(FLARE_MAX)]
-    )
+    lo = np.array([SPECS["customShape"].lo] * 4 + [0.0, np.log(0.02), np.log(1e-3), 0.0])
+    hi = np.array([SPECS["customShape"].hi] * 4 + [0.95, np.log(3.0), np.log(0.5), 140.0])
     x0 = np.array(
         [float(v) for v in q["customShape"]]
         + [float(q["baseSize"]), np.log(max(length[1], 1e-6))]
-        + [np.log(max(float(q["ratio"]), 1e-6)), down[1], np.log(float(q["rootFlare"]))]
+        + [np.log(max(float(q["ratio"]), 1e-6)), down[1]]
     )
     u0 = (np.clip(x0, lo, hi) - lo) / (hi - lo)
 
@@ -419,7 +397,6 @@ def polish(
             length=ln,
             ratio=float(np.exp(x[6])),
             downAngle=da,
-            rootFlare=float(np.exp(x[8])),
         )
 
     def gap(u: np.ndarray, grad: np.ndarray) -> float:

@@ -15,17 +15,12 @@ SIZE = 128
 
 
 def drawing(
-    crown: str,
-    stick: float,
-    page: Image.Image | None = None,
-    at: tuple[float, float] = (0, 0),
-    foot: float = 0.0,
+    crown: str, stick: float, page: Image.Image | None = None, at: tuple[float, float] = (0, 0)
 ) -> np.ndarray:
     """A tree drawn with a pen: a trunk of two lines ``stick`` of the height tall under a
     crown outline, ``"round"`` (a lollipop) or ``"flat"`` (a wide flat-topped crown);
     on a 256 px page of its own, or on ``page`` with its 256 px box scaled to fit the
-    page's width / 5 at ``at`` (a tree drawn small in a corner).  ``foot``: each trunk
-    line splays out this many px over the bottom 24 px (a trunk flaring into roots)."""
+    page's width / 5 at ``at`` (a tree drawn small in a corner)."""
     im = Image.new("L", (256, 256), 255) if page is None else page
     k = 1.0 if page is None else page.width / 5 / 256
 
@@ -35,8 +30,8 @@ def drawing(
     d = ImageDraw.Draw(im)
     top, bottom = 20, 240
     base = bottom - stick * (bottom - top)
-    for x, out in ((120, -foot), (136, foot)):
-        d.line([xy(x + out, bottom), xy(x, bottom - 24), xy(x, base)], fill=0, width=3)
+    d.line([xy(120, bottom), xy(120, base)], fill=0, width=3)
+    d.line([xy(136, bottom), xy(136, base)], fill=0, width=3)
     if crown == "round":
         d.ellipse([*xy(78, top), *xy(178, base + 8)], outline=0, width=3)
     else:  # flat top, flat base: an umbrella's outline
@@ -84,27 +79,6 @@ def test_the_drawn_outline_wins_over_the_species_ranges() -> None:
     for key in species.DRAWN_KEYS:
         assert kept[key] == fitted[key]
     assert species.project("oak", fitted, search=True)["shape"] == species.base("oak")["shape"]
-
-
-def test_a_trunk_drawn_flaring_into_roots_grows_a_flared_foot() -> None:
-    # people draw trunks widening at the ground: the fitted start flares the trunk's foot
-    # (``rootFlare``), and leaves a straight drawn trunk straight
-    from refine.start import FLARE_MAX
-
-    start = species.base("oak")
-    flared = framed(drawing("round", 0.4, foot=18), SIZE)
-    want = profile_of(flared)
-    assert want.flare > 2.0  # the reading itself
-    fitted = fit_start(flared, start, "oak", SIZE)
-    assert 1.5 < float(fitted["rootFlare"]) <= FLARE_MAX
-    before, after = outline(start, "oak").flare, outline(fitted, "oak").flare
-    assert abs(after - want.flare) < abs(before - want.flare), (before, after, want.flare)
-    straight = fit_start(framed(drawing("round", 0.4), SIZE), start, "oak", SIZE)
-    assert float(straight["rootFlare"]) < 1.3
-    # the Sapling preset carries the drawn foot
-    from weberpenn.preset import to_sapling
-
-    assert to_sapling(fitted)["rootFlare"] == float(fitted["rootFlare"])
 
 
 def test_a_blank_drawing_leaves_the_start_alone() -> None:

@@ -248,10 +248,10 @@ SEARCH_FREEDOMS: dict[str, tuple[Unfixed, ...]] = {
 
 #: The outline a drawing sets over the species' habit (issue 48, ``refine.start``): the
 #: crown's width profile (``shape`` 8 and its ``customShape``), the crown base, the
-#: trunk's thickness and its flared foot, and the branches' reach.  ``project(..., keep=DRAWN_KEYS)`` keeps
+#: trunk's thickness and the branches' reach.  ``project(..., keep=DRAWN_KEYS)`` keeps
 #: them as given (the parameter table has checked their ranges): where a person draws
 #: what the species' ranges do not allow, the tree follows the drawing as far as it grows.
-DRAWN_KEYS = ("shape", "customShape", "baseSize", "ratio", "rootFlare", "length")
+DRAWN_KEYS = ("shape", "customShape", "baseSize", "ratio", "length")
 
 
 def search_freedoms(name: str) -> tuple[Unfixed, ...]:
