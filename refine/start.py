@@ -65,7 +65,15 @@ __all__ = [
 # trees lost mesh error, and a margin on the distance instead cost people's outlines)
 FIT_BELOW = 0.7
 BINS = 24  # height bins of a width profile
-TRUNK_FRACTION = 0.3  # of the widest row: narrower rows at the bottom are the trunk
+TRUNK_FRACTION = 0.3  # of the widest row: narrower rows at the bottom are the trunk, unless
+# the drawn trunk itself is seen: its width (a low quantile of the rows under the crown's
+# widest, single lines left out) under TRUNK_MAX of the widest row; then the crown starts
+# where the rows grow past CROWN_JUMP times it.  People draw trunks a third of the crown
+# wide, past TRUNK_FRACTION, whose crown base then read as the ground's (a crown grown down
+# to the ground round a trunk too thin to see: RESULTS.md, "The tree follows the drawing")
+TRUNK_MAX = 0.5
+CROWN_JUMP = 1.75
+LINE_WIDTH = 0.02  # of the height: a row this narrow holds one line, not a trunk's two
 REACH_STEP = 3.0  # the branches are made at most this many times longer or shorter
 CORRECTIONS = 2  # rounds of correction from the tree's own outline
 TRUNK_STEP = 2.0  # the trunk is made at most this many times thicker or thinner per round
@@ -102,16 +110,26 @@ def profile_of(img: np.ndarray) -> Profile | None:
     top, bottom = rows[0], rows[-1]
     h = float(bottom - top + 1)
     w = width[top : bottom + 1][::-1] / h  # bottom row first
-    # the crown base: going down from the widest row, the first row narrower than
-    # TRUNK_FRACTION of it (a trunk flaring at its root is not the crown)
+    # the crown base: going down from the widest row, the first row narrow enough to be
+    # the trunk (a trunk flaring at its root is not the crown)
     peak = int(np.argmax(w))
-    narrow = np.flatnonzero(w[:peak] < TRUNK_FRACTION * w.max())
+    narrow = np.flatnonzero(w[:peak] < _trunk_limit(w[:peak], float(w.max())))
     k = int(narrow[-1]) + 1 if narrow.size else 0
     trunk = float(np.median(w[:k])) if k >= 2 else 0.0
     # each bin's widest row (a drawing shorter than BINS rows repeats rows)
     starts = np.minimum((np.arange(BINS) * len(w)) // BINS, len(w) - 1)
     widths = np.maximum.reduceat(w, starts) if len(w) >= BINS else w[starts]
     return Profile(widths, k / h, trunk)
+
+
+def _trunk_limit(below: np.ndarray, widest: float) -> float:
+    """The width under which a row below the crown's widest is the trunk's (see
+    ``TRUNK_MAX``), of rows' widths over the height ``below`` and the widest row's."""
+    seen = below[below > LINE_WIDTH]
+    trunk = float(np.quantile(seen, 0.25)) if seen.size else widest
+    if trunk <= TRUNK_MAX * widest:
+        return CROWN_JUMP * trunk
+    return TRUNK_FRACTION * widest
 
 
 def _clamp(key: str, value: float) -> float:

@@ -15,12 +15,16 @@ SIZE = 128
 
 
 def drawing(
-    crown: str, stick: float, page: Image.Image | None = None, at: tuple[float, float] = (0, 0)
+    crown: str,
+    stick: float,
+    page: Image.Image | None = None,
+    at: tuple[float, float] = (0, 0),
+    trunk: float = 16,
 ) -> np.ndarray:
-    """A tree drawn with a pen: a trunk of two lines ``stick`` of the height tall under a
-    crown outline, ``"round"`` (a lollipop) or ``"flat"`` (a wide flat-topped crown);
-    on a 256 px page of its own, or on ``page`` with its 256 px box scaled to fit the
-    page's width / 5 at ``at`` (a tree drawn small in a corner)."""
+    """A tree drawn with a pen: a trunk of two lines ``trunk`` px apart and ``stick`` of
+    the height tall under a crown outline, ``"round"`` (a lollipop) or ``"flat"`` (a
+    wide flat-topped crown); on a 256 px page of its own, or on ``page`` with its 256 px
+    box scaled to fit the page's width / 5 at ``at`` (a tree drawn small in a corner)."""
     im = Image.new("L", (256, 256), 255) if page is None else page
     k = 1.0 if page is None else page.width / 5 / 256
 
@@ -30,8 +34,8 @@ def drawing(
     d = ImageDraw.Draw(im)
     top, bottom = 20, 240
     base = bottom - stick * (bottom - top)
-    d.line([xy(120, bottom), xy(120, base)], fill=0, width=3)
-    d.line([xy(136, bottom), xy(136, base)], fill=0, width=3)
+    for x in (128 - trunk / 2, 128 + trunk / 2):
+        d.line([xy(x, bottom), xy(x, base)], fill=0, width=3)
     if crown == "round":
         d.ellipse([*xy(78, top), *xy(178, base + 8)], outline=0, width=3)
     else:  # flat top, flat base: an umbrella's outline
@@ -79,6 +83,24 @@ def test_the_drawn_outline_wins_over_the_species_ranges() -> None:
     for key in species.DRAWN_KEYS:
         assert kept[key] == fitted[key]
     assert species.project("oak", fitted, search=True)["shape"] == species.base("oak")["shape"]
+
+
+def test_a_thick_trunk_under_a_wide_crown_is_read_and_grown() -> None:
+    # people draw trunks a third of the crown wide or more: read as the trunk (not as the
+    # crown reaching the ground), and the tree grows a thicker trunk and its crown base
+    # where drawn, not a crown down to the ground round a trunk too thin to see
+    img = framed(drawing("round", 0.4, trunk=40), SIZE)
+    want = profile_of(img)
+    # (the crown's underside narrower than the trunk's reach counts as the trunk's)
+    assert 0.35 < want.crown_base < 0.5, want.crown_base
+    assert want.trunk > 0.12, want.trunk
+    start = species.base("oak")
+    fitted = fit_start(img, start, "oak", SIZE)
+    assert float(fitted["ratio"]) > float(start["ratio"])
+    before, after = outline(start, "oak"), outline(fitted, "oak")
+    assert abs(after.crown_base - want.crown_base) < 0.12, (after.crown_base, want.crown_base)
+    assert abs(after.crown_base - want.crown_base) < abs(before.crown_base - want.crown_base)
+    assert after.trunk > 1.5 * before.trunk, (after.trunk, before.trunk)
 
 
 def test_a_blank_drawing_leaves_the_start_alone() -> None:
