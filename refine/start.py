@@ -10,7 +10,7 @@ RESULTS.md, "The tree follows the drawing".)
 
 :func:`fit_start` reads the drawing's envelope (``refine.envelope``: ink closed, rows
 filled) as a width profile up its height, with its crown base (going down from the widest
-row, where the width falls under ``TRUNK_FRACTION`` of it) and its trunk's width, and sets
+row, where the width falls to the drawn trunk's, ``TRUNK_MAX``) and its trunk's width, and sets
 those values so the tree's own envelope follows it, then corrects them twice from the
 tree's cheap sketch.  Values are clamped to the parameter table's valid ranges
 (``weberpenn.params``), not to the species' ranges: where the drawing asks for more than
