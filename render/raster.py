@@ -64,7 +64,7 @@ def hit_mask(
 
 # The scanline loops run compiled (numba): a tree's mesh has tens of thousands of small
 # polygons a few rows tall, where numpy's per-row passes over all of them cost 2-3 times
-# as much (RESULTS.md, "The refinement's time").  ``cache``: compiled once per machine.
+# as much (RESULTS.md, "The rasteriser compiled").  ``cache``: compiled once per machine.
 
 
 @numba.njit(cache=True)

@@ -26,7 +26,7 @@ import render.raster as raster
 from refine.start import cheap_sketch
 from weberpenn import species
 
-NAMES = ("oak", "maple", "pine", "palm", "willow", "cherry", "fir", "birch", "poplar", "winter")
+NAMES = species.SPECIES
 YAWS = (0.0, 37.0, 123.0, 275.5)
 
 
@@ -70,7 +70,7 @@ def main() -> None:
     cheap_sketch(species.sample("oak", 1), "oak", 128, 0.0)  # compile or load the cache
     raster.hit_mask = both
     for seed in range(args.seeds):
-        for name in (*NAMES, "bonsai"):
+        for name in NAMES:
             p = species.sample(name, 100 + seed)
             for yaw in YAWS:
                 cheap_sketch(p, name, 128, yaw)
