@@ -36,6 +36,8 @@ from typing import Any
 
 import numpy as np
 
+from .distance import distance_to_background
+
 __all__ = [
     "FORMATS",
     "INK_LEVEL",
@@ -401,7 +403,6 @@ def _ink_of(flat: np.ndarray) -> np.ndarray:
     grain, sensor noise)."""
     from scipy import ndimage
     from skimage.filters import threshold_otsu
-    from skimage.morphology import remove_small_objects
 
     dark = flat < INK_CONTRAST
     if not dark.any():
@@ -433,8 +434,36 @@ def _ink_of(flat: np.ndarray) -> np.ndarray:
         seeded[np.unique(lab[sure & ink])] = True
         seeded[0] = False
         ink = seeded[lab]
+    return _without_dust(ink)
+
+
+def _without_dust(ink: np.ndarray) -> np.ndarray:
+    """``ink`` without marks too small to be drawn (a pixel or two at any page size)."""
+    from skimage.morphology import remove_small_objects
+
     min_px = max(2, int(round(ink.size * 2e-5)))
     return remove_small_objects(ink, max_size=min_px - 1)
+
+
+TWO_LEVEL_INK = 0.35  # see _page_ink
+
+
+def _page_ink(page: np.ndarray) -> np.ndarray:
+    """The ink of a page (grey ``uint8``): :func:`_ink_of` its :func:`flatten_paper`.
+
+    A page of pure black and white (a sketch the renderer made, a drawing a program
+    saved without smoothing) has no paper to flatten and no grain: its ink is its black,
+    less dust, unless :func:`flatten_paper` would refuse it as dark paper.  That takes
+    half the page's blocks black all through (a block with a white pixel sets the paper
+    white over every window it is in, its own included), so a page under ``TWO_LEVEL_INK``
+    black is read straight (the margin: a page's last blocks, padded, hold fewer of its
+    pixels, under a tenth of the blocks at any allowed aspect).  The
+    refinement frames every candidate tree's sketch, such a page, through here.
+    """
+    black = page == 0
+    if np.all(black | (page == 255)) and float(black.mean()) < TWO_LEVEL_INK:
+        return _without_dust(black)
+    return _ink_of(flatten_paper(page))
 
 
 SPECK_WIDTHS = 1.5  # a mark smaller than a square this many stroke widths wide ...
@@ -444,12 +473,11 @@ SPECK_GAP = 3.0  # ... and further than this many stroke widths from the strokes
 def stroke_width(ink: np.ndarray) -> float:
     """The drawing's typical stroke width in pixels: twice the median distance from the
     centre line of its strokes to their edge (at least 1)."""
-    from scipy import ndimage
     from skimage.morphology import skeletonize
 
     if not ink.any():
         return 1.0
-    inside = ndimage.distance_transform_edt(ink)
+    inside = distance_to_background(ink)
     return max(1.0, 2.0 * float(np.median(inside[skeletonize(ink)])))
 
 
@@ -486,9 +514,12 @@ def _kept_marks(ink: np.ndarray) -> np.ndarray:
     if not small.any():
         return ink
     big = ink & ~np.concatenate([[False], small])[lab]
-    gap = ndimage.distance_transform_edt(~big)
-    near = ndimage.minimum(gap, lab, index=idx) <= SPECK_GAP * width
-    keep = np.concatenate([[False], ~small | near])
+    gap = distance_to_background(~big)
+    # each mark's nearest pixel's gap (ndimage.minimum sorts every pixel by label first)
+    nearest = np.full(n + 1, np.inf)
+    on = lab > 0
+    np.minimum.at(nearest, lab[on], gap[on])
+    keep = np.concatenate([[False], ~small | (nearest[1:] <= SPECK_GAP * width)])
     return keep[lab]
 
 
@@ -934,10 +965,9 @@ def normalise_drawing(
         s = WORK_SIDE / max(a.shape)
         shape = (max(MIN_SIDE, round(a.shape[1] * s)), max(MIN_SIDE, round(a.shape[0] * s)))
         a = np.asarray(Image.fromarray(a).resize(shape, Image.Resampling.BOX))
-    flat = flatten_paper(a)
     # a ground line drawn from edge to edge looks like ruling, whose removal keeps what
     # crosses it and leaves the line's crests: it goes as a ground line first
-    ink = tree_ink(drop_specks(_drop_ruled_lines(_drop_ground(_ink_of(flat)))))
+    ink = tree_ink(drop_specks(_drop_ruled_lines(_drop_ground(_page_ink(a)))))
     frac = float(ink.mean())
     if frac < MIN_INK:
         raise SketchError("the sketch is blank: draw a tree (dark lines on a light page)")

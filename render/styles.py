@@ -40,6 +40,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.special import ndtri
 
+from .distance import distance_to_background
 from .edges import EdgeConfig, branch_sketch, combine, foliage_sketch
 
 __all__ = [
@@ -116,8 +117,8 @@ def _sdf(mask: np.ndarray) -> np.ndarray:
         return np.full(mask.shape, -1e6, np.float32)
     if mask.all():
         return np.full(mask.shape, 1e6, np.float32)
-    inside = ndimage.distance_transform_edt(mask)
-    outside = ndimage.distance_transform_edt(~mask)
+    inside = distance_to_background(mask)
+    outside = distance_to_background(~mask)
     # pixel centres sit half a pixel from the edge between a mask pixel and its neighbour
     return np.where(mask, inside - 0.5, 0.5 - outside).astype(np.float32)
 
@@ -130,7 +131,7 @@ def _stroke(dist: np.ndarray, width: np.ndarray | float) -> np.ndarray:
 def _dist_to(mask: np.ndarray) -> np.ndarray:
     if not mask.any():
         return np.full(mask.shape, 1e6, np.float32)
-    return ndimage.distance_transform_edt(~mask).astype(np.float32)
+    return distance_to_background(~mask).astype(np.float32)
 
 
 def _along_lines(lines: np.ndarray, width: np.ndarray | float) -> np.ndarray:
@@ -154,7 +155,7 @@ def _opening(mask: np.ndarray, radius: float) -> np.ndarray:
     """The parts of ``mask`` at least ``2 * radius`` px wide (opening by a disc)."""
     if radius <= 0 or not mask.any():
         return mask
-    core = ndimage.distance_transform_edt(mask) >= radius
+    core = distance_to_background(mask) >= radius
     return (_dist_to(core) <= radius) & mask
 
 
@@ -253,7 +254,7 @@ def _geometry(sil: Silhouettes) -> _Geometry:
     b = np.asarray(sil.branches, dtype=np.float32) <= 0.5
     f = np.asarray(sil.leaves, dtype=np.float32) < 0.9
     n = sil.n
-    radius = ndimage.distance_transform_edt(b).astype(np.float32) if b.any() else np.zeros((n, n))
+    radius = distance_to_background(b).astype(np.float32) if b.any() else np.zeros((n, n))
     skel = skeletonize(b) if b.any() else b
     return _Geometry(n, n / REFERENCE, b, _sdf(b), f, skel, radius)
 

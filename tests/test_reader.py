@@ -504,3 +504,31 @@ def test_a_trunk_drawn_as_one_line_keeps_its_axis() -> None:
     out = normalise_drawing(np.asarray(im), 256) < 128
     base = np.flatnonzero(out[240:249].any(axis=0))
     assert abs((base[0] + base[-1] + 1) / 2 - 128) <= 2
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_black_and_white_page_reads_as_the_same_page_with_paper_to_flatten(seed: int) -> None:
+    # a page of pure black and white (every candidate tree's sketch in a refinement) is
+    # read straight, not through the paper's flattening: the same drawing, the same ink,
+    # dust, specks and refusals as a page that must be flattened (one pixel a grey step
+    # off white sends it that way)
+    rng = np.random.default_rng(seed)
+    pages = [np.where(tree_doodle("oak", seed) < 128, 0, 255).astype(np.uint8)]
+    noisy = pages[0].copy()
+    noisy[rng.random(noisy.shape) < 0.002] = 0  # dust over the page
+    pages.append(noisy)
+    blob = np.full((200, 160), 255, np.uint8)
+    blob[10:190, 10:150] = 0  # a filled area over most of the page: refused
+    blob[100:110, :] = 0
+    pages.append(blob)
+    for page in pages:
+        greyed = page.copy()
+        greyed[np.unravel_index(int(np.argmax(page)), page.shape)] = 254
+        for over_crown in (False, True):
+            try:
+                want = normalise_drawing(greyed, 128, over_crown=over_crown)
+            except SketchError as e:
+                with pytest.raises(SketchError, match=str(e)[:20]):
+                    normalise_drawing(page, 128, over_crown=over_crown)
+                continue
+            assert np.array_equal(normalise_drawing(page, 128, over_crown=over_crown), want)

@@ -69,6 +69,26 @@ def test_hit_mask_of_many_triangles_is_every_sample_inside_any() -> None:
         hit_mask(v, np.array([[0, 1, 90]]), cam, n)
 
 
+def test_a_large_mesh_drawn_on_two_threads_is_the_mask_one_thread_draws(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # a tree's branch tubes (quads as triangle pairs, facing both ways) are drawn in two
+    # halves side by side; the halves' runs summed must be the one-thread mask exactly
+    import render.raster as raster
+
+    tree = sketch_mesh(grow(species.sample("oak", seed=3)), 128, "oak")
+    v, f = tree.branches.vertices, tree.branches.faces
+    assert len(f) >= raster.SPLIT_FACES
+    cam = Camera(Framing.from_parts([v]), 37.0, 5.0)
+    both = [hit_mask(v, f, cam, 512, front_only) for front_only in (True, False)]
+    odd = hit_mask(v, f[:-1], cam, 512)  # an odd count: the last face is drawn alone
+    monkeypatch.setattr(raster, "SPLIT_FACES", len(f) + 1)
+    for front_only, mask in zip((True, False), both, strict=True):
+        assert mask.sum() > 1000
+        assert np.array_equal(mask, hit_mask(v, f, cam, 512, front_only))
+    assert np.array_equal(odd, hit_mask(v, f[:-1], cam, 512))
+
+
 def test_triangle_pairs_drawn_as_quads_cover_what_their_triangles_cover() -> None:
     fr = Framing(0.0, 1.0, 0.5, margin_bottom=0.0, margin_top=0.0, margin_side=0.0)
     cam = Camera(fr, 20.0, 10.0)
