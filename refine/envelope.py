@@ -14,6 +14,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
+from render.distance import distance_to_background
+
 __all__ = [
     "CLOSE_FRACTION",
     "close_disk",
@@ -32,8 +34,8 @@ def close_disk(ink: np.ndarray, radius: float) -> np.ndarray:
     if radius <= 0 or not ink.any():
         return ink.copy()
     pad = int(np.ceil(radius)) + 1
-    fat = ndimage.distance_transform_edt(~np.pad(ink, pad)) <= radius
-    closed = ndimage.distance_transform_edt(fat) > radius
+    fat = distance_to_background(~np.pad(ink, pad)) <= radius
+    closed = distance_to_background(fat) > radius
     return closed[pad:-pad, pad:-pad] | ink
 
 

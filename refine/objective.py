@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
+from render.distance import distance_to_background
 from render.reader import SketchError, normalise_drawing
 from weberpenn import TreeParams, build_mesh, grow, species
 from weberpenn.params import SPECS
@@ -92,7 +93,7 @@ def _levels(img: np.ndarray, scales: int) -> tuple[_Level, ...]:
     for _ in range(scales):
         n = int(dark.sum())
         if n:
-            dist = ndimage.distance_transform_edt(~dark).astype(np.float32)
+            dist = distance_to_background(~dark).astype(np.float32)
         else:
             dist = np.zeros(dark.shape, np.float32)
         out.append(_Level(dark, dist, _fill(dark), n))

@@ -54,6 +54,7 @@ from typing import Any, Protocol
 import numpy as np
 from scipy import ndimage
 
+from render.distance import distance_to_background
 from render.reader import crown_axis
 
 from .envelope import CLOSE_FRACTION, envelope_of_ink, mask_iou
@@ -152,8 +153,8 @@ def filled_shape(ink: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     r = max(1, int(round(side * CLOSE_RADIUS)))
     pad = r + 1  # near the border the fat brush must not touch the edge
     # closing with a disk of radius r, by distance transforms (linear time at any r)
-    fat = ndimage.distance_transform_edt(~np.pad(ink, pad)) <= r
-    filled = ndimage.distance_transform_edt(ndimage.binary_fill_holes(fat)) > r
+    fat = distance_to_background(~np.pad(ink, pad)) <= r
+    filled = distance_to_background(ndimage.binary_fill_holes(fat)) > r
     filled = filled[pad:-pad, pad:-pad] | ink
     return filled, filled & ~ndimage.binary_erosion(filled, border_value=0)
 
@@ -177,8 +178,8 @@ def _level(ink: np.ndarray) -> _ShapeLevel:
     if n == 0:
         return _ShapeLevel(np.zeros(ink.shape, np.float32), outline, 0)
     # zero on the outline pixels (the silhouette's own boundary), negative inside
-    inside = np.maximum(ndimage.distance_transform_edt(filled) - 1.0, 0.0)
-    sdf = ndimage.distance_transform_edt(~filled) - inside
+    inside = np.maximum(distance_to_background(filled) - 1.0, 0.0)
+    sdf = distance_to_background(~filled) - inside
     return _ShapeLevel(sdf.astype(np.float32), outline, n)
 
 
