@@ -532,3 +532,17 @@ def test_a_black_and_white_page_reads_as_the_same_page_with_paper_to_flatten(see
                     normalise_drawing(page, 128, over_crown=over_crown)
                 continue
             assert np.array_equal(normalise_drawing(page, 128, over_crown=over_crown), want)
+
+
+def test_dust_goes_as_remove_small_objects_takes_it_at_every_page_size() -> None:
+    from skimage.morphology import remove_small_objects
+
+    from render.reader import _without_dust  # the module's own test may look inside it
+
+    rng = np.random.default_rng(5)
+    for h, w in ((1, 9), (40, 7), (256, 256), (300, 400)):  # the last: three pixels go
+        ink = rng.random((h, w)) < 0.15
+        min_px = max(2, round(ink.size * 2e-5))
+        want = remove_small_objects(ink, max_size=min_px - 1)
+        assert np.array_equal(_without_dust(ink), want)
+        assert want.sum() < ink.sum() or h == 1
