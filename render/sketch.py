@@ -21,6 +21,7 @@ cannot survive the branch thinning (``weberpenn.lod.drop_thin_stems``).
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
@@ -115,10 +116,14 @@ class SketchRenderer:
             yaw_deg, work, ss, pitch, keep_hr=True, leaf_supersample=cfg.leaf_supersample
         )
         assert cov.branches_hr is not None
-        branch_sil = 1.0 - thin_mask(cov.branches_hr, ss, cfg.px(cfg.branch_thin_px, work))
         leaf_sil = 1.0 - cov.leaves
-        b = branch_sketch(branch_sil, cfg)
-        f = foliage_sketch(leaf_sil, cfg)
+        # the two chains side by side (scipy's filters let go of the GIL): a refinement
+        # draws a hundred sketches per drawing, each chain a few milliseconds
+        with ThreadPoolExecutor(1) as pool:
+            foliage = pool.submit(foliage_sketch, leaf_sil, cfg)
+            branch_sil = 1.0 - thin_mask(cov.branches_hr, ss, cfg.px(cfg.branch_thin_px, work))
+            b = branch_sketch(branch_sil, cfg)
+            f = foliage.result()
         out = b * f
         if work != size:
             out = _area_resize(out, size)
