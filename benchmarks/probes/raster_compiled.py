@@ -1,11 +1,12 @@
-"""Is the compiled rasteriser the numpy one, bit for bit, and how much faster?
+"""Is the rasteriser the one at ``--before``, bit for bit, and how much faster?
 
-Loads ``render/raster.py`` as it was at ``--before`` (``git show``; the numpy scanline
-code, before the loops were compiled with numba) beside the current one and draws every
+Loads ``render/raster.py`` as it was at ``--before`` (``git show``; 954e6a1: the numpy
+scanline code, before the loops were compiled with numba; 4eaeece: compiled, on one
+thread) beside the current one and draws every
 hit mask of the refinement's fast sketch (``refine.start.cheap_sketch``: branches at 512
 px facing the camera, leaves at 256 px) of ``--seeds`` trees of each of the eleven
 species at four views with both: the masks must be equal, and each one's time is summed
-(the compiled code's first call, its compilation or cache load, left out).
+(each code's first call, its compilation or cache load, left out).
 
     .venv/bin/python benchmarks/probes/raster_compiled.py --before 954e6a1 --seeds 3
 """
@@ -67,8 +68,11 @@ def main() -> None:
         counts["different"] += int(not np.array_equal(a, b))
         return b
 
-    cheap_sketch(species.sample("oak", 1), "oak", 128, 0.0)  # compile or load the cache
     raster.hit_mask = both
+    # both codes' first calls (their compilation or cache load) left out
+    cheap_sketch(species.sample("oak", 1), "oak", 128, 0.0)
+    t.update(before=0.0, now=0.0)
+    counts.update(masks=0, different=0)
     for seed in range(args.seeds):
         for name in NAMES:
             p = species.sample(name, 100 + seed)
@@ -76,8 +80,8 @@ def main() -> None:
                 cheap_sketch(p, name, 128, yaw)
     raster.hit_mask = now
     print(
-        f"{counts['masks']} hit masks, {counts['different']} different; numpy at "
-        f"{args.before}: {t['before']:.2f} s, compiled: {t['now']:.2f} s "
+        f"{counts['masks']} hit masks, {counts['different']} different; at "
+        f"{args.before}: {t['before']:.2f} s, now: {t['now']:.2f} s "
         f"({t['before'] / t['now']:.1f}x)"
     )
 
