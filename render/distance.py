@@ -7,8 +7,8 @@ pixels wide, about a thousand times per drawing (the candidate's framing, its sh
 its envelope).  Felzenszwalb and Huttenlocher's two passes (a 1-D distance down each
 column, then the lower envelope of parabolas along each row) give the same squared
 distances, whole numbers held exactly in float64, and their square roots are the same
-floats: the values are identical, at about a third of the time (RESULTS.md, "The
-framing's distance transform compiled").
+floats: the values are identical, at about a third of the time (RESULTS.md, "The same
+searches, faster").
 """
 
 from __future__ import annotations
