@@ -75,13 +75,16 @@ class Framing:
         z_lo, z_hi, r2 = [], [], []
         for part in parts:
             v = np.asarray(part)
-            v = v.reshape(-1, 3) if v.dtype in (np.float32, np.float64) else v.astype(float)
-            extent = _extent(np.ascontiguousarray(v).reshape(-1, 3)) if len(v) else None
-            if extent is None or not np.isfinite(extent).all():
+            if v.dtype not in (np.float32, np.float64):
+                v = v.astype(np.float64)
+            v = np.ascontiguousarray(v).reshape(-1, 3)
+            if not len(v):
+                continue
+            extent = _extent(v)
+            if not np.isfinite(extent).all():
                 # a point off to infinity or NaN: only the finite rows (the row-wise
                 # filter is slow: only when needed)
-                v = np.asarray(v, dtype=np.float64).reshape(-1, 3)
-                v = v[np.isfinite(v).all(axis=1)]
+                v = v.astype(np.float64)[np.isfinite(v).all(axis=1)]
                 if not len(v):
                     continue
                 extent = (v[:, 2].min(), v[:, 2].max(), (v[:, 0] ** 2 + v[:, 1] ** 2).max())
