@@ -137,6 +137,23 @@ def test_leaves_counts_uvs_and_placement(shape, nv, nf):
     assert tm.species == "maple"
 
 
+@pytest.mark.parametrize("name", ["oak", "palm"])
+def test_grown_leaves_are_numpys_broadcast_sums_bit_for_bit(name):
+    # the leaf corners are placed in one compiled pass: x * col0 + y * col1 + pos added
+    # in numpy's order, so every refinement's sketch stays the same to the bit
+    from weberpenn import grow, species
+
+    sk = grow(species.sample(name, 4))
+    assert sk.n_leaves > 0
+    tmpl = RECT if str(sk.leaf_shape) == "rect" else HEX
+    mats, pos = np.asarray(sk.leaf_matrices), np.asarray(sk.leaf_positions)
+    want = tmpl[None, :, 0, None] * mats[:, None, :, 0]
+    want += tmpl[None, :, 1, None] * mats[:, None, :, 1]
+    want += pos[:, None, :]
+    got = build_mesh(sk, species=name).leaves.vertices
+    assert np.array_equal(got, want.reshape(-1, 3))
+
+
 def test_grouping_keeps_stems_consistent():
     # stems of different point counts mesh exactly like each one alone
     stems = [STRAIGHT, BENT, ([[1, 1, 0], [1, 1, 1]], [0.2, 0.1])]

@@ -16,6 +16,7 @@ over ring index, for all stems of a group at once.
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 import trimesh
 from trimesh.visual import TextureVisuals
@@ -279,18 +280,32 @@ def _branches(sk: Skeleton) -> tuple[trimesh.Trimesh, dict]:
     return mesh, {"stems": s, "sides": sides, "res_u": res_u}
 
 
+@numba.njit(cache=True)
+def _leaf_corners(tmpl2: np.ndarray, mats: np.ndarray, pos: np.ndarray) -> np.ndarray:
+    """(L, T, 3): each template corner (x, y, 0) placed by each leaf's matrix and
+    position, ``x * col0 + y * col1 + pos`` (the template lies in z = 0, so only the
+    matrix's first two columns matter), added in that order as numpy adds the
+    broadcast arrays, in one pass over the leaves (compiled: a tree has 10^4 leaves, and
+    numpy's broadcasts over the matrices' strided columns took 3x as long)."""
+    out = np.empty((mats.shape[0], tmpl2.shape[0], 3))
+    for i in range(mats.shape[0]):
+        for j in range(tmpl2.shape[0]):
+            for k in range(3):
+                a = tmpl2[j, 0] * mats[i, k, 0]
+                b = tmpl2[j, 1] * mats[i, k, 1]
+                out[i, j, k] = (a + b) + pos[i, k]
+    return out
+
+
 def _leaves(sk: Skeleton) -> trimesh.Trimesh:
     nl = sk.n_leaves
     rect = str(sk.leaf_shape) == "rect"
     tmpl2, tf = (RECT, RECT_FACES) if rect else (HEX, HEX_FACES)
     if nl == 0:
         return _empty_mesh()
-    mats = np.asarray(sk.leaf_matrices, dtype=np.float64)
-    pos = np.asarray(sk.leaf_positions, dtype=np.float64)
-    # template z = 0: only the first two matrix columns matter; v = x*col0 + y*col1 + pos
-    v = tmpl2[None, :, 0, None] * mats[:, None, :, 0]
-    v += tmpl2[None, :, 1, None] * mats[:, None, :, 1]
-    v += pos[:, None, :]
+    mats = np.ascontiguousarray(sk.leaf_matrices, dtype=np.float64)
+    pos = np.ascontiguousarray(sk.leaf_positions, dtype=np.float64)
+    v = _leaf_corners(np.ascontiguousarray(tmpl2), mats, pos)
     nt = len(tmpl2)
     faces = (np.arange(nl)[:, None, None] * nt + tf[None]).reshape(-1, 3)
     uv = np.tile(tmpl2 + np.array([0.5, 0.0]), (nl, 1))
