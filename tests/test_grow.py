@@ -279,3 +279,20 @@ def test_leaf_azimuth_accumulates_along_each_stem():
     scale = np.linalg.norm(a.leaf_matrices, axis=(1, 2))
     turn = np.linalg.norm(b.leaf_matrices - a.leaf_matrices, axis=(1, 2)) / scale
     assert 0 < turn.max() < 0.05
+
+
+def test_leaf_matrix_products_are_numpys_bit_for_bit() -> None:
+    # the leaves' 3x3 products run compiled; each entry is summed in numpy's order, so
+    # every grown tree stays the same to the bit
+    from weberpenn._grow_leaves import _mul  # the module's own test may look inside it
+
+    rng = np.random.default_rng(3)
+    stack = np.moveaxis(rng.normal(size=(500, 3, 3)), 0, -1)  # (3, 3, L), strided
+    one = rng.normal(size=(3, 3))
+    for a, b in ((stack, one), (one, stack), (stack, stack[:, :, ::-1]), (one, one)):
+        want = np.empty((3, 3) + np.broadcast_shapes(a.shape[2:], b.shape[2:]))
+        for i in range(3):
+            for k in range(3):
+                want[i, k] = a[i, 0] * b[0, k] + a[i, 1] * b[1, k] + a[i, 2] * b[2, k]
+        got = _mul(a, b)
+        assert got.shape == want.shape and np.array_equal(got, want)
