@@ -289,7 +289,10 @@ def test_leaf_matrix_products_are_numpys_bit_for_bit() -> None:
     rng = np.random.default_rng(3)
     stack = np.moveaxis(rng.normal(size=(500, 3, 3)), 0, -1)  # (3, 3, L), strided
     one = rng.normal(size=(3, 3))
-    for a, b in ((stack, one), (one, stack), (stack, stack[:, :, ::-1]), (one, one)):
+    none = np.zeros((3, 3, 0))  # a tree without leaves
+    pairs = [(stack, one), (one, stack), (stack, stack[:, :, ::-1]), (one, one)]
+    pairs += [(none, one), (one, none), (none, none), (stack[:, :, :1], stack)]
+    for a, b in pairs:
         want = np.empty((3, 3) + np.broadcast_shapes(a.shape[2:], b.shape[2:]))
         for i in range(3):
             for k in range(3):
