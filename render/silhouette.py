@@ -32,6 +32,7 @@ import numpy as np
 
 from .backend import LLVM_VARIANT, Backend, init_mitsuba
 from .camera import Camera, Framing, check_size
+from .edges import block_counts
 
 log = logging.getLogger(__name__)
 
@@ -122,8 +123,7 @@ class CoverageScene:
         if ss < 1 or ss_leaf < 1:
             raise ValueError(f"supersample must be >= 1, got {supersample!r}, {leaf_supersample!r}")
         hits = [self._hit(0, cam, size, ss), self._hit(1, cam, size, ss_leaf)]
-        cov_b = downsample(hits[0].astype(np.float32), ss)
-        cov_l = downsample(hits[1].astype(np.float32), ss_leaf)
+        cov_b, cov_l = _covered(hits[0], ss), _covered(hits[1], ss_leaf)
         return Coverage(cov_b, cov_l, hits[0] if keep_hr else None)
 
 
@@ -238,6 +238,14 @@ class TreeScene(CoverageScene):
         normal = img[:, 1:4].astype(np.float32)
         t = np.where(depth > 0, depth, np.inf)
         return t, normal
+
+
+def _covered(hits: np.ndarray, ss: int) -> np.ndarray:
+    """:func:`downsample` of a bool hit mask as float32, from its blocks' counts (the
+    same floats: a count of ones is exact in float32 either way)."""
+    if ss == 1:
+        return hits.astype(np.float32)
+    return block_counts(hits, ss).astype(np.float32) * np.float32(1.0 / (ss * ss))
 
 
 def downsample(img: np.ndarray, ss: int) -> np.ndarray:
