@@ -86,3 +86,18 @@ def test_thinning_is_a_square_erosion():
         fp = np.ones((k + 1, k + 1), bool)
         ref = ndimage.binary_erosion(m, structure=fp, border_value=0, origin=-((k + 1) // 2))
         assert np.array_equal(thin_mask(m, 2, k / 4), ref.reshape(32, 2, 32, 2).mean(axis=(1, 3)))
+
+
+def test_block_counts_are_the_blocks_sums_and_keep_coverage_exact() -> None:
+    from render.edges import block_counts
+    from render.silhouette import downsample
+
+    rng = np.random.default_rng(11)
+    for ss in (1, 2, 3, 4):
+        mask = rng.random((12 * ss, 12 * ss)) < 0.4
+        counts = block_counts(mask, ss)
+        assert counts.dtype == np.uint8
+        assert np.array_equal(counts, mask.reshape(12, ss, 12, ss).sum(axis=(1, 3)))
+        # the coverage drawn from them is the float downsample of the mask, bit for bit
+        cover = counts.astype(np.float32) * np.float32(1.0 / (ss * ss))
+        assert np.array_equal(cover, downsample(mask.astype(np.float32), ss))
