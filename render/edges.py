@@ -113,16 +113,17 @@ def thin_mask(mask_hr: np.ndarray, ss: int, thin_px: float) -> np.ndarray:
 
 
 def block_counts(mask: np.ndarray, ss: int) -> np.ndarray:
-    """(n, n) uint8: how many samples of each ``ss`` x ``ss`` block of the bool ``mask``
-    (``(n * ss, n * ss)``, ``ss`` <= 15) are set.  Counted in bytes, row pairs first:
+    """(n, n) unsigned: how many samples of each ``ss`` x ``ss`` block of the bool ``mask``
+    (``(n * ss, n * ss)``) are set (uint8 up to ``ss`` 15, wider past it).  Counted in bytes, row pairs first:
     a refinement draws a hundred 512-sample masks per drawing, and a float mean over
     the blocks' strided axes cost twice as long (the counts are the same integers)."""
     n = mask.shape[0] // ss
     u = np.ascontiguousarray(mask, dtype=bool).view(np.uint8).reshape(n, ss, n * ss)
-    rows = u[:, 0].copy()
+    count = np.uint8 if ss * ss <= 255 else np.uint32
+    rows = u[:, 0].astype(count)
     for i in range(1, ss):
         rows += u[:, i]
-    return rows.reshape(n, n, ss).sum(axis=2, dtype=np.uint8)
+    return rows.reshape(n, n, ss).sum(axis=2, dtype=count)
 
 
 def branch_sketch(silhouette: np.ndarray, cfg: EdgeConfig | None = None) -> np.ndarray:

@@ -93,10 +93,12 @@ def test_block_counts_are_the_blocks_sums_and_keep_coverage_exact() -> None:
     from render.silhouette import downsample
 
     rng = np.random.default_rng(11)
-    for ss in (1, 2, 3, 4):
+    for ss in (1, 2, 3, 4, 16):  # 16: a block of 256 samples outgrows a byte
         mask = rng.random((12 * ss, 12 * ss)) < 0.4
+        if ss == 16:
+            mask[:16, :16] = True
         counts = block_counts(mask, ss)
-        assert counts.dtype == np.uint8
+        assert counts.dtype == (np.uint8 if ss < 16 else np.uint32)
         assert np.array_equal(counts, mask.reshape(12, ss, 12, ss).sum(axis=(1, 3)))
         # the coverage drawn from them is the float downsample of the mask, bit for bit
         cover = counts.astype(np.float32) * np.float32(1.0 / (ss * ss))

@@ -76,6 +76,7 @@ def test_a_large_mesh_drawn_on_two_threads_is_the_mask_one_thread_draws(
     # halves side by side; the halves' runs summed must be the one-thread mask exactly
     import render.raster as raster
 
+    monkeypatch.setattr(raster, "_cores", lambda: 2)  # split even where one core is lent
     tree = sketch_mesh(grow(species.sample("oak", seed=3)), 128, "oak")
     v, f = tree.branches.vertices, tree.branches.faces
     assert len(f) >= raster.SPLIT_FACES
