@@ -192,7 +192,11 @@ def framed(img: Any, size: int) -> np.ndarray:
     if a is None:
         a = np.round(prepare_sketch(img, max(8, min(np.shape(img)[:2]))) * 255).astype(np.uint8)
     big = normalise_drawing(a, 2 * size, over_crown=True)
-    return big.reshape(size, 2, size, 2).min(axis=(1, 3))
+    # the darker of each 2 x 2 block, as four strided minima: numpy's min over the
+    # reshaped block axes gives the same values at about thirty times the cost
+    return np.minimum(
+        np.minimum(big[0::2, 0::2], big[0::2, 1::2]), np.minimum(big[1::2, 0::2], big[1::2, 1::2])
+    )
 
 
 def draw_side(size: int) -> int:

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
+import numba
 import numpy as np
 from scipy import ndimage
 from skimage import filters, morphology
@@ -114,16 +115,24 @@ def thin_mask(mask_hr: np.ndarray, ss: int, thin_px: float) -> np.ndarray:
 
 def block_counts(mask: np.ndarray, ss: int) -> np.ndarray:
     """(n, n) unsigned: how many samples of each ``ss`` x ``ss`` block of the bool ``mask``
-    (``(n * ss, n * ss)``) are set (uint8 up to ``ss`` 15, wider past it).  Counted in bytes, row pairs first:
-    a refinement draws a hundred 512-sample masks per drawing, and a float mean over
-    the blocks' strided axes cost twice as long (the counts are the same integers)."""
+    (``(n * ss, n * ss)``) are set (uint8 up to ``ss`` 15, wider past it).  One compiled
+    pass: a refinement counts about two hundred 512-sample masks per drawing, and numpy's
+    sum over a block's short inner axis cost ten times as long (the counts are the same
+    integers)."""
     n = mask.shape[0] // ss
-    u = np.ascontiguousarray(mask, dtype=bool).view(np.uint8).reshape(n, ss, n * ss)
-    count = np.uint8 if ss * ss <= 255 else np.uint32
-    rows = u[:, 0].astype(count)
-    for i in range(1, ss):
-        rows += u[:, i]
-    return rows.reshape(n, n, ss).sum(axis=2, dtype=count)
+    out = np.zeros((n, n), dtype=np.uint8 if ss * ss <= 255 else np.uint32)
+    _count_blocks(np.asarray(mask, dtype=bool), int(ss), out)
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _count_blocks(mask: np.ndarray, ss: int, out: np.ndarray) -> None:
+    n = out.shape[0]
+    for i in range(n * ss):
+        row = out[i // ss]
+        for j in range(n * ss):
+            if mask[i, j]:
+                row[j // ss] += 1
 
 
 def branch_sketch(silhouette: np.ndarray, cfg: EdgeConfig | None = None) -> np.ndarray:
