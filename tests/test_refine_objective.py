@@ -110,3 +110,14 @@ def test_objective_deterministic_cached_and_zero_at_truth() -> None:
     x2[sp.labels.index("scaleV")] = 1.0 - x2[sp.labels.index("scaleV")]
     obj2 = SketchObjective(make_target(framed(img, 128), 128), sp)
     assert obj2(x2) == obj(x2) > 0.0  # deterministic across objectives
+
+
+def test_framed_pools_each_two_by_two_block_to_its_darkest_pixel() -> None:
+    from render.reader import normalise_drawing
+
+    img = _ring(30, width=1.0, n=160)  # a one-pixel pen line: pooling must keep it whole
+    big = normalise_drawing(img, 256, over_crown=True)
+    out = framed(img, 128)
+    assert out.dtype == np.uint8 and out.shape == (128, 128)
+    assert np.array_equal(out, big.reshape(128, 2, 128, 2).min(axis=(1, 3)))
+    assert (out < 128).sum() >= (big < 128).sum() / 4  # no line lost to the pooling
