@@ -407,22 +407,43 @@ class SearchSpace:
         trunk-split rotation with ``baseSplits`` 0, the last-angle memory of a level whose
         stems take another rule, a pine's whorl-placed branches); searching them costs
         the local search start evaluations and lets them drift without a signal.  Costs
-        ``2 n`` skeleton grows (no mesh, no render): well under a second.
+        up to ``2 n`` skeleton grows (no mesh, no render), each stopped at the first
+        level whose stems differ from the base tree's (``weberpenn.growing``): a value
+        that moves the trunk is known live once the trunk is grown.
         """
-        from weberpenn import grow
+        from weberpenn.grow import growing
 
-        def signature(params: TreeParams) -> tuple[np.ndarray, ...]:
-            sk = grow(params)
-            return (np.asarray(sk.points), np.asarray(sk.radii), np.asarray(sk.leaf_matrices))
+        def close(a: np.ndarray, b: np.ndarray) -> bool:
+            return a.shape == b.shape and np.allclose(a, b, rtol=0.0, atol=1e-9)
 
-        def same(a: tuple[np.ndarray, ...], b: tuple[np.ndarray, ...]) -> bool:
-            return all(
-                x.shape == y.shape and np.allclose(x, y, rtol=0.0, atol=1e-9)
-                for x, y in zip(a, b, strict=True)
+        def grown(params: TreeParams) -> tuple[list[tuple[np.ndarray, ...]], Any]:
+            levels = growing(params)
+            out: list[tuple[np.ndarray, ...]] = []
+            while True:
+                try:
+                    out.append(next(levels))
+                except StopIteration as done:
+                    return out, done.value
+
+        def moves(params: TreeParams) -> bool:
+            levels = growing(params)
+            k = 0
+            while True:
+                try:
+                    stems = next(levels)
+                except StopIteration as done:
+                    sk = done.value
+                    break
+                if k >= len(ref) or not all(map(close, stems, ref[k])):
+                    levels.close()
+                    return True
+                k += 1
+            return k != len(ref) or not close(
+                np.asarray(sk.leaf_matrices), np.asarray(ref_sk.leaf_matrices)
             )
 
         x0 = self.from_params(self.base)
-        ref = signature(self.to_params(x0))
+        ref, ref_sk = grown(self.to_params(x0))
         keep = []
         for i, u in enumerate(self.dims):
             for t in (x0[i] + probe, x0[i] - probe):
@@ -430,7 +451,7 @@ class SearchSpace:
                     continue
                 x = x0.copy()
                 x[i] = t
-                if not same(signature(self.to_params(x)), ref):
+                if moves(self.to_params(x)):
                     keep.append(u)
                     break
         return dataclasses.replace(self, dims=tuple(keep))

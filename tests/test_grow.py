@@ -299,3 +299,25 @@ def test_leaf_matrix_products_are_numpys_bit_for_bit() -> None:
                 want[i, k] = a[i, 0] * b[0, k] + a[i, 1] * b[1, k] + a[i, 2] * b[2, k]
         got = _mul(a, b)
         assert got.shape == want.shape and np.array_equal(got, want)
+
+
+def test_growing_yields_each_level_as_grow_returns_it() -> None:
+    from weberpenn import species
+    from weberpenn.grow import growing
+
+    for name in ("maple", "pine", "palm"):
+        params = species.sample(name, 41)
+        sk = grow(params)
+        levels = growing(params)
+        got = []
+        while True:
+            try:
+                got.append(next(levels))
+            except StopIteration as done:
+                again = done.value
+                break
+        assert len(got) == int(sk.levels.max()) + 1
+        assert np.array_equal(np.concatenate([p for p, _ in got]), sk.points)
+        assert np.array_equal(np.concatenate([r for _, r in got]), sk.radii)
+        for field in ("points", "radii", "offsets", "leaf_matrices", "leaf_positions"):
+            assert np.array_equal(getattr(again, field), getattr(sk, field)), field

@@ -40,7 +40,7 @@ segment at a time, with local frames as rotation matrices (Sapling's quaternions
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Generator, Mapping
 from typing import Any
 
 import numpy as np
@@ -53,7 +53,7 @@ from .limits import MAX_LEAVES, MAX_STEMS, check_grow, check_leaves, check_mesh,
 from .params import TreeParams, validate
 from .skeleton import Skeleton
 
-__all__ = ["Skeleton", "grow"]
+__all__ = ["Skeleton", "grow", "growing"]
 
 
 def _no_child_points() -> ChildPoints:
@@ -69,6 +69,22 @@ def grow(params: TreeParams | Mapping[str, Any], seed: int = 0) -> Skeleton:
     ``seed`` and ``params['seed']`` together seed the draws Sapling makes that have no
     realised TreeSketchNet key (which segments split, ``lengthV``, whorl jitter).
     """
+    levels = growing(params, seed)
+    while True:
+        try:
+            next(levels)
+        except StopIteration as done:
+            return done.value
+
+
+def growing(
+    params: TreeParams | Mapping[str, Any], seed: int = 0
+) -> Generator[tuple[np.ndarray, np.ndarray], None, Skeleton]:
+    """:func:`grow`, a level at a time: yields each level's stem points and radii (its
+    stems in Sapling order, as the skeleton will hold them) as soon as the level is
+    grown, and returns the skeleton.  A caller asking only whether two trees differ
+    stops at the first level that does, before the costlier levels and the leaves
+    (``refine.objective.SearchSpace.live``)."""
     p = validate(params)
     cfg = Cfg(p)
     pseed = int(p["seed"])
@@ -114,6 +130,7 @@ def grow(params: TreeParams | Mapping[str, Any], seed: int = 0) -> Skeleton:
         next_gid += len(order)
         # the branch mesh so far, exactly: refuse before growing (or meshing) any more
         check_mesh(*mesh_size(np.concatenate(counts), res_u, bevel_res, 0, leaf_shape), p)
+        yield all_pts[-1], all_rad[-1]
         last = n == cfg.levels - 1
         if last and cfg.leaves == 0:
             cp = _no_child_points()
