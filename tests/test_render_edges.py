@@ -103,3 +103,22 @@ def test_block_counts_are_the_blocks_sums_and_keep_coverage_exact() -> None:
         # the coverage drawn from them is the float downsample of the mask, bit for bit
         cover = counts.astype(np.float32) * np.float32(1.0 / (ss * ss))
         assert np.array_equal(cover, downsample(mask.astype(np.float32), ss))
+
+
+def test_binary_edges_are_the_ramped_sobel_of_a_mask() -> None:
+    from render.edges import EdgeConfig, binary_edges, branch_sketch, sobel
+
+    rng = np.random.default_rng(5)
+    for _ in range(60):  # odd shapes, sparse to full masks, the border included
+        h, w = (int(v) for v in rng.integers(3, 48, size=2))
+        m = rng.random((h, w)) < rng.random()
+        assert np.array_equal(binary_edges(m), sobel(m.astype(np.float32), 4.0) >= 0.9)
+    # a ramp above a quarter of the scale takes the float filters, and drops the faint edges
+    sil = np.where(rng.random((64, 64)) < 0.2, 0.0, 1.0).astype(np.float32)
+    cfg = EdgeConfig(branch_erosion_px=0.0, branch_denoise_px=0.0)
+    strict = EdgeConfig(branch_erosion_px=0.0, branch_denoise_px=0.0, branch_ramp=1.5)
+    mask = sil <= cfg.branch_threshold
+    assert np.array_equal(branch_sketch(sil, cfg) == 0.0, binary_edges(mask))
+    want = sobel(mask.astype(np.float32), strict.sobel_scale) >= 1.5
+    assert np.array_equal(branch_sketch(sil, strict) == 0.0, want)
+    assert want.sum() < binary_edges(mask).sum()
