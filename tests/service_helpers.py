@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import io
 import time
-from collections.abc import Callable, Iterator
-from typing import Any
+from collections.abc import Callable, Coroutine, Iterator
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -14,6 +16,8 @@ from treesketch import Estimate
 from treesketch.service.inprocess import serve
 from treesketch.service.store import FINISHED
 from weberpenn import species
+
+T = TypeVar("T")
 
 
 class PalmEstimator:
@@ -144,3 +148,12 @@ def check_broken_estimator_is_reported(app: Any, sketch: bytes) -> None:
         assert pool.replaced == LOAD_ATTEMPTS - 1
         r = c.post("/jobs", files={"sketch": ("s.png", sketch, "image/png")})
         assert r.status_code == 503 and "no worker can start" in r.json()["detail"]
+
+
+def run_coroutine(coro: Coroutine[Any, Any, T]) -> T:
+    """``asyncio.run(coro)`` on a thread of its own.  A page module's browser
+    (Playwright's sync API), alive for the rest of its worker's session, keeps an event
+    loop running on the main thread, where ``asyncio.run`` refuses to start: a service
+    test that a worker runs after a page module would fail for the order alone."""
+    with ThreadPoolExecutor(1) as pool:
+        return pool.submit(asyncio.run, coro).result()

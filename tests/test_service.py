@@ -13,7 +13,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
-from service_helpers import check_broken_estimator_is_reported, finished, png, wait_for
+from service_helpers import (
+    check_broken_estimator_is_reported,
+    finished,
+    png,
+    run_coroutine,
+    wait_for,
+)
 
 from treesketch.service import ARTEFACTS, JobStore, Limits, ServiceConfig, create_app
 from treesketch.service.limits import LimitError, read_form
@@ -234,15 +240,13 @@ def test_read_form_stops_a_huge_upload_early() -> None:
             read[0] += len(chunk)
             yield chunk
 
-    import asyncio
-
     with pytest.raises(LimitError) as exc:
-        asyncio.run(read_form("multipart/form-data; boundary=B", None, body(), Limits()))
+        run_coroutine(read_form("multipart/form-data; boundary=B", None, body(), Limits()))
     assert exc.value.status == 413
     assert read[0] < 11 * 1024 * 1024
     read[0] = 0
     with pytest.raises(LimitError) as exc:  # declared up front: refused before any byte
-        asyncio.run(read_form("multipart/form-data; boundary=B", "1610612736", body(), Limits()))
+        run_coroutine(read_form("multipart/form-data; boundary=B", "1610612736", body(), Limits()))
     assert exc.value.status == 413 and read[0] == 0
 
 

@@ -17,6 +17,7 @@ import httpx
 import pytest
 from fastapi import HTTPException
 from fastapi.testclient import TestClient
+from service_helpers import run_coroutine
 
 from treesketch.service import ServiceConfig, create_app, interactive
 from treesketch.service.inprocess import serve
@@ -165,7 +166,7 @@ def test_a_gate_holds_a_bounded_line() -> None:
             pass
         return refused
 
-    status, retry = asyncio.run(scenario())
+    status, retry = run_coroutine(scenario())
     assert status == 503 and retry is not None and int(retry) > 0
 
 
