@@ -44,7 +44,11 @@ for line in sys.stdin:
 
 
 def start(tree: Path, people: int, first: int) -> subprocess.Popen:
-    env = dict(os.environ, PYTHONPATH=str(tree))
+    from eval.people import ENV_ROOT, people_root
+
+    # both codes read the drawings this checkout reads (a worktree elsewhere has no
+    # ../shared beside it)
+    env = dict(os.environ, PYTHONPATH=str(tree), **{ENV_ROOT: str(people_root())})
     cmd = [sys.executable, "-c", WORKER, str(people), str(first)]
     proc = subprocess.Popen(
         cmd, cwd=tree, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
