@@ -411,19 +411,10 @@ class SearchSpace:
         level whose stems differ from the base tree's (``weberpenn.growing``): a value
         that moves the trunk is known live once the trunk is grown.
         """
-        from weberpenn.grow import growing
+        from weberpenn.grow import grow_levels, growing
 
         def close(a: np.ndarray, b: np.ndarray) -> bool:
             return a.shape == b.shape and np.allclose(a, b, rtol=0.0, atol=1e-9)
-
-        def grown(params: TreeParams) -> tuple[list[tuple[np.ndarray, ...]], Any]:
-            levels = growing(params)
-            out: list[tuple[np.ndarray, ...]] = []
-            while True:
-                try:
-                    out.append(next(levels))
-                except StopIteration as done:
-                    return out, done.value
 
         def moves(params: TreeParams) -> bool:
             levels = growing(params)
@@ -443,7 +434,7 @@ class SearchSpace:
             )
 
         x0 = self.from_params(self.base)
-        ref, ref_sk = grown(self.to_params(x0))
+        ref, ref_sk = grow_levels(self.to_params(x0))
         keep = []
         for i, u in enumerate(self.dims):
             for t in (x0[i] + probe, x0[i] - probe):

@@ -303,19 +303,12 @@ def test_leaf_matrix_products_are_numpys_bit_for_bit() -> None:
 
 def test_growing_yields_each_level_as_grow_returns_it() -> None:
     from weberpenn import species
-    from weberpenn.grow import growing
+    from weberpenn.grow import grow_levels
 
     for name in ("maple", "pine", "palm"):
         params = species.sample(name, 41)
         sk = grow(params)
-        levels = growing(params)
-        got = []
-        while True:
-            try:
-                got.append(next(levels))
-            except StopIteration as done:
-                again = done.value
-                break
+        got, again = grow_levels(params)
         assert len(got) == int(sk.levels.max()) + 1
         assert np.array_equal(np.concatenate([p for p, _ in got]), sk.points)
         assert np.array_equal(np.concatenate([r for _, r in got]), sk.radii)

@@ -53,7 +53,7 @@ from .limits import MAX_LEAVES, MAX_STEMS, check_grow, check_leaves, check_mesh,
 from .params import TreeParams, validate
 from .skeleton import Skeleton
 
-__all__ = ["Skeleton", "grow", "growing"]
+__all__ = ["Skeleton", "grow", "grow_levels", "growing"]
 
 
 def _no_child_points() -> ChildPoints:
@@ -69,12 +69,21 @@ def grow(params: TreeParams | Mapping[str, Any], seed: int = 0) -> Skeleton:
     ``seed`` and ``params['seed']`` together seed the draws Sapling makes that have no
     realised TreeSketchNet key (which segments split, ``lengthV``, whorl jitter).
     """
+    return grow_levels(params, seed)[1]
+
+
+def grow_levels(
+    params: TreeParams | Mapping[str, Any], seed: int = 0
+) -> tuple[list[tuple[np.ndarray, np.ndarray]], Skeleton]:
+    """:func:`growing` run to its end: each level's stem points and radii, and the
+    skeleton."""
     levels = growing(params, seed)
+    out: list[tuple[np.ndarray, np.ndarray]] = []
     while True:
         try:
-            next(levels)
+            out.append(next(levels))
         except StopIteration as done:
-            return done.value
+            return out, done.value
 
 
 def growing(
