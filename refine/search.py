@@ -13,8 +13,9 @@ loss after is never above the loss before.  When the search started from the dra
 shape and still misses the drawn outline, those values are then searched for the drawn
 outlines alone, every view's (``refine.start.polish``, up to ``POLISH_EVALS`` more trees;
 for a drawing of outlines first the tree's own random draws and a turn of the view,
-``refine.start.reseed``, up to ``RESEED_TREES``), and that tree kept when its outlines are
-nearer the drawn ones, as tall as the searched tree (``refine.start.same_size``: a drawing
+``refine.start.reseed``, up to ``RESEED_TREES``; both together at most
+``RefineSettings.outline_trees``, fewer under the default budget), and that tree kept when
+its outlines are nearer the drawn ones, as tall as the searched tree (``refine.start.same_size``: a drawing
 shows no size): there the drawn outline wins over the distance's other terms, and
 ``loss_after`` is that tree's.
 
@@ -45,6 +46,9 @@ from .start import (
     FIT_BELOW,
     LINES_INSIDE,
     POLISH_BELOW,
+    POLISH_EVALS,
+    RESEED_SEEDS,
+    RESEED_TREES,
     cheap_sketches,
     choose_start,
     fit_start,
@@ -61,6 +65,7 @@ __all__ = [
     "DEFAULT_HOLD",
     "MAX_BUDGET",
     "MAX_TIME_LIMIT",
+    "OUTLINE_TREES",
     "START_YAWS",
     "Cancelled",
     "RefineResult",
@@ -109,6 +114,9 @@ MAX_BUDGET = 10_000
 # settings, the CLI, the service, the page and the Blender add-on all take it from here.
 # 40 is the budget the refinement's quality is measured at (bench_drawings --part refine)
 DEFAULT_BUDGET = 40
+# the outline step's trees at the default budget or more (``RefineSettings.outline_trees``)
+OUTLINE_TREES = RESEED_TREES + POLISH_EVALS
+MAX_OUTLINE_TREES = 1_000
 MAX_TIME_LIMIT = 3600.0
 EMBEDDINGS = ("shipped", "none")  # RefineSettings.embedding's names (else a checkpoint path)
 
@@ -236,6 +244,10 @@ class RefineSettings:
     estimator's species and the rest shared by the others); the estimator's scores and the
     refined trees' distances decide together (``treesketch.species_choice``).
     ``species_tries`` 1 refines the estimator's species only.
+    ``outline_trees`` caps the trees the outline step after the search grows, on top of
+    the budget (``refine.start.reseed`` and ``polish``; 0 leaves the step out); None gives
+    :data:`OUTLINE_TREES` at the default budget or more and a share in proportion to the
+    budget under it, so a small budget asks for a quick refinement as a whole.
     The refined tree keeps the size values the search does not move (the species'
     ``scale``, the estimator's ``scaleV``) and the proportions it fitted; a height given to
     ``Pipeline.run`` rescales it.
@@ -258,6 +270,7 @@ class RefineSettings:
     metric: str = "shape"
     fast_sketch: bool = True
     embedding: str = "shipped"
+    outline_trees: int | None = None
 
     def replace(self, **changes: Any) -> RefineSettings:
         return dataclasses.replace(self, **changes).validate()
@@ -282,6 +295,8 @@ class RefineSettings:
         if unknown:
             raise ValueError(f"hold: not parameter names: {', '.join(map(str, unknown))}")
         _int_in("species_tries", self.species_tries, 1, 5)
+        if self.outline_trees is not None:
+            _int_in("outline_trees", self.outline_trees, 0, MAX_OUTLINE_TREES)
         r = self.species_ratio
         if not (_finite(r) and 0 <= r <= 1):
             raise ValueError(f"species_ratio must be in [0, 1], got {_shown(r)}")
@@ -298,6 +313,12 @@ class RefineSettings:
                 f"file, got {e!r}"
             )
         return self
+
+    def outline_allowance(self) -> int:
+        """The most trees the outline step may grow (see ``outline_trees``)."""
+        if self.outline_trees is not None:
+            return int(self.outline_trees)
+        return round(OUTLINE_TREES * min(1.0, self.budget / DEFAULT_BUDGET))
 
     def load_embedder(self) -> Any:
         """The ``refine.embed.ShapeEmbedder`` these settings ask for, or None (the ink
@@ -407,11 +428,12 @@ def refine(
     # held-out-style bonsai mesh error).  Its trees come on top of the budget (a share of
     # it cost the search what the outline gained: RESULTS.md, "The tree follows the
     # drawing")
-    if keep:
-        result = _outline_searched(result, drawing, views, run, t0)
-    else:
+    trees = cfg.outline_allowance()
+    if trees and keep:
+        result = _outline_searched(result, drawing, views, run, t0, trees)
+    elif trees:
         below = FIT_BELOW if bending else POLISH_BELOW
-        result = _outline_searched(result, drawing, views, run, t0, below=below)
+        result = _outline_searched(result, drawing, views, run, t0, trees, below=below)
     return result
 
 
@@ -421,6 +443,7 @@ def _outline_searched(
     views: Sequence[OtherView],
     run: _Run,
     t0: float,
+    trees: int,
     below: float | None = None,
 ) -> RefineResult:
     """``result`` with its drawn values searched for the drawn outlines, every view's
@@ -429,11 +452,15 @@ def _outline_searched(
     kept when its outlines are nearer the drawn ones (its
     ``loss_after`` then the search's distance of that tree, the mean over the views, which
     may be above the search's best).  ``below``: only when the tree's outlines overlap the
-    drawn ones less than this (one tree to see)."""
+    drawn ones less than this (one tree to see).  ``trees``: the most trees grown here
+    (``RefineSettings.outline_allowance``); under the full step's the reseed tries fewer
+    other draws and the polish stops where they run out."""
     used = 0
 
     def going() -> bool:
         nonlocal used
+        if used >= trees:
+            return False
         if run.cancel is not None and run.cancel():
             return False
         if run.deadline is not None and time.perf_counter() >= run.deadline:
@@ -449,7 +476,8 @@ def _outline_searched(
     if inside < LINES_INSIDE:
         # a drawing of outlines: the outline is all it shows, so the tree's own draws are
         # chosen for it too (``refine.start.reseed``)
-        seeded = reseed(result.params, wants, result.species, drawing.size, going, below)
+        seeds = round(RESEED_SEEDS * min(1.0, trees / OUTLINE_TREES))
+        seeded = reseed(result.params, wants, result.species, drawing.size, going, below, seeds)
     if seeded is not None:
         result = dataclasses.replace(result, params=seeded[0], yaw=(result.yaw + seeded[1]) % 360.0)
         wants = [(w, yaw + seeded[1]) for w, yaw in wants]

@@ -452,8 +452,9 @@ def reseed(
     size: int,
     going: Callable[[], bool] | None = None,
     below: float | None = None,
+    seeds: int = RESEED_SEEDS,
 ) -> tuple[TreeParams, float, list[np.ndarray]] | None:
-    """The tree among ``p`` and ``RESEED_SEEDS`` others differing only in their seed, and
+    """The tree among ``p`` and ``seeds`` others differing only in their seed, and
     the turn of ``RESEED_TURNS``, whose outlines overlap the drawn ones (``wants``, as
     :func:`polish` takes them) most: (tree, turn in degrees, its cheap sketches), or None
     when none is nearer than ``p`` at its own view, or ``p``'s overlap is already
@@ -471,7 +472,7 @@ def reseed(
         return None
     best: tuple[float, TreeParams, float, list[np.ndarray]] | None = None
     seed = int(p["seed"])
-    for k in range(RESEED_SEEDS + 1):
+    for k in range(max(0, int(seeds)) + 1):
         q = p if k == 0 else p.replace(seed=(seed + k * RESEED_STEP) % 2**31)
         turns: list[float] = []
         for turn in RESEED_TURNS:

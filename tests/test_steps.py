@@ -96,6 +96,12 @@ def test_share_gives_the_first_species_the_whole_budget_and_most_of_the_time() -
     assert (other.budget, other.time_limit) == (20, pytest.approx(2.0))
     assert planned_evaluations(cfg, 3) == 80
     assert planned_evaluations(cfg.replace(refine=False), 3) == 0
+    # every species' outline step grows what the whole run's budget allows, not what
+    # its own half of the budget would: the default run's second species is unchanged
+    assert first.outline_allowance() == other.outline_allowance() == cfg.outline_allowance()
+    small = RefineSettings(budget=6)
+    assert share(small, 1, 2).budget == 8
+    assert share(small, 1, 2).outline_allowance() == small.outline_allowance() == 7
 
 
 def test_refine_species_without_names_keeps_the_first_estimate() -> None:
