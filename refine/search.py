@@ -14,10 +14,10 @@ shape and still misses the drawn outline, those values are then searched for the
 outlines alone, every view's (``refine.start.polish``, up to ``POLISH_EVALS`` more trees;
 for a drawing of outlines first the tree's own random draws and a turn of the view,
 ``refine.start.reseed``, up to ``RESEED_TREES``; both together at most
-``RefineSettings.outline_trees``, fewer under the default budget), and that tree kept when
-its outlines are nearer the drawn ones, as tall as the searched tree (``refine.start.same_size``: a drawing
-shows no size): there the drawn outline wins over the distance's other terms, and
-``loss_after`` is that tree's.
+``RefineSettings.outline_trees``, fewer under half the default budget), and that tree kept
+when its outlines are nearer the drawn ones, as tall as the searched tree
+(``refine.start.same_size``: a drawing shows no size): there the drawn outline wins over
+the distance's other terms, and ``loss_after`` is that tree's.
 
 Studies measured to give nothing and removed (their numbers stay in
 ``docs/history/results-2026-12-05.md``, "Options measured and removed"; the code last lived at commit
@@ -65,6 +65,7 @@ __all__ = [
     "DEFAULT_HOLD",
     "MAX_BUDGET",
     "MAX_TIME_LIMIT",
+    "OUTLINE_FULL_BUDGET",
     "OUTLINE_TREES",
     "START_YAWS",
     "Cancelled",
@@ -114,8 +115,11 @@ MAX_BUDGET = 10_000
 # settings, the CLI, the service, the page and the Blender add-on all take it from here.
 # 40 is the budget the refinement's quality is measured at (bench_drawings --part refine)
 DEFAULT_BUDGET = 40
-# the outline step's trees at the default budget or more (``RefineSettings.outline_trees``)
+# the outline step's trees (``RefineSettings.outline_trees``) at a budget of
+# OUTLINE_FULL_BUDGET or more: half the default, what a second species gets in a default
+# run and about what the report's rotation sweep gives each angle; a share under it
 OUTLINE_TREES = RESEED_TREES + POLISH_EVALS
+OUTLINE_FULL_BUDGET = DEFAULT_BUDGET // 2
 MAX_OUTLINE_TREES = 1_000
 MAX_TIME_LIMIT = 3600.0
 EMBEDDINGS = ("shipped", "none")  # RefineSettings.embedding's names (else a checkpoint path)
@@ -246,8 +250,9 @@ class RefineSettings:
     ``species_tries`` 1 refines the estimator's species only.
     ``outline_trees`` caps the trees the outline step after the search grows, on top of
     the budget (``refine.start.reseed`` and ``polish``; 0 leaves the step out); None gives
-    :data:`OUTLINE_TREES` at the default budget or more and a share in proportion to the
-    budget under it, so a small budget asks for a quick refinement as a whole.
+    :data:`OUTLINE_TREES` at a budget of :data:`OUTLINE_FULL_BUDGET` (half the default)
+    or more and a share in proportion to the budget under it, so a small budget asks for
+    a quick refinement as a whole.
     The refined tree keeps the size values the search does not move (the species'
     ``scale``, the estimator's ``scaleV``) and the proportions it fitted; a height given to
     ``Pipeline.run`` rescales it.
@@ -318,7 +323,7 @@ class RefineSettings:
         """The most trees the outline step may grow (see ``outline_trees``)."""
         if self.outline_trees is not None:
             return int(self.outline_trees)
-        return round(OUTLINE_TREES * min(1.0, self.budget / DEFAULT_BUDGET))
+        return round(OUTLINE_TREES * min(1.0, self.budget / OUTLINE_FULL_BUDGET))
 
     def load_embedder(self) -> Any:
         """The ``refine.embed.ShapeEmbedder`` these settings ask for, or None (the ink

@@ -8,7 +8,14 @@ import numpy as np
 import pytest
 
 from refine.objective import SearchSpace
-from refine.search import OUTLINE_TREES, RefineSettings, guess_species, refine
+from refine.search import (
+    DEFAULT_BUDGET,
+    OUTLINE_FULL_BUDGET,
+    OUTLINE_TREES,
+    RefineSettings,
+    guess_species,
+    refine,
+)
 from refine.start import POLISH_EVALS, RESEED_TREES
 from weberpenn import TreeParams, build_mesh, grow, species
 
@@ -196,19 +203,21 @@ def test_settings_bound_every_integer(field: str, value: int) -> None:
 
 def test_the_outline_step_grows_in_proportion_to_a_budget_under_the_default() -> None:
     # a budget is the whole refinement's size: the outline step's trees come on top of
-    # the search's, all of them at the default budget or more, a share under it
+    # the search's, all of them from half the default budget up, a share under it
     full = OUTLINE_TREES
     assert full == POLISH_EVALS + RESEED_TREES
+    assert OUTLINE_FULL_BUDGET == DEFAULT_BUDGET // 2
     assert RefineSettings().outline_allowance() == full
     assert RefineSettings(budget=400).outline_allowance() == full
-    assert RefineSettings(budget=20).outline_allowance() == full // 2
-    assert RefineSettings(budget=6).outline_allowance() == 7
-    assert RefineSettings(budget=1).outline_allowance() == 1
+    assert RefineSettings(budget=OUTLINE_FULL_BUDGET).outline_allowance() == full
+    assert RefineSettings(budget=10).outline_allowance() == full // 2
+    assert RefineSettings(budget=6).outline_allowance() == 13
+    assert RefineSettings(budget=1).outline_allowance() == 2
     assert RefineSettings(budget=1, outline_trees=90).outline_allowance() == 90
     assert RefineSettings(outline_trees=0).outline_allowance() == 0
 
 
-@pytest.mark.parametrize(("settings", "most"), [({"budget": 6}, 7), ({"outline_trees": 0}, 0)])
+@pytest.mark.parametrize(("settings", "most"), [({"budget": 3}, 7), ({"outline_trees": 0}, 0)])
 def test_the_outline_step_keeps_to_its_trees(settings: dict, most: int) -> None:
     # a people's-style outline (a round crown on a trunk) starts the step on any species
     img = np.full((256, 256), 255, np.uint8)
@@ -217,11 +226,11 @@ def test_the_outline_step_keeps_to_its_trees(settings: dict, most: int) -> None:
     trunk = (np.abs(np.abs(xx - 128) - 12) < 2) & (yy > 160) & (yy < 235)
     img[ring | trunk | ((yy == 234) & (np.abs(xx - 128) < 14))] = 0
     gt = species.sample("oak", 4)
-    full = refine(img, gt, RefineSettings(budget=6, outline_trees=OUTLINE_TREES), species="oak")
+    full = refine(img, gt, RefineSettings(budget=3, outline_trees=OUTLINE_TREES), species="oak")
     r = refine(img, gt, RefineSettings(**settings), species="oak")
     assert full.outline_evaluations > most  # the step would grow more
     assert r.outline_evaluations <= most
-    assert r.evaluations <= 6 or "budget" not in settings
+    assert r.evaluations <= 3 or "budget" not in settings
 
 
 def _bent_palm(bend: float):

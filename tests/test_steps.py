@@ -101,7 +101,7 @@ def test_share_gives_the_first_species_the_whole_budget_and_most_of_the_time() -
     assert first.outline_allowance() == other.outline_allowance() == cfg.outline_allowance()
     small = RefineSettings(budget=6)
     assert share(small, 1, 2).budget == 8
-    assert share(small, 1, 2).outline_allowance() == small.outline_allowance() == 7
+    assert share(small, 1, 2).outline_allowance() == small.outline_allowance() == 13
 
 
 def test_refine_species_without_names_keeps_the_first_estimate() -> None:

@@ -87,7 +87,7 @@ def predict_command(
         None,
         "--budget",
         help=f"Refinement: most trees to evaluate for the first species (default "
-        f"{DEFAULT_BUDGET}; another candidate species gets half as many; under the "
+        f"{DEFAULT_BUDGET}; another candidate species gets half as many; under half the "
         f"default, the outline step after the search grows fewer trees too).",
     ),
     time_limit: float = typer.Option(
