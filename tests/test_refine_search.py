@@ -201,7 +201,7 @@ def test_settings_bound_every_integer(field: str, value: int) -> None:
     assert RefineSettings(budget=10_000).validate().budget == 10_000
 
 
-def test_the_outline_step_grows_in_proportion_to_a_budget_under_the_default() -> None:
+def test_the_outline_step_grows_in_proportion_to_a_budget_under_half_the_default() -> None:
     # a budget is the whole refinement's size: the outline step's trees come on top of
     # the search's, all of them from half the default budget up, a share under it
     full = OUTLINE_TREES
