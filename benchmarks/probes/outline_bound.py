@@ -8,9 +8,12 @@ union (at an overlap near ``lam`` that is the row's share of the best overlap). 
 whose crown stands round its trunk has such an outline, so its median bounds what the
 generator can reach.  ``--best-axis`` also lets each drawing's axis move (every 4 px within
 a quarter of the frame).  Also printed: where the returned trees miss, the tree's width
-minus the drawn width over the drawing's height in ten bins from the top (medians).
+minus the drawn width over the drawing's height in ten bins from the top (medians); the
+tree's envelope outside the drawn one and the drawn one outside the tree's, each as a
+share of the union (means), on the left and right of the frame's centre line; and the
+median overlap were each tree's envelope shifted sideways by the best of -16..16 px.
 
-    .venv/bin/python benchmarks/probes/outline_bound.py RUN.json [--set people]
+    .venv/bin/python benchmarks/probes/outline_bound.py RUN.json [RUN2.json ...] [--set people]
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from eval.envelope import SIDE, envelope
+from refine.envelope import mask_iou
 
 BINS = 10
 
@@ -63,17 +67,23 @@ def width_misses(drawn: np.ndarray, tree: np.ndarray) -> np.ndarray:
     )
 
 
+def best_shift(drawn: np.ndarray, tree: np.ndarray, reach: int = 16) -> float:
+    """The overlap of ``drawn`` with ``tree`` shifted sideways by the best whole pixel."""
+    return max(mask_iou(drawn, np.roll(tree, dx, axis=1)) for dx in range(-reach, reach + 1))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("run", type=Path, help="bench_drawings.py --part follow --json")
+    ap.add_argument(
+        "run", type=Path, nargs="+", help="bench_drawings.py --part follow --json (one or more)"
+    )
     ap.add_argument("--set", default="people", help="people, paper or pairs")
     ap.add_argument("--lam", type=float, default=0.8)
     ap.add_argument("--best-axis", action="store_true")
     args = ap.parse_args()
-    doc = json.loads(args.run.read_text())
-    sketches = np.load(args.run.with_suffix(".npz"))
-    bound, free, got, misses = [], [], [], []
-    for r in doc["records"]:
+    runs = [(json.loads(p.read_text()), np.load(p.with_suffix(".npz"))) for p in args.run]
+    bound, free, got, misses, shifted, shares = [], [], [], [], [], []
+    for r, sketches in ((r, z) for doc, z in runs for r in doc["records"]):
         if not r["name"].startswith(args.set + "/"):
             continue
         drawn = envelope(sketches[r["name"] + "/input_sketch"])
@@ -84,6 +94,16 @@ def main() -> None:
             free.append(max(symmetric_bound(drawn, a, args.lam) for a in axes))
         got.append(r["overlap_after"])
         misses.append(width_misses(drawn, tree))
+        shifted.append(best_shift(drawn, tree))
+        union = float((drawn | tree).sum())
+        half = SIDE // 2
+        shares.append(
+            [
+                float(m[:, side].sum()) / union
+                for m in (tree & ~drawn, drawn & ~tree)
+                for side in (slice(None, half), slice(half, None))
+            ]
+        )
     print(f"{args.set}: {len(got)} drawings")
     print(f"returned trees' overlap, median {np.median(got):.3f}")
     print(f"best outline symmetric about the trunk's axis, median {np.median(bound):.3f}")
@@ -94,6 +114,13 @@ def main() -> None:
     print(
         "tree minus drawn width over the height, top to bottom:", " ".join(f"{v:+.2f}" for v in m)
     )
+    sh = np.mean(np.array(shares), axis=0)
+    print(
+        f"tree outside the drawing {sh[0] + sh[1]:.3f} of the union (left {sh[0]:.3f}, right "
+        f"{sh[1]:.3f}); drawing outside the tree {sh[2] + sh[3]:.3f} (left {sh[2]:.3f}, right "
+        f"{sh[3]:.3f}) (means)"
+    )
+    print(f"each tree shifted sideways by its best whole pixel, median {np.median(shifted):.3f}")
 
 
 if __name__ == "__main__":
