@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -215,6 +216,11 @@ def test_the_outline_step_grows_in_proportion_to_a_budget_under_half_the_default
     assert RefineSettings(budget=1).outline_allowance() == 2
     assert RefineSettings(budget=1, outline_trees=90).outline_allowance() == 90
     assert RefineSettings(outline_trees=0).outline_allowance() == 0
+    # the page's and the Blender add-on's budget help say where the share begins
+    root = Path(__file__).resolve().parents[1]
+    for told in ("treesketch/service/static/index.html", "blender/treesketch_addon/__init__.py"):
+        text = (root / told).read_text()
+        assert f"under {OUTLINE_FULL_BUDGET} the outline step" in text, told
 
 
 @pytest.mark.parametrize(("settings", "most"), [({"budget": 3}, 7), ({"outline_trees": 0}, 0)])

@@ -138,7 +138,8 @@ class TREESKETCH_Settings(bpy.types.PropertyGroup):
     budget: IntProperty(
         name="Budget",
         description="Trees the refinement may try (0: TreeSketch's own default, the same "
-        "as the page's and the CLI's)",
+        "as the page's and the CLI's; under 20 the outline step after it tries fewer too: "
+        "a quick preview)",
         default=0,
         min=0,
     )
