@@ -120,7 +120,6 @@ DEFAULT_BUDGET = 40
 # run and about what the report's rotation sweep gives each angle; a share under it
 OUTLINE_TREES = RESEED_TREES + POLISH_EVALS
 OUTLINE_FULL_BUDGET = DEFAULT_BUDGET // 2
-MAX_OUTLINE_TREES = 1_000
 MAX_TIME_LIMIT = 3600.0
 EMBEDDINGS = ("shipped", "none")  # RefineSettings.embedding's names (else a checkpoint path)
 
@@ -249,7 +248,8 @@ class RefineSettings:
     refined trees' distances decide together (``treesketch.species_choice``).
     ``species_tries`` 1 refines the estimator's species only.
     ``outline_trees`` caps the trees the outline step after the search grows, on top of
-    the budget (``refine.start.reseed`` and ``polish``; 0 leaves the step out); None gives
+    the budget (``refine.start.reseed`` and ``polish``; 0 leaves the step out, at most
+    :data:`OUTLINE_TREES`, the whole step); None gives
     :data:`OUTLINE_TREES` at a budget of :data:`OUTLINE_FULL_BUDGET` (half the default)
     or more and a share in proportion to the budget under it, so a small budget asks for
     a quick refinement as a whole.
@@ -301,7 +301,7 @@ class RefineSettings:
             raise ValueError(f"hold: not parameter names: {', '.join(map(str, unknown))}")
         _int_in("species_tries", self.species_tries, 1, 5)
         if self.outline_trees is not None:
-            _int_in("outline_trees", self.outline_trees, 0, MAX_OUTLINE_TREES)
+            _int_in("outline_trees", self.outline_trees, 0, OUTLINE_TREES)
         r = self.species_ratio
         if not (_finite(r) and 0 <= r <= 1):
             raise ValueError(f"species_ratio must be in [0, 1], got {_shown(r)}")

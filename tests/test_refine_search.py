@@ -189,6 +189,7 @@ HUGE = 10**400  # 401 digits: math.isfinite and float() overflow on it
         ("species_tries", True),
         ("species_tries", -HUGE),
         ("outline_trees", HUGE),
+        ("outline_trees", 45),
         ("outline_trees", -1),
         ("outline_trees", 2.5),
     ],
@@ -214,7 +215,7 @@ def test_the_outline_step_grows_in_proportion_to_a_budget_under_half_the_default
     assert RefineSettings(budget=10).outline_allowance() == full // 2
     assert RefineSettings(budget=6).outline_allowance() == 13
     assert RefineSettings(budget=1).outline_allowance() == 2
-    assert RefineSettings(budget=1, outline_trees=90).outline_allowance() == 90
+    assert RefineSettings(budget=1, outline_trees=full).outline_allowance() == full
     assert RefineSettings(outline_trees=0).outline_allowance() == 0
     # the page's and the Blender add-on's budget help say where the share begins
     root = Path(__file__).resolve().parents[1]
