@@ -13,8 +13,8 @@ loss after is never above the loss before.  When the search started from the dra
 shape and still misses the drawn outline, those values are then searched for the drawn
 outlines alone, every view's (``refine.start.polish``, up to ``POLISH_EVALS`` more trees;
 for a drawing of outlines first the tree's own random draws and a turn of the view,
-``refine.start.reseed``, up to ``RESEED_TREES``; both together at most
-``RefineSettings.outline_trees``, fewer under half the default budget), and that tree kept
+``refine.start.reseed``, up to ``RESEED_TREES``; both together fewer under half the
+default budget: :func:`outline_allowance`), and that tree kept
 when its outlines are nearer the drawn ones, as tall as the searched tree
 (``refine.start.same_size``: a drawing shows no size): there the drawn outline wins over
 the distance's other terms, and ``loss_after`` is that tree's.
@@ -73,6 +73,7 @@ __all__ = [
     "RefineSettings",
     "bend_starts",
     "guess_species",
+    "outline_allowance",
     "refine",
 ]
 
@@ -115,9 +116,9 @@ MAX_BUDGET = 10_000
 # settings, the CLI, the service, the page and the Blender add-on all take it from here.
 # 40 is the budget the refinement's quality is measured at (bench_drawings --part refine)
 DEFAULT_BUDGET = 40
-# the outline step's trees (``RefineSettings.outline_trees``) at a budget of
-# OUTLINE_FULL_BUDGET or more: half the default, what a second species gets in a default
-# run and about what the report's rotation sweep gives each angle; a share under it
+# the outline step's trees (:func:`outline_allowance`) at a budget of OUTLINE_FULL_BUDGET
+# or more: half the default, what a second species gets in a default run and about what
+# the report's rotation sweep gives each angle; a share under it
 OUTLINE_TREES = RESEED_TREES + POLISH_EVALS
 OUTLINE_FULL_BUDGET = DEFAULT_BUDGET // 2
 MAX_TIME_LIMIT = 3600.0
@@ -247,12 +248,9 @@ class RefineSettings:
     estimator's species and the rest shared by the others); the estimator's scores and the
     refined trees' distances decide together (``treesketch.species_choice``).
     ``species_tries`` 1 refines the estimator's species only.
-    ``outline_trees`` caps the trees the outline step after the search grows, on top of
-    the budget (``refine.start.reseed`` and ``polish``; 0 leaves the step out, at most
-    :data:`OUTLINE_TREES`, the whole step); None gives
-    :data:`OUTLINE_TREES` at a budget of :data:`OUTLINE_FULL_BUDGET` (half the default)
-    or more and a share in proportion to the budget under it, so a small budget asks for
-    a quick refinement as a whole.
+    The outline step after the search grows its trees on top of the budget, all of
+    them from half the default budget up and a share under it (:func:`outline_allowance`),
+    so a small budget asks for a quick refinement as a whole.
     The refined tree keeps the size values the search does not move (the species'
     ``scale``, the estimator's ``scaleV``) and the proportions it fitted; a height given to
     ``Pipeline.run`` rescales it.
@@ -275,7 +273,6 @@ class RefineSettings:
     metric: str = "shape"
     fast_sketch: bool = True
     embedding: str = "shipped"
-    outline_trees: int | None = None
 
     def replace(self, **changes: Any) -> RefineSettings:
         return dataclasses.replace(self, **changes).validate()
@@ -300,8 +297,6 @@ class RefineSettings:
         if unknown:
             raise ValueError(f"hold: not parameter names: {', '.join(map(str, unknown))}")
         _int_in("species_tries", self.species_tries, 1, 5)
-        if self.outline_trees is not None:
-            _int_in("outline_trees", self.outline_trees, 0, OUTLINE_TREES)
         r = self.species_ratio
         if not (_finite(r) and 0 <= r <= 1):
             raise ValueError(f"species_ratio must be in [0, 1], got {_shown(r)}")
@@ -319,12 +314,6 @@ class RefineSettings:
             )
         return self
 
-    def outline_allowance(self) -> int:
-        """The most trees the outline step may grow (see ``outline_trees``)."""
-        if self.outline_trees is not None:
-            return int(self.outline_trees)
-        return round(OUTLINE_TREES * min(1.0, self.budget / OUTLINE_FULL_BUDGET))
-
     def load_embedder(self) -> Any:
         """The ``refine.embed.ShapeEmbedder`` these settings ask for, or None (the ink
         metric, or ``embedding="none"``)."""
@@ -333,6 +322,13 @@ class RefineSettings:
         from .embed import load_embedder
 
         return load_embedder(None if self.embedding == "shipped" else self.embedding)
+
+
+def outline_allowance(budget: int) -> int:
+    """The most trees the outline step after a search of ``budget`` trees grows: all
+    :data:`OUTLINE_TREES` from :data:`OUTLINE_FULL_BUDGET` up, a share in proportion
+    under it (13 at a budget of 6, 4 at 2; RESULTS.md, "The tree follows the drawing")."""
+    return round(OUTLINE_TREES * min(1.0, budget / OUTLINE_FULL_BUDGET))
 
 
 class Cancelled(Exception):
@@ -433,7 +429,7 @@ def refine(
     # held-out-style bonsai mesh error).  Its trees come on top of the budget (a share of
     # it cost the search what the outline gained: RESULTS.md, "The tree follows the
     # drawing")
-    trees = cfg.outline_allowance()
+    trees = outline_allowance(budget)
     if trees and keep:
         result = _outline_searched(result, drawing, views, run, t0, trees)
     elif trees:
@@ -458,7 +454,7 @@ def _outline_searched(
     ``loss_after`` then the search's distance of that tree, the mean over the views, which
     may be above the search's best).  ``below``: only when the tree's outlines overlap the
     drawn ones less than this (one tree to see).  ``trees``: the most trees grown here
-    (``RefineSettings.outline_allowance``); under the full step's the reseed tries fewer
+    (:func:`outline_allowance`); under the full step's the reseed tries fewer
     other draws and the polish stops where they run out."""
     used = 0
 

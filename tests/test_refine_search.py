@@ -15,6 +15,7 @@ from refine.search import (
     OUTLINE_TREES,
     RefineSettings,
     guess_species,
+    outline_allowance,
     refine,
 )
 from refine.start import POLISH_EVALS, RESEED_TREES
@@ -188,10 +189,6 @@ HUGE = 10**400  # 401 digits: math.isfinite and float() overflow on it
         ("size", True),
         ("species_tries", True),
         ("species_tries", -HUGE),
-        ("outline_trees", HUGE),
-        ("outline_trees", 45),
-        ("outline_trees", -1),
-        ("outline_trees", 2.5),
     ],
     ids=lambda v: "huge" if isinstance(v, int) and abs(v) > 2**64 else repr(v),
 )
@@ -209,14 +206,11 @@ def test_the_outline_step_grows_in_proportion_to_a_budget_under_half_the_default
     full = OUTLINE_TREES
     assert full == POLISH_EVALS + RESEED_TREES
     assert OUTLINE_FULL_BUDGET == DEFAULT_BUDGET // 2
-    assert RefineSettings().outline_allowance() == full
-    assert RefineSettings(budget=400).outline_allowance() == full
-    assert RefineSettings(budget=OUTLINE_FULL_BUDGET).outline_allowance() == full
-    assert RefineSettings(budget=10).outline_allowance() == full // 2
-    assert RefineSettings(budget=6).outline_allowance() == 13
-    assert RefineSettings(budget=1).outline_allowance() == 2
-    assert RefineSettings(budget=1, outline_trees=full).outline_allowance() == full
-    assert RefineSettings(outline_trees=0).outline_allowance() == 0
+    assert outline_allowance(DEFAULT_BUDGET) == outline_allowance(400) == full
+    assert outline_allowance(OUTLINE_FULL_BUDGET) == full
+    assert outline_allowance(10) == full // 2
+    assert outline_allowance(6) == 13
+    assert outline_allowance(1) == 2
     # the page's and the Blender add-on's budget help say where the share begins
     root = Path(__file__).resolve().parents[1]
     for told in ("treesketch/service/static/index.html", "blender/treesketch_addon/__init__.py"):
@@ -224,20 +218,23 @@ def test_the_outline_step_grows_in_proportion_to_a_budget_under_half_the_default
         assert f"under {OUTLINE_FULL_BUDGET} the outline step" in text, told
 
 
-@pytest.mark.parametrize(("settings", "most"), [({"budget": 3}, 7), ({"outline_trees": 0}, 0)])
-def test_the_outline_step_keeps_to_its_trees(settings: dict, most: int) -> None:
+def test_the_outline_step_keeps_to_its_trees(monkeypatch: pytest.MonkeyPatch) -> None:
     # a people's-style outline (a round crown on a trunk) starts the step on any species
+    import refine.search as search
+
     img = np.full((256, 256), 255, np.uint8)
     yy, xx = np.mgrid[:256, :256]
     ring = np.abs(np.hypot(yy - 95, xx - 128) - 70) < 2
     trunk = (np.abs(np.abs(xx - 128) - 12) < 2) & (yy > 160) & (yy < 235)
     img[ring | trunk | ((yy == 234) & (np.abs(xx - 128) < 14))] = 0
     gt = species.sample("oak", 4)
-    full = refine(img, gt, RefineSettings(budget=3, outline_trees=OUTLINE_TREES), species="oak")
-    r = refine(img, gt, RefineSettings(**settings), species="oak")
-    assert full.outline_evaluations > most  # the step would grow more
-    assert r.outline_evaluations <= most
-    assert r.evaluations <= 3 or "budget" not in settings
+    small = refine(img, gt, RefineSettings(budget=3), species="oak")
+    assert small.evaluations <= 3 and small.outline_evaluations <= outline_allowance(3) == 7
+    monkeypatch.setattr(search, "outline_allowance", lambda budget: OUTLINE_TREES)
+    full = refine(img, gt, RefineSettings(budget=3), species="oak")
+    assert full.outline_evaluations > 7  # the whole step would grow more
+    monkeypatch.setattr(search, "outline_allowance", lambda budget: 0)
+    assert refine(img, gt, RefineSettings(budget=3), species="oak").outline_evaluations == 0
 
 
 def _bent_palm(bend: float):

@@ -136,7 +136,7 @@ def test_a_tree_drawn_small_above_a_ground_line_is_not_blown_up() -> None:
     assert got > 0.6 and got > envelope_overlap(ref.input_sketch, ref.sketch_after) - 0.1
 
 
-def test_the_drawn_outline_is_searched_after_the_search() -> None:
+def test_the_drawn_outline_is_searched_after_the_search(monkeypatch) -> None:
     # a lollipop on an oak's start: the search holds the fitted start's drawn values;
     # searched after it, the outline follows the drawing more closely than with that step
     # turned off, within the same budget for the search
@@ -152,9 +152,11 @@ def test_the_drawn_outline_is_searched_after_the_search() -> None:
     from treesketch import Pipeline, RefineSettings
 
     img = drawing("round", 0.5)
-    searched = Pipeline(Fixed("oak", 1), RefineSettings(budget=40)).run(img)
+    run = Pipeline(Fixed("oak", 1), RefineSettings(budget=40))
+    searched = run.run(img)
     trees = refine.search.OUTLINE_TREES
-    held = Pipeline(Fixed("oak", 1), RefineSettings(budget=40, outline_trees=0)).run(img)
+    monkeypatch.setattr(refine.search, "outline_allowance", lambda budget: 0)  # the step off
+    held = run.run(img)
     assert searched.refinement.evaluations <= 40
     assert 0 < searched.refinement.outline_evaluations <= trees
     assert held.refinement.outline_evaluations == 0
@@ -168,7 +170,7 @@ def test_the_drawn_outline_is_searched_after_the_search() -> None:
     assert searched.refinement.loss_after < searched.refinement.loss_before
 
 
-def test_with_two_drawings_every_view_outline_is_searched() -> None:
+def test_with_two_drawings_every_view_outline_is_searched(monkeypatch) -> None:
     # the lollipop drawn from the front and from 90 degrees round: the step after the
     # search follows both drawn outlines (the mean overlap of the views), not the first's
     import sys
@@ -177,13 +179,15 @@ def test_with_two_drawings_every_view_outline_is_searched() -> None:
     sys.path.insert(0, str(Path(__file__).parent))
     from pipeline_helpers import Fixed
 
+    import refine.search
     from eval.envelope import envelope_overlap
     from treesketch import Pipeline, RefineSettings
 
     img = drawing("round", 0.5)
-    searched = Pipeline(Fixed("oak", 1), RefineSettings(budget=40)).run([img, (img, 90.0)])
-    steps_off = RefineSettings(budget=40, outline_trees=0)
-    held = Pipeline(Fixed("oak", 1), steps_off).run([img, (img, 90.0)])
+    run = Pipeline(Fixed("oak", 1), RefineSettings(budget=40))
+    searched = run.run([img, (img, 90.0)])
+    monkeypatch.setattr(refine.search, "outline_allowance", lambda budget: 0)  # the step off
+    held = run.run([img, (img, 90.0)])
     assert searched.refinement.outline_evaluations > 0
     assert held.refinement.outline_evaluations == 0
     got = [envelope_overlap(v.input_sketch, v.sketch_after) for v in searched.views]

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from pipeline_helpers import Fixed, gt_sketch
 
-from refine.search import Cancelled, RefineSettings
+from refine.search import OUTLINE_TREES, Cancelled, RefineSettings, outline_allowance
 from treesketch import Estimate, SketchError
 from treesketch.pipeline import fit_height, has_height, judge_views, mesh_height
 from treesketch.steps import (
@@ -96,12 +96,8 @@ def test_share_gives_the_first_species_the_whole_budget_and_most_of_the_time() -
     assert (other.budget, other.time_limit) == (20, pytest.approx(2.0))
     assert planned_evaluations(cfg, 3) == 80
     assert planned_evaluations(cfg.replace(refine=False), 3) == 0
-    # every species' outline step grows what the whole run's budget allows, not what
-    # its own half of the budget would: the default run's second species is unchanged
-    assert first.outline_allowance() == other.outline_allowance() == cfg.outline_allowance()
-    small = RefineSettings(budget=6)
-    assert share(small, 1, 2).budget == 8
-    assert share(small, 1, 2).outline_allowance() == small.outline_allowance() == 13
+    # the default run's second species still gets the whole outline step
+    assert outline_allowance(other.budget) == outline_allowance(first.budget) == OUTLINE_TREES
 
 
 def test_refine_species_without_names_keeps_the_first_estimate() -> None:

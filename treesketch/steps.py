@@ -290,19 +290,12 @@ def species_to_try(first: FirstEstimate, cfg: RefineSettings) -> list[str]:
 def share(cfg: RefineSettings, i: int, n: int) -> RefineSettings:
     """Candidate ``i`` of ``n`` species' settings: the estimator's species (``i`` 0) the
     whole budget and, when others are tried, 60% of the time; the others half the budget
-    and an equal part of the remaining 40%, so the whole run keeps to ``time_limit``.
-    Every species' outline step grows the trees the whole run's budget allows
-    (``RefineSettings.outline_allowance``): the drawn outline is as much each species'
-    to fit."""
+    and an equal part of the remaining 40%, so the whole run keeps to ``time_limit``."""
     if n == 1:
         return cfg
     part = 0.6 if i == 0 else 0.4 / (n - 1)
     limit = None if cfg.time_limit is None else cfg.time_limit * part
-    return cfg.replace(
-        budget=cfg.budget if i == 0 else max(8, cfg.budget // 2),
-        time_limit=limit,
-        outline_trees=cfg.outline_allowance(),
-    )
+    return cfg.replace(budget=cfg.budget if i == 0 else max(8, cfg.budget // 2), time_limit=limit)
 
 
 def planned_evaluations(cfg: RefineSettings, n: int) -> int:
