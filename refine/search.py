@@ -14,7 +14,8 @@ shape and still misses the drawn outline, those values are then searched for the
 outlines alone, every view's (``refine.start.polish``, up to ``POLISH_EVALS`` more trees;
 for a drawing of outlines first the tree's own random draws and a turn of the view,
 ``refine.start.reseed``, up to ``RESEED_TREES``; both together fewer under half the
-default budget: :func:`outline_allowance`), and that tree kept
+default budget: :func:`outline_allowance`; with drawings from other sides, the polished
+tree's draws again, up to ``RESEED_VIEWS_TREES``), and that tree kept
 when its outlines are nearer the drawn ones, as tall as the searched tree
 (``refine.start.same_size``: a drawing shows no size): there the drawn outline wins over
 the distance's other terms, and ``loss_after`` is that tree's.
@@ -49,6 +50,8 @@ from .start import (
     POLISH_EVALS,
     RESEED_SEEDS,
     RESEED_TREES,
+    RESEED_VIEWS_SEEDS,
+    RESEED_VIEWS_TREES,
     cheap_sketches,
     choose_start,
     fit_start,
@@ -455,20 +458,30 @@ def _outline_searched(
     may be above the search's best).  ``below``: only when the tree's outlines overlap the
     drawn ones less than this (one tree to see).  ``trees``: the most trees grown here
     (:func:`outline_allowance`); under the full step's the reseed tries fewer
-    other draws and the polish stops where they run out."""
+    other draws and the polish stops where they run out.  With other ``views`` of
+    outlines, the polished tree's draws are chosen again (``RESEED_VIEWS_SEEDS``, up to
+    ``RESEED_VIEWS_TREES`` more, the same share of them)."""
     used = 0
 
-    def going() -> bool:
-        nonlocal used
-        if used >= trees:
-            return False
-        if run.cancel is not None and run.cancel():
-            return False
-        if run.deadline is not None and time.perf_counter() >= run.deadline:
-            return False
-        used += 1
-        return True
+    def upto(limit: int) -> Callable[[], bool]:
+        """Whether another tree may be grown: under ``limit`` in all, the caller's time
+        and cancel allowing."""
 
+        def going() -> bool:
+            nonlocal used
+            if used >= limit:
+                return False
+            if run.cancel is not None and run.cancel():
+                return False
+            if run.deadline is not None and time.perf_counter() >= run.deadline:
+                return False
+            used += 1
+            return True
+
+        return going
+
+    going = upto(trees)
+    share = min(1.0, trees / OUTLINE_TREES)
     drawings = [drawing, *(v.drawing for v in views)]
     turns = [0.0, *result.view_yaws]
     inside = float(np.mean([d.shape.inside_ink for d in drawings]))
@@ -477,7 +490,7 @@ def _outline_searched(
     if inside < LINES_INSIDE:
         # a drawing of outlines: the outline is all it shows, so the tree's own draws are
         # chosen for it too (``refine.start.reseed``)
-        seeds = round(RESEED_SEEDS * min(1.0, trees / OUTLINE_TREES))
+        seeds = round(RESEED_SEEDS * share)
         seeded = reseed(result.params, wants, result.species, drawing.size, going, below, seeds)
     if seeded is not None:
         result = dataclasses.replace(result, params=seeded[0], yaw=(result.yaw + seeded[1]) % 360.0)
@@ -512,6 +525,20 @@ def _outline_searched(
     if sized is not tree:
         tree = sized
         sketches = cheap_sketches(tree, result.species, drawing.size, [yaw for _, yaw in wants])
+    if views and inside < LINES_INSIDE:
+        more = round(RESEED_VIEWS_TREES * share)
+        again = reseed(
+            tree,
+            wants,
+            result.species,
+            drawing.size,
+            upto(used + more),
+            None,
+            round(RESEED_VIEWS_SEEDS * share),
+        )
+        if again is not None:
+            tree, sketches = again[0], again[2]
+            result = dataclasses.replace(result, yaw=(result.yaw + again[1]) % 360.0)
     targets = [d.target for d in drawings]
     losses = tuple(run.obj.loss_of_sketch(s, t) for s, t in zip(sketches, targets, strict=True))
     loss = float(np.mean(losses))

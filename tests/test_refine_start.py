@@ -197,6 +197,44 @@ def test_with_two_drawings_every_view_outline_is_searched(monkeypatch) -> None:
     assert len(searched.refinement.view_losses_after) == 2
 
 
+def test_with_two_drawings_the_polished_trees_draws_are_chosen_again(monkeypatch) -> None:
+    # drawn from two sides, how the outlines differ from side to side is the branches'
+    # placement: after the polish the tree's draws are tried again, from more of them
+    # (the budget's share of RESEED_VIEWS_SEEDS); drawn from one side, only before it
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from pipeline_helpers import Fixed
+
+    import refine.search
+    from refine.search import OUTLINE_TREES, outline_allowance
+    from refine.start import RESEED_SEEDS, RESEED_VIEWS_SEEDS, RESEED_VIEWS_TREES
+    from treesketch import Pipeline, RefineSettings
+
+    calls: list[tuple[int, int]] = []
+    real = refine.search.reseed
+
+    def spy(p, wants, *args):
+        calls.append((len(wants), args[-1]))
+        return real(p, wants, *args)
+
+    monkeypatch.setattr(refine.search, "reseed", spy)
+    img = drawing("round", 0.5)
+    run = Pipeline(Fixed("oak", 1), RefineSettings(budget=6))
+    share = outline_allowance(6) / OUTLINE_TREES
+    two = run.run([img, (img, 90.0)])
+    assert calls == [(2, round(RESEED_SEEDS * share)), (2, round(RESEED_VIEWS_SEEDS * share))]
+    assert (
+        0
+        < two.refinement.outline_evaluations
+        <= outline_allowance(6) + round(RESEED_VIEWS_TREES * share)
+    )
+    calls.clear()
+    run.run(img)
+    assert calls == [(1, round(RESEED_SEEDS * share))]
+
+
 def test_an_outline_already_followed_is_left_as_it_is() -> None:
     # a tree the search did not start from the drawn outline is searched for it only
     # where its outline misses the drawn one (``below``): its own outline is met at once
