@@ -526,6 +526,8 @@ def _outline_searched(
         tree = sized
         sketches = cheap_sketches(tree, result.species, drawing.size, [yaw for _, yaw in wants])
     if views and inside < LINES_INSIDE:
+        # drawn from other sides too: where the branches leave the trunk sets how the
+        # outlines differ from side to side, which the polish cannot move
         more = round(RESEED_VIEWS_TREES * share)
         again = reseed(
             tree,
