@@ -14,8 +14,8 @@ shape and still misses the drawn outline, those values are then searched for the
 outlines alone, every view's (``refine.start.polish``, up to ``POLISH_EVALS`` more trees;
 for a drawing of outlines first the tree's own random draws and a turn of the view,
 ``refine.start.reseed``, up to ``RESEED_TREES``; both together fewer under half the
-default budget: :func:`outline_allowance`; with drawings from other sides, the polished
-tree's draws again, up to ``RESEED_VIEWS_TREES``), and that tree kept
+default budget: :func:`outline_allowance`; then the polished tree's draws again, from
+more of them with drawings from other sides, up to ``RESEED_VIEWS_TREES``), and that tree kept
 when its outlines are nearer the drawn ones, as tall as the searched tree
 (``refine.start.same_size``: a drawing shows no size): there the drawn outline wins over
 the distance's other terms, and ``loss_after`` is that tree's.
@@ -122,7 +122,7 @@ DEFAULT_BUDGET = 40
 # the outline step's trees (:func:`outline_allowance`) at a budget of OUTLINE_FULL_BUDGET
 # or more: half the default, what a second species gets in a default run and about what
 # the report's rotation sweep gives each angle; a share under it
-OUTLINE_TREES = RESEED_TREES + POLISH_EVALS
+OUTLINE_TREES = RESEED_TREES + POLISH_EVALS + RESEED_TREES  # the draws, the polish, the draws
 OUTLINE_FULL_BUDGET = DEFAULT_BUDGET // 2
 MAX_TIME_LIMIT = 3600.0
 EMBEDDINGS = ("shipped", "none")  # RefineSettings.embedding's names (else a checkpoint path)
@@ -458,9 +458,10 @@ def _outline_searched(
     may be above the search's best).  ``below``: only when the tree's outlines overlap the
     drawn ones less than this (one tree to see).  ``trees``: the most trees grown here
     (:func:`outline_allowance`); under the full step's the reseed tries fewer
-    other draws and the polish stops where they run out.  With other ``views`` of
-    outlines, the polished tree's draws are chosen again (``RESEED_VIEWS_SEEDS``, up to
-    ``RESEED_VIEWS_TREES`` more, the same share of them)."""
+    other draws and the polish stops where they run out.  For a drawing of outlines the
+    polished tree's draws are then chosen again (``RESEED_SEEDS`` other draws; with other
+    ``views``, ``RESEED_VIEWS_SEEDS``, up to ``RESEED_VIEWS_TREES`` less ``RESEED_TREES``
+    more trees than ``trees``, the same share of them)."""
     used = 0
 
     def upto(limit: int) -> Callable[[], bool]:
@@ -480,8 +481,8 @@ def _outline_searched(
 
         return going
 
-    going = upto(trees)
     share = min(1.0, trees / OUTLINE_TREES)
+    going = upto(round((RESEED_TREES + POLISH_EVALS) * share))  # the draws, then the polish
     drawings = [drawing, *(v.drawing for v in views)]
     turns = [0.0, *result.view_yaws]
     inside = float(np.mean([d.shape.inside_ink for d in drawings]))
@@ -525,18 +526,20 @@ def _outline_searched(
     if sized is not tree:
         tree = sized
         sketches = cheap_sketches(tree, result.species, drawing.size, [yaw for _, yaw in wants])
-    if views and inside < LINES_INSIDE:
-        # drawn from other sides too: where the branches leave the trunk sets how the
-        # outlines differ from side to side, which the polish cannot move
-        more = round(RESEED_VIEWS_TREES * share)
+    if inside < LINES_INSIDE:
+        # the polish moved the outline away from what the draws chosen before it bought:
+        # they are chosen again for the polished tree; drawn from other sides too, from
+        # more of them, as where the branches leave the trunk sets how the outlines differ
+        # from side to side, which the polish cannot move
+        extra = round((RESEED_VIEWS_TREES - RESEED_TREES) * share) if views else 0
         again = reseed(
             tree,
             wants,
             result.species,
             drawing.size,
-            upto(used + more),
+            upto(trees + extra),
             None,
-            round(RESEED_VIEWS_SEEDS * share),
+            round((RESEED_VIEWS_SEEDS if views else RESEED_SEEDS) * share),
         )
         if again is not None:
             tree, sketches = again[0], again[2]
