@@ -46,6 +46,7 @@ from .objective import METRICS, OtherView, PreparedDrawing, SearchSpace, SketchO
 from .start import (
     FIT_BELOW,
     LINES_INSIDE,
+    POLISH_AGAIN_EVALS,
     POLISH_BELOW,
     POLISH_EVALS,
     RESEED_SEEDS,
@@ -122,7 +123,8 @@ DEFAULT_BUDGET = 40
 # the outline step's trees (:func:`outline_allowance`) at a budget of OUTLINE_FULL_BUDGET
 # or more: half the default, what a second species gets in a default run and about what
 # the report's rotation sweep gives each angle; a share under it
-OUTLINE_TREES = RESEED_TREES + POLISH_EVALS + RESEED_TREES  # the draws, the polish, the draws
+# the draws, the polish, the draws again, the polish again
+OUTLINE_TREES = RESEED_TREES + POLISH_EVALS + RESEED_TREES + POLISH_AGAIN_EVALS
 OUTLINE_FULL_BUDGET = DEFAULT_BUDGET // 2
 MAX_TIME_LIMIT = 3600.0
 EMBEDDINGS = ("shipped", "none")  # RefineSettings.embedding's names (else a checkpoint path)
@@ -461,7 +463,8 @@ def _outline_searched(
     other draws and the polish stops where they run out.  For a drawing of outlines the
     polished tree's draws are then chosen again (``RESEED_SEEDS`` other draws; with other
     ``views``, ``RESEED_VIEWS_SEEDS``, up to ``RESEED_VIEWS_TREES`` less ``RESEED_TREES``
-    more trees than ``trees``, the same share of them)."""
+    more trees than ``trees``, the same share of them) and, where other draws were
+    chosen, its drawn values polished once more (up to ``POLISH_AGAIN_EVALS`` trees)."""
     used = 0
 
     def upto(limit: int) -> Callable[[], bool]:
@@ -532,18 +535,31 @@ def _outline_searched(
         # more of them, as where the branches leave the trunk sets how the outlines differ
         # from side to side, which the polish cannot move
         extra = round((RESEED_VIEWS_TREES - RESEED_TREES) * share) if views else 0
+        going = upto(trees + extra)  # the draws again, then the polish again
         again = reseed(
             tree,
             wants,
             result.species,
             drawing.size,
-            upto(trees + extra),
+            going,
             None,
             round((RESEED_VIEWS_SEEDS if views else RESEED_SEEDS) * share),
         )
         if again is not None:
             tree, sketches = again[0], again[2]
             result = dataclasses.replace(result, yaw=(result.yaw + again[1]) % 360.0)
+            wants = [(w, yaw + again[1]) for w, yaw in wants]
+            # the new draws moved the outline the polish fitted: fitted once more
+            polished, seen = polish(
+                tree,
+                wants,
+                result.species,
+                drawing.size,
+                evals=round(POLISH_AGAIN_EVALS * share),
+                going=going,
+            )
+            if seen is not None:
+                tree, sketches = polished, seen
     targets = [d.target for d in drawings]
     losses = tuple(run.obj.loss_of_sketch(s, t) for s, t in zip(sketches, targets, strict=True))
     loss = float(np.mean(losses))

@@ -361,15 +361,42 @@ def test_grass_along_the_ground_goes_with_it(name: str, seed: int, rise: int, li
     assert np.abs(_box(framed) - _box(bare)).max() <= 8
 
 
-def test_a_ground_line_shorter_than_the_tree_is_kept() -> None:
-    """A line under the trunk no wider than the crown does not stick out of the tree: when
-    in doubt the ink stays."""
+def test_a_ground_line_no_wider_than_the_crown_is_dropped() -> None:
+    """People draw the ground under a tree no wider than its crown: a line under the
+    trunk sticks out of the trunk's foot, whatever the crown above it, and goes."""
     page = _on_page(tree_doodle("maple", 3), 512, (128, 100))
     ink = ink_mask(page)
     cols = np.flatnonzero(ink.any(axis=0))
     foot = int(np.flatnonzero(ink.any(axis=1))[-1])
-    short = ink_mask(_drawn(page, lambda d: d.line((cols[0], foot, cols[-1], foot), 0, 3)))
-    assert np.array_equal(tree_ink(short), short)
+    lined = ink_mask(_drawn(page, lambda d: d.line((cols[0], foot, cols[-1], foot), 0, 3)))
+    kept = tree_ink(lined)
+    assert not np.array_equal(kept, lined)
+    # the line's rows hold the trunk's foot at most, and the tree above them is whole
+    left = np.flatnonzero(kept[foot - 1 : foot + 2].any(axis=0))
+    assert left.size == 0 or np.ptp(left) < 0.3 * np.ptp(cols)
+    assert np.array_equal(kept[: foot - 8], ink[: foot - 8])
+
+
+def _mushroom(ground: bool) -> np.ndarray:
+    """A crown over a wide trunk drawn closed at its foot (the trunk 0.4 of the crown's
+    width), with a ground line 0.8 of the crown's width under it or without."""
+    im = Image.new("L", (400, 400), 255)
+    d = ImageDraw.Draw(im)
+    d.ellipse((100, 60, 300, 200), outline=0, width=3)
+    d.rectangle((160, 198, 240, 330), outline=0, width=3)
+    if ground:
+        d.line((120, 331, 280, 331), fill=0, width=3)
+    return ink_mask(np.asarray(im))
+
+
+def test_a_trunk_closed_at_its_foot_keeps_its_bottom() -> None:
+    """The line closing a wide trunk's foot does not stick out of the trunk's sides drawn
+    just above it: it stays (a line under the trunk wider than it goes)."""
+    closed = _mushroom(ground=False)
+    assert np.array_equal(tree_ink(closed), closed)
+    on_ground = tree_ink(_mushroom(ground=True))
+    assert not on_ground[325:336, :150].any() and not on_ground[325:336, 251:].any()
+    assert on_ground[200:320].sum() == closed[200:320].sum()
 
 
 @pytest.mark.parametrize("name, seed", FRAMED[:3])
