@@ -78,6 +78,7 @@ __all__ = [
     "bend_starts",
     "guess_species",
     "outline_allowance",
+    "outline_searched",
     "refine",
 ]
 
@@ -436,14 +437,14 @@ def refine(
     # drawing")
     trees = outline_allowance(budget)
     if trees and keep:
-        result = _outline_searched(result, drawing, views, run, t0, trees)
+        result = outline_searched(result, drawing, views, run, t0, trees)
     elif trees:
         below = FIT_BELOW if bending else POLISH_BELOW
-        result = _outline_searched(result, drawing, views, run, t0, trees, below=below)
+        result = outline_searched(result, drawing, views, run, t0, trees, below=below)
     return result
 
 
-def _outline_searched(
+def outline_searched(
     result: RefineResult,
     drawing: PreparedDrawing,
     views: Sequence[OtherView],
