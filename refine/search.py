@@ -464,8 +464,8 @@ def outline_searched(
     other draws and the polish stops where they run out.  For a drawing of outlines the
     polished tree's draws are then chosen again (``RESEED_SEEDS`` other draws; with other
     ``views``, ``RESEED_VIEWS_SEEDS``, up to ``RESEED_VIEWS_TREES`` less ``RESEED_TREES``
-    more trees than ``trees``, the same share of them) and, where other draws were
-    chosen, its drawn values polished once more (up to ``POLISH_AGAIN_EVALS`` trees)."""
+    more trees than ``trees``, the same share of them) and its drawn values polished
+    once more (up to ``POLISH_AGAIN_EVALS`` trees)."""
     used = 0
 
     def upto(limit: int) -> Callable[[], bool]:
@@ -550,17 +550,18 @@ def outline_searched(
             tree, sketches = again[0], again[2]
             result = dataclasses.replace(result, yaw=(result.yaw + again[1]) % 360.0)
             wants = [(w, yaw + again[1]) for w, yaw in wants]
-            # the new draws moved the outline the polish fitted: fitted once more
-            polished, seen = polish(
-                tree,
-                wants,
-                result.species,
-                drawing.size,
-                evals=round(POLISH_AGAIN_EVALS * share),
-                going=going,
-            )
-            if seen is not None:
-                tree, sketches = polished, seen
+        # the new draws moved the outline the polish fitted, or the polish stopped short
+        # of its best: fitted once more, from a fresh start of its search
+        polished, seen = polish(
+            tree,
+            wants,
+            result.species,
+            drawing.size,
+            evals=round(POLISH_AGAIN_EVALS * share),
+            going=going,
+        )
+        if seen is not None:
+            tree, sketches = polished, seen
     targets = [d.target for d in drawings]
     losses = tuple(run.obj.loss_of_sketch(s, t) for s, t in zip(sketches, targets, strict=True))
     loss = float(np.mean(losses))
