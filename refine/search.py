@@ -525,11 +525,16 @@ def outline_searched(
         return dataclasses.replace(
             result, outline_evaluations=used, seconds=time.perf_counter() - t0
         )
-    # as tall as the searched tree: the step moves proportions, not the tree's size
-    sized = same_size(tree, grown_height(result.params))
-    if sized is not tree:
-        tree = sized
-        sketches = cheap_sketches(tree, result.species, drawing.size, [yaw for _, yaw in wants])
+    height = grown_height(result.params)
+
+    def sized(tree: TreeParams, sketches: list[np.ndarray]) -> tuple[TreeParams, list]:
+        """As tall as the searched tree: the step moves proportions, not the tree's size."""
+        q = same_size(tree, height)
+        if q is tree:
+            return tree, sketches
+        return q, cheap_sketches(q, result.species, drawing.size, [yaw for _, yaw in wants])
+
+    tree, sketches = sized(tree, sketches)
     if inside < LINES_INSIDE:
         # the polish moved the outline away from what the draws chosen before it bought:
         # they are chosen again for the polished tree; drawn from other sides too, from
@@ -561,7 +566,7 @@ def outline_searched(
             going=going,
         )
         if seen is not None:
-            tree, sketches = polished, seen
+            tree, sketches = sized(polished, seen)
     targets = [d.target for d in drawings]
     losses = tuple(run.obj.loss_of_sketch(s, t) for s, t in zip(sketches, targets, strict=True))
     loss = float(np.mean(losses))

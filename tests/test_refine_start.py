@@ -472,8 +472,9 @@ def test_same_size_is_the_same_tree_at_another_height() -> None:
 
 
 def test_the_outline_step_keeps_the_searched_trees_size(monkeypatch) -> None:
-    # the outline step doubles the branches' reach (a willow's crown then rises over its
-    # trunk's top): the tree returned has the reach, and the searched tree's height
+    # the outline step's polish lengthens the branches' reach 2.5 times, the polish once
+    # more 1.2 times (a willow's crown then rises over its trunk's top): the tree returned
+    # has the reach, and the searched tree's height
     import sys
     from pathlib import Path
 
@@ -486,19 +487,24 @@ def test_the_outline_step_keeps_the_searched_trees_size(monkeypatch) -> None:
 
     given = []
 
+    evals = []
+
     def polish(p, wants, name, size, **kw):
         given.append(p)
+        evals.append(kw.get("evals"))
         length = [float(v) for v in p["length"]]
-        length[1] *= 2.5
+        length[1] *= 2.5 if len(given) == 1 else 1.2
         q = p.replace(length=length)
         return q, cheap_sketches(q, name, size, [yaw for _, yaw in wants])
 
     monkeypatch.setattr(refine.search, "polish", polish)
     monkeypatch.setattr(refine.search, "reseed", lambda *a, **k: None)
     res = Pipeline(Fixed("willow", 2), RefineSettings(budget=6)).run(drawing("round", 0.3))
-    assert len(given) == 1
+    assert len(given) == 2  # the polish, then once more with the budget's share
+    share = refine.search.outline_allowance(6) / refine.search.OUTLINE_TREES
+    assert evals == [None, round(refine.search.POLISH_AGAIN_EVALS * share)]
     searched = given[0]
-    reach = 2.5 * float(searched["length"][1])
+    reach = 2.5 * 1.2 * float(searched["length"][1])
     assert float(res.params["length"][1]) == pytest.approx(reach, rel=1e-6)
     grown = searched.replace(length=[float(v) for v in res.params["length"]])
     assert grown_height(grown) > 1.2 * grown_height(searched)  # the reach alone grows it
