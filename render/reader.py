@@ -662,7 +662,7 @@ def _level_runs(ink: np.ndarray, tilt: int, length: float) -> np.ndarray:
 def _is_ground(ink: np.ndarray, box: tuple[slice, slice], tilt: int) -> bool:
     """Whether a level run with bounding box ``box`` is a ground line under the tree:
     thin, in the lower half of the drawing, at its foot (next to nothing below it) and
-    sticking out beyond the foot of what stands on it (see ``GROUND_FOOT``)."""
+    sticking out beyond what stands on it or beyond its foot (see ``GROUND_FOOT``)."""
     ys = np.flatnonzero(ink.any(axis=1))
     top, height = int(ys[0]), int(ys[-1] - ys[0] + 1)
     (t, b), (left, right) = (box[0].start, box[0].stop), (box[1].start, box[1].stop)
