@@ -333,7 +333,7 @@ class RefineSettings:
 def outline_allowance(budget: int) -> int:
     """The most trees the outline step after a search of ``budget`` trees grows: all
     :data:`OUTLINE_TREES` from :data:`OUTLINE_FULL_BUDGET` up, a share in proportion
-    under it (13 at a budget of 6, 4 at 2; RESULTS.md, "The tree follows the drawing")."""
+    under it (30 at a budget of 6, 10 at 2; RESULTS.md, "The tree follows the drawing")."""
     return round(OUTLINE_TREES * min(1.0, budget / OUTLINE_FULL_BUDGET))
 
 

@@ -6,7 +6,8 @@ time before it (the first estimate, the search).  ``capture`` runs the benchmark
 step wrapped so every call's inputs and result are pickled beside the run's JSON;
 ``replay`` runs the step again on them with the code as it is, with module constants
 changed by ``--set`` (``refine.search.POLISH_AGAIN_EVALS=0``: the step before the
-polish again), and scores both trees as the benchmark does (the returned tree grown,
+polish again; a step given more trees needs ``refine.search.OUTLINE_TREES`` set too, as
+the calls made with the whole step's trees then get that many), and scores both trees as the benchmark does (the returned tree grown,
 meshed and sketched at its view, framed as drawn, its envelope overlap with the
 prepared drawing at 256 px; a pair's side view too).  Only the calls for the species the
 run returned are replayed; the step's other uses of the search's distance are kept.
@@ -109,6 +110,7 @@ def _set(assignments: list[str]) -> None:
 def replay(runs: list[Path], assignments: list[str]) -> None:
     import refine.search as search
 
+    full = search.OUTLINE_TREES
     _set(assignments)
     rows = []
     for run in runs:
@@ -126,9 +128,11 @@ def replay(runs: list[Path], assignments: list[str]) -> None:
                 on_best=None,
                 obj=_Distance([drawing, *(v.drawing for v in views)]),
             )
+            # a call given the whole step's trees gets the whole step's as ``--set`` makes it
+            trees = search.OUTLINE_TREES if call["trees"] >= full else call["trees"]
             t = time.perf_counter()
             new = search.outline_searched(
-                call["result"], drawing, views, stub, t, call["trees"], call["below"]
+                call["result"], drawing, views, stub, t, trees, call["below"]
             )
             seconds = time.perf_counter() - t
             keys = ["input_sketch"] + [f"view{i}/input_sketch" for i in range(2, len(views) + 2)]
