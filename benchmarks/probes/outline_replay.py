@@ -5,12 +5,13 @@ the cheapest to vary, but a ``bench_drawings.py --part follow`` run spends most 
 time before it (the first estimate, the search).  ``capture`` runs the benchmark with the
 step wrapped so every call's inputs and result are pickled beside the run's JSON;
 ``replay`` runs the step again on them with the code as it is, with module constants
-changed by ``--set`` (``refine.search.POLISH_AGAIN_EVALS=0``: the step before the
-polish again; a step given more trees needs ``refine.search.OUTLINE_TREES`` set too, as
-the calls made with the whole step's trees then get that many), and scores both trees as the benchmark does (the returned tree grown,
-meshed and sketched at its view, framed as drawn, its envelope overlap with the
-prepared drawing at 256 px; a pair's side view too).  Only the calls for the species the
-run returned are replayed; the step's other uses of the search's distance are kept.
+changed by ``--set`` (``refine.search.POLISH_AGAIN_EVALS=0``: the step before the polish
+again; a longer step needs ``refine.search.OUTLINE_TREES`` set too: the calls made with
+the whole step's trees then get that many), and scores both trees as the benchmark does
+(the returned tree grown, meshed and sketched at its view, framed as drawn, its envelope
+overlap with the prepared drawing at 256 px; a pair's side view too).  Only the calls for
+the species the run returned are replayed; the step's other uses of the search's distance
+are kept.
 
     .venv/bin/python benchmarks/probes/outline_replay.py capture RUN.json -- \\
         --part follow --only people --people 72 --people-from 0
