@@ -13,7 +13,8 @@
 (``eval.envelope``) of the prepared drawing and the first estimate's sketch, and of the
 drawing and the returned tree's sketch (``Result.input_sketch``, ``sketch_before``,
 ``sketch_after``), at the pipeline's default settings (``--budget`` 40, ``--set``), on the
-first ``--people`` held-out people's tree drawings (``eval.people``, strokes) and the
+first ``--people`` held-out people's tree drawings (``eval.people``; ``--people-source``
+strokes, or mouse224 or quickdraw28 for another folder's drawings in another hand) and the
 paper's ten (its five drawings as published and as light pencil on grey paper, as
 ``bench_species.py paper`` makes them) and, with ``--pairs N``, N code-made trees per
 species drawn in the doodle style from two sides 90 degrees apart (seeds
@@ -514,10 +515,15 @@ def follow_cases(args: argparse.Namespace) -> list[tuple[str, Any]]:
 
     cases = []
     if args.only in (None, "people"):
-        held = people_drawings("held", ("strokes",), ("tree",))
+        source = getattr(args, "people_source", "strokes")
+        held = people_drawings("held", (source,), ("tree",))
         first = args.people_from
         held = held[first : first + args.people]
-        cases += [(f"people/{first + i:02d}-{d.key}", d.image()) for i, d in enumerate(held)]
+        # a mouse224 key names its folder ("tree/12"): one name part per drawing
+        cases += [
+            (f"people/{first + i:02d}-{d.key.replace('/', '-')}", d.image())
+            for i, d in enumerate(held)
+        ]
     if args.only in (None, "paper"):
         cases += paper_drawings()
     if args.only in (None, "pairs") and args.pairs > 0:
@@ -537,9 +543,9 @@ def inside_ink(img: Any) -> float:
     the refinement sees it: under ``refine.start.LINES_INSIDE`` a drawing of outlines,
     searched for its outline; at or above it one that shows its inside."""
     from refine.objective import PreparedDrawing
-    from treesketch.steps import prepare_input
+    from treesketch.steps import load_sketch, prepare_input
 
-    return PreparedDrawing.create(prepare_input(img), 128).shape.inside_ink
+    return PreparedDrawing.create(prepare_input(load_sketch(img)), 128).shape.inside_ink
 
 
 def part_follow(args: argparse.Namespace) -> dict:
@@ -655,6 +661,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--people", type=int, default=40, help="follow: people's drawings")
     ap.add_argument(
         "--people-from", type=int, default=0, help="follow: the first people's drawing's index"
+    )
+    ap.add_argument(
+        "--people-source",
+        choices=("strokes", "mouse224", "quickdraw28"),
+        default="strokes",
+        help="follow: which of people's folders (strokes: the web page's drawings, the "
+        "figures of issue 48; mouse224: one drawing app's; quickdraw28: Quick, Draw!'s "
+        "28 px doodles; the last two never looked at while the refinement was built)",
     )
     ap.add_argument(
         "--only", choices=("people", "paper", "pairs"), default=None, help="follow: one set"

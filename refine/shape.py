@@ -55,7 +55,7 @@ import numpy as np
 from scipy import ndimage
 
 from render.distance import distance_to_background
-from render.reader import crown_axis
+from render.reader import crown_axis, stroke_width
 
 from .envelope import CLOSE_FRACTION, envelope_of_ink, mask_iou
 from .prepare import prepare_sketch
@@ -82,6 +82,11 @@ OFFSET_LIMIT = 0.06  # of the side: how far around the leaves an outline may be 
 CLOSE_RADIUS = 1 / 14  # of the side: gaps up to twice this close before the fill
 SPECK_AREA = 1e-3  # of the frame: smaller pieces of ink are dust, not drawing
 TRUNK_WIDTH = 0.2  # of the widest row: narrower rows at the bottom are the trunk
+# of the side: the widest line ``ShapeTarget.inside_ink`` counts as drawn (4.5 px at 128:
+# people's web-page strokes are 2 px wide there, the renderer's styles and the paper's
+# drawings up to 4.5 px; a 28 px Quick, Draw! doodle scaled up draws every line 8-10 px
+# wide, and its outline's own ink filled half its crown's inside, as a scribble does)
+INSIDE_STROKE = 4.5 / 128
 MIN_STEM = 0.02  # of the height: a drawing with less trunk than this does not stand on one
 STEM_WEIGHT = 5.0  # line distance added per unit of missing stem (0.1 with no stem at all)
 # the frame of render.reader (trunk base row, top margin), as fractions of the side
@@ -239,11 +244,17 @@ class ShapeTarget:
     def inside_ink(self) -> float:
         """The share of the envelope's inside (less a band of the closing radius along
         its outline) that is ink: near 0 for a drawing of outlines only, more where
-        branches, leaves or shading are drawn within the crown."""
+        branches, leaves or shading are drawn within the crown.  Lines wider than
+        ``INSIDE_STROKE`` count as if drawn that wide: what is drawn inside is told by
+        its lines' length, not by the pen."""
         depth = max(1, round(CLOSE_FRACTION * self.size))
         inner = ndimage.binary_erosion(self.envelope, iterations=depth)
         n = int(np.count_nonzero(inner))
-        return 0.0 if n == 0 else int(np.count_nonzero(inner & (self.image < _DARK))) / n
+        if n == 0:
+            return 0.0
+        ink = self.image < _DARK
+        share = int(np.count_nonzero(inner & ink)) / n
+        return share * min(1.0, INSIDE_STROKE * self.size / stroke_width(ink))
 
     @property
     def stem(self) -> float:

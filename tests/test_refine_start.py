@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from PIL import Image, ImageDraw
 
+from refine.envelope import CLOSE_FRACTION
 from refine.objective import framed
 from refine.start import fit_start, profile_of
 from treesketch.trees import tree_sketch
@@ -337,6 +338,39 @@ def test_inside_ink_tells_an_outline_from_a_drawing_of_its_branches() -> None:
     from refine.shape import ShapeTarget
 
     assert ShapeTarget.from_image(np.full((SIZE, SIZE), 255, np.uint8), SIZE).inside_ink == 0.0
+
+
+def test_a_thick_pen_outline_is_still_an_outline() -> None:
+    """A small doodle scaled up (Quick, Draw!'s 28 px) draws every line 8-10 px wide at
+    the work size: its outline's own ink must not read as branches drawn inside."""
+    from scipy import ndimage
+
+    from refine.objective import PreparedDrawing
+    from refine.shape import INSIDE_STROKE
+    from refine.start import LINES_INSIDE
+    from render.reader import stroke_width
+
+    def shape(img: np.ndarray):
+        return PreparedDrawing.create(img, SIZE).shape
+
+    def thick(img: np.ndarray) -> np.ndarray:  # a pen three times as wide
+        return ndimage.minimum_filter(img, size=9)
+
+    thin = drawing("round", 0.4)
+    wide = shape(thick(thin))
+    assert stroke_width(wide.image < 0.5) > INSIDE_STROKE * SIZE
+    # its ink fills more of the crown's inside than the cap lets count as drawn
+    depth = max(1, round(CLOSE_FRACTION * SIZE))
+    inner = ndimage.binary_erosion(wide.envelope, iterations=depth)
+    assert np.count_nonzero(inner & (wide.image < 0.5)) / np.count_nonzero(inner) > LINES_INSIDE
+    assert wide.inside_ink < LINES_INSIDE
+    # a pen of the usual width: every ink pixel counts
+    narrow = shape(thin)
+    inner = ndimage.binary_erosion(narrow.envelope, iterations=depth)
+    share = np.count_nonzero(inner & (narrow.image < 0.5)) / np.count_nonzero(inner)
+    assert narrow.inside_ink == share
+    # a crown full of branches and leaves, drawn as thick, still shows its inside
+    assert shape(thick(shows_inside(thin))).inside_ink >= LINES_INSIDE
 
 
 def unsized(p) -> dict:
