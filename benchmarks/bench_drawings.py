@@ -538,14 +538,20 @@ def as_list(img: Any) -> list:
     return img if isinstance(img, list) else [img]
 
 
+def seen_shape(img: Any) -> Any:
+    """A drawing's ``ShapeTarget`` as the refinement's search sees it (read, prepared,
+    framed at its 128 px)."""
+    from refine.objective import PreparedDrawing
+    from treesketch.steps import load_sketch, prepare_input
+
+    return PreparedDrawing.create(prepare_input(load_sketch(img)), 128).shape
+
+
 def inside_ink(img: Any) -> float:
     """How much of a drawing's crown's inside is drawn (``ShapeTarget.inside_ink``), as
     the refinement sees it: under ``refine.start.LINES_INSIDE`` a drawing of outlines,
     searched for its outline; at or above it one that shows its inside."""
-    from refine.objective import PreparedDrawing
-    from treesketch.steps import load_sketch, prepare_input
-
-    return PreparedDrawing.create(prepare_input(load_sketch(img)), 128).shape.inside_ink
+    return seen_shape(img).inside_ink
 
 
 def part_follow(args: argparse.Namespace) -> dict:

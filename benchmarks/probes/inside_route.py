@@ -5,7 +5,9 @@ lines are all as narrow as that (``render.reader.stroke_width`` at the search's 
 the same share as without the cap, and the refinement takes it down the same road (a
 drawing of outlines under ``refine.start.LINES_INSIDE``, one that shows its inside at or
 above it). Per set: the median and widest stroke, how many drawings are wider than the
-cap (only those can change), and how many read as showing their inside. Sets: people's
+cap (only those can change), and how many read as showing their inside, with the cap and
+without it (a pair's two drawings go one road, by their mean: the pairs' row counts
+pairs). Sets: people's
 held-out trees of each folder (the first ``--people`` of each), the paper's ten, the
 code-made doodle pairs (``--pairs`` a species, seeds 950+), the held-out-style drawings of
 the mesh-error figure (one a species at seed 950, three at 952+), and with ``--published``
@@ -27,14 +29,18 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
 
 
-def reading(img: Any) -> tuple[float, float]:
-    """(stroke width at 128 px, inside_ink) of a drawing as the refinement prepares it."""
-    from refine.objective import PreparedDrawing
-    from render.reader import stroke_width
-    from treesketch.steps import load_sketch, prepare_input
+def reading(img: Any) -> tuple[float, float, float]:
+    """(stroke width at 128 px, inside_ink, the share without the cap) of a drawing as
+    the refinement prepares it."""
+    from bench_drawings import seen_shape
 
-    shape = PreparedDrawing.create(prepare_input(load_sketch(img)), 128).shape
-    return stroke_width(shape.image < 0.5), shape.inside_ink
+    from refine.shape import INSIDE_STROKE
+    from render.reader import stroke_width
+
+    shape = seen_shape(img)
+    width = stroke_width(shape.image < 0.5)
+    capped = shape.inside_ink
+    return width, capped, capped / min(1.0, INSIDE_STROKE * shape.size / width)
 
 
 def drawing_sets(people: int, pairs: int, published: bool) -> dict[str, list[Any]]:
@@ -78,15 +84,31 @@ def main() -> None:
     args = ap.parse_args()
     cap = INSIDE_STROKE * 128
     print(f"cap {cap:.2f} px at 128; LINES_INSIDE {LINES_INSIDE}")
-    print("| set | drawings | stroke median | widest | wider than the cap | show their inside |")
-    print("|---|---:|---:|---:|---:|---:|")
+    print(
+        "| set | drawings | stroke median | widest | wider than the cap "
+        "| show their inside | ... without the cap |"
+    )
+    print("|---|---:|---:|---:|---:|---:|---:|")
+    readings = {}
     for name, imgs in drawing_sets(args.people, args.pairs, args.published).items():
-        r = np.array([reading(img) for img in imgs])
-        print(
-            f"| {name} | {len(r)} | {np.median(r[:, 0]):.2f} | {r[:, 0].max():.2f} | "
-            f"{int(np.sum(r[:, 0] > cap))} | {int(np.sum(r[:, 1] >= LINES_INSIDE))} |",
-            flush=True,
-        )
+        r = readings[name] = np.array([reading(img) for img in imgs])
+        row(name, len(r), r[:, 0], r[:, 1], r[:, 2], cap, LINES_INSIDE)
+    fronts, sides = readings["pairs, fronts"], readings["pairs, sides"]
+    both = np.maximum(fronts[:, 0], sides[:, 0])
+    mean = [(fronts[:, k] + sides[:, k]) / 2 for k in (1, 2)]
+    row("pairs, the two views' mean", len(both), both, *mean, cap, LINES_INSIDE)
+
+
+def row(
+    name: str, n: int, width: np.ndarray, capped: np.ndarray, uncapped: np.ndarray,
+    cap: float, limit: float,
+) -> None:  # fmt: skip
+    print(
+        f"| {name} | {n} | {np.median(width):.2f} | {width.max():.2f} | "
+        f"{int(np.sum(width > cap))} | {int(np.sum(capped >= limit))} | "
+        f"{int(np.sum(uncapped >= limit))} |",
+        flush=True,
+    )
 
 
 if __name__ == "__main__":
