@@ -373,6 +373,44 @@ def test_a_thick_pen_outline_is_still_an_outline() -> None:
     assert shape(thick(shows_inside(thin))).inside_ink >= LINES_INSIDE
 
 
+def test_a_doodles_thick_outline_is_not_counted_as_its_inside() -> None:
+    """A 28 px doodle (Quick, Draw!'s) scaled up: a crown outline with three branches in
+    it, every line 10 px wide at the work size.  The outline's own line reaches that far
+    into the crown, past the closing radius's band: counted as inside, it made the doodle
+    read as a crown full of branches."""
+    from scipy import ndimage
+
+    from refine.objective import PreparedDrawing
+    from refine.shape import INSIDE_STROKE
+    from refine.start import LINES_INSIDE
+    from render.reader import stroke_width
+
+    im = Image.new("L", (28, 28), 255)
+    d = ImageDraw.Draw(im)
+    for x in (12, 16):
+        d.line([(x, 27), (x, 15)], fill=0, width=2)
+    d.ellipse([8, 4, 20, 17], outline=0, width=2)
+    for line in ([(12, 15), (10, 9)], [(16, 15), (18, 9)], [(14, 15), (14, 7)]):
+        d.line(line, fill=0, width=2)
+    shape = PreparedDrawing.create(
+        np.asarray(im.resize((224, 224), Image.Resampling.BILINEAR)), SIZE
+    ).shape
+    ink = shape.image < 0.5
+    width = stroke_width(ink)
+    assert width > 2 * INSIDE_STROKE * SIZE
+    # within the closing radius's band only, the outline's ink fills the crown
+    inner = ndimage.binary_erosion(shape.envelope, iterations=max(1, round(CLOSE_FRACTION * SIZE)))
+    share = np.count_nonzero(inner & ink) / np.count_nonzero(inner)
+    assert share * INSIDE_STROKE * SIZE / width >= LINES_INSIDE
+    assert shape.inside_ink < LINES_INSIDE
+    # a crown full of branches and leaves drawn with a wide pen still shows its inside
+    leafy = PreparedDrawing.create(
+        ndimage.minimum_filter(shows_inside(drawing("round", 0.4)), 9), SIZE
+    )
+    assert stroke_width(leafy.shape.image < 0.5) > INSIDE_STROKE * SIZE
+    assert leafy.shape.inside_ink >= 1.5 * LINES_INSIDE
+
+
 def unsized(p) -> dict:
     """A tree's values but its size (``refine.start.same_size`` moves those alone)."""
     return {k: v for k, v in p.to_dict().items() if k not in ("scale", "scaleV", "leafScale")}
