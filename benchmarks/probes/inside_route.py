@@ -1,17 +1,18 @@
 """Which drawings does the stroke-width cap of ``ShapeTarget.inside_ink`` touch?
 
-``inside_ink`` counts a line no wider than ``refine.shape.INSIDE_STROKE``; a drawing whose
+``inside_ink`` counts a line no wider than ``refine.shape.INSIDE_STROKE`` and leaves out a
+band along the outline as much wider as a line is wider than that; a drawing whose
 lines are all as narrow as that (``render.reader.stroke_width`` at the search's 128 px) has
 the same share as without the cap, and the refinement takes it down the same road (a
 drawing of outlines under ``refine.start.LINES_INSIDE``, one that shows its inside at or
 above it). Per set: the median and widest stroke, how many drawings are wider than the
 cap (only those can change), and how many read as showing their inside, with the cap and
-without it (a pair's two drawings go one road, by their mean: the pairs' row counts
-pairs). Sets: people's
-held-out trees of each folder (the first ``--people`` of each), the paper's ten, the
-code-made doodle pairs (``--pairs`` a species, seeds 950+), the held-out-style drawings of
-the mesh-error figure (one a species at seed 950, three at 952+), and with ``--published``
-the renderer's sketches of the paper's 15 trees every 15 degrees (the reports' views).
+without it (the band as wide either way; a pair's two drawings go one road, by their
+mean: the pairs' row counts pairs). Sets: people's held-out trees of each folder (the
+first ``--people`` of each), the paper's ten, the code-made doodle pairs (``--pairs`` a
+species, seeds 950+), the held-out-style drawings of the mesh-error figure (one a species
+at seed 950, three at 952+), and with ``--published`` the renderer's sketches of the
+paper's 15 trees every 15 degrees (the reports' views).
 
     .venv/bin/python benchmarks/probes/inside_route.py --people 143 --published
 """
