@@ -514,6 +514,26 @@ def test_a_crown_stands_over_a_trunk_whose_foot_flares_to_one_side(side: int) ->
     assert abs(crown(normalise_drawing(page, 256) < 128) - 128) > 15  # the network's frame
 
 
+@pytest.mark.parametrize("side", [-1, 1])
+def test_a_doodles_thick_splayed_feet_frame_the_tree_between_them(side: int) -> None:
+    # a 28 px doodle scaled up (Quick, Draw!'s): every line a twelfth of the tree's
+    # height wide, the trunk's two lines splayed out at their feet, one ending lower.
+    # Its lowest rows, one foot's end, are wider than a thin line: taken for the whole
+    # trunk, they sat the tree on that foot, its crown over 50 px off the network's
+    # centre line (at 256 px)
+    im = Image.new("L", (28, 28), 255)
+    d = ImageDraw.Draw(im)
+    d.ellipse([6, 2, 22, 14], outline=0, width=2)
+    d.line(
+        [(14 - 2 * side, 14), (14 - 3 * side, 21), (14 - 7 * side, 25), (14 - 9 * side, 25)], 0, 2
+    )
+    d.line([(14 + 2 * side, 14), (14 + 3 * side, 20), (14 + 6 * side, 23)], fill=0, width=2)
+    page = np.asarray(im.resize((224, 224), Image.Resampling.BICUBIC))
+    out = normalise_drawing(page, 256) < 128
+    cols = np.flatnonzero(out[:100].any(axis=0))
+    assert abs((cols[0] + cols[-1] + 1) / 2 - 128) <= 20, (cols[0], cols[-1])
+
+
 def test_a_symmetric_tree_is_framed_alike_on_its_trunk_and_over_its_crown() -> None:
     # a tree whose trunk ends on one row under a crown centred over it: both rules agree
     for name, seed in (("oak", 2), ("pine", 5), ("poplar", 4)):
