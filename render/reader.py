@@ -897,9 +897,9 @@ def trunk_axis(ink: np.ndarray) -> float:
     """The column of the trunk's axis at its base (``ink`` bool, not blank): the middle
     of the lowest rows' ink.  People draw a trunk as two lines that seldom end on one
     row: when the lowest rows hold one line (thin, or no wider than ``SINGLE_STROKES``
-    of the drawing's strokes), the axis is the middle of it and the
-    nearest line beside it a little higher up (the trunk's other side), not the line
-    alone (which would frame the tree half off the centre line)."""
+    of the drawing's strokes), the axis is the middle of it and the nearest line beside
+    it a little higher up (the trunk's other side), not the line alone (which would
+    frame the tree half off the centre line)."""
     ys = np.flatnonzero(ink.any(axis=1))
     top, bottom = int(ys[0]), int(ys[-1])
     h = bottom - top + 1
