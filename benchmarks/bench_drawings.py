@@ -517,12 +517,14 @@ def follow_cases(args: argparse.Namespace) -> list[tuple[str, Any]]:
     if args.only in (None, "people"):
         source = getattr(args, "people_source", "strokes")
         held = people_drawings("held", (source,), ("tree",))
+        pick = getattr(args, "people_pick", None)
         first = args.people_from
-        held = held[first : first + args.people]
+        chosen = pick if pick is not None else range(first, min(len(held), first + args.people))
+        if any(not 0 <= i < len(held) for i in chosen):
+            raise SystemExit(f"--people-pick: {source} holds {len(held)} held-out trees")
         # a mouse224 key names its folder ("tree/12"): one name part per drawing
         cases += [
-            (f"people/{first + i:02d}-{d.key.replace('/', '-')}", d.image())
-            for i, d in enumerate(held)
+            (f"people/{i:02d}-{held[i].key.replace('/', '-')}", held[i].image()) for i in chosen
         ]
     if args.only in (None, "paper"):
         cases += paper_drawings()
@@ -667,6 +669,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--people", type=int, default=40, help="follow: people's drawings")
     ap.add_argument(
         "--people-from", type=int, default=0, help="follow: the first people's drawing's index"
+    )
+    ap.add_argument(
+        "--people-pick",
+        type=lambda t: [int(i) for i in t.split(",") if i.strip()],
+        default=None,
+        help="follow: only these people's drawings (comma-separated indices, as "
+        "benchmarks/probes/reframed.py prints them; --people and --people-from ignored)",
     )
     ap.add_argument(
         "--people-source",

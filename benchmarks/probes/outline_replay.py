@@ -27,6 +27,7 @@ import json
 import pickle
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -97,22 +98,30 @@ def _overlaps(result: Any, drawn: list[np.ndarray]) -> list[float]:
     ]
 
 
-def _set(assignments: list[str]) -> None:
+def set_constants(assignments: list[str]) -> Callable[[], None]:
+    """Each ``module.NAME=value`` of ``assignments`` set (the value of NAME's own type);
+    returns what puts them back."""
+    was = []
     for a in assignments:
         name, value = a.split("=", 1)
         module, attr = name.rsplit(".", 1)
-        setattr(
-            importlib.import_module(module),
-            attr,
-            type(getattr(importlib.import_module(module), attr))(value),
-        )
+        mod = importlib.import_module(module)
+        old = getattr(mod, attr)
+        was.append((mod, attr, old))
+        setattr(mod, attr, type(old)(value))
+
+    def restore() -> None:
+        for mod, attr, old in reversed(was):
+            setattr(mod, attr, old)
+
+    return restore
 
 
 def replay(runs: list[Path], assignments: list[str]) -> None:
     import refine.search as search
 
     full = search.OUTLINE_TREES
-    _set(assignments)
+    set_constants(assignments)
     rows = []
     for run in runs:
         records = json.loads(run.read_text())["records"]
