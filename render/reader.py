@@ -50,6 +50,7 @@ __all__ = [
     "check_ink",
     "image_format",
     "ink_mask",
+    "light_on_dark",
     "read_sketch",
     "tree_ink",
     "crown_axis",
@@ -456,6 +457,29 @@ def _without_dust(ink: np.ndarray) -> np.ndarray:
 
 
 TWO_LEVEL_INK = 0.35  # see _page_ink
+# light lines on a dark page (chalk on a board, a drawing app in dark mode) are read as the
+# same lines dark on light: the page's border at least DARK_BORDER dark (under
+# DARK_LEVEL), its light pixels (over LIGHT_LEVEL) between a trace and LIGHT_LINES of it
+DARK_LEVEL = 96
+LIGHT_LEVEL = 160
+DARK_BORDER = 0.9
+LIGHT_LINES = 0.3
+
+
+def light_on_dark(page: np.ndarray) -> bool:
+    """Whether a grey ``uint8`` page is light lines drawn on a dark ground (its border
+    dark, a small share of it light, the rest dark): read inverted, the lines are ink on
+    paper.  A dark page without light lines (an unlit photo) and a dark fill on light
+    paper (whose border is light) are not, and stay refused by :func:`flatten_paper`."""
+    a = np.asarray(page)
+    edge = max(1, min(a.shape) // 50)
+    border = np.concatenate(
+        [a[:edge].ravel(), a[-edge:].ravel(), a[:, :edge].ravel(), a[:, -edge:].ravel()]
+    )
+    if float((border < DARK_LEVEL).mean()) < DARK_BORDER:
+        return False
+    light = float((a > LIGHT_LEVEL).mean())
+    return MIN_INK <= light <= LIGHT_LINES and float((a < DARK_LEVEL).mean()) >= 1.0 - LIGHT_LINES
 
 
 def _page_ink(page: np.ndarray) -> np.ndarray:
@@ -986,7 +1010,8 @@ def normalise_drawing(
     on the centre line, the drawing as large as the frame allows.
 
     Pencil on grey or off-white paper and phone photos read as ink (:func:`flatten_paper`,
-    Otsu) and come out as black strokes on white, like the training sketches, without the
+    Otsu), light lines on a dark page as the same lines dark (:func:`light_on_dark`), and
+    come out as black strokes on white, like the training sketches, without the
     paper's grain (:func:`drop_specks`) or stray marks apart from the drawing.  It is
     framed on the tree (:func:`tree_ink`), not on all the ink: a ground line under the
     tree, a sun, a cloud or grass beside it are left out of the frame and the picture; a
@@ -1006,6 +1031,8 @@ def normalise_drawing(
         s = WORK_SIDE / max(a.shape)
         shape = (max(MIN_SIDE, round(a.shape[1] * s)), max(MIN_SIDE, round(a.shape[0] * s)))
         a = np.asarray(Image.fromarray(a).resize(shape, Image.Resampling.BOX))
+    if light_on_dark(a):
+        a = 255 - a
     # a ground line drawn from edge to edge looks like ruling, whose removal keeps what
     # crosses it and leaves the line's crests: it goes as a ground line first
     page = _page_ink(a)

@@ -14,7 +14,7 @@ from PIL import Image, ImageDraw
 
 from refine.objective import SearchSpace
 from refine.shape import shape_distance
-from render.reader import FRAME_BOTTOM, SketchError, normalise_drawing
+from render.reader import FRAME_BOTTOM, SketchError, light_on_dark, normalise_drawing
 from treesketch import Pipeline, RefineSettings
 from treesketch.pipeline import prepare_input
 from weberpenn import build_mesh, grow, species
@@ -207,6 +207,23 @@ def test_dark_page_is_a_clear_error() -> None:
     disc = np.where((yy - 150) ** 2 + (xx - 150) ** 2 < 140**2, 0, 255).astype(np.uint8)
     with pytest.raises(SketchError, match="filled area"):
         prepare_input(disc)
+
+
+def test_light_lines_on_a_dark_page_read_as_the_same_drawing(sketches) -> None:
+    """Chalk on a board or a drawing app in dark mode: the light lines are the drawing,
+    read as the same lines dark on white (the same normalised picture)."""
+    img = sketches["maple"]
+    want = prepare_input(img)
+    assert np.array_equal(prepare_input(255 - img), want)
+    # chalk on a grey-green board: a dark, grainy ground, lines at three fifths of white
+    rng = np.random.default_rng(3)
+    lines = (255 - img.astype(float)) / 255.0
+    board = np.clip(55 + rng.normal(0, 6, img.shape) + 150 * lines, 0, 255).astype(np.uint8)
+    got = prepare_input(board) < 128
+    iou = (got & (want < 128)).sum() / (got | (want < 128)).sum()
+    assert iou > 0.9
+    # the page itself read, not its border: a dark drawing on white is read as before
+    assert not light_on_dark(img) and light_on_dark(255 - img) and light_on_dark(board)
 
 
 def _drawn(seed: int, style: str, index: int) -> np.ndarray:
