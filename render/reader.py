@@ -482,6 +482,23 @@ def light_on_dark(page: np.ndarray) -> bool:
     return MIN_INK <= light <= LIGHT_LINES and float((a < DARK_LEVEL).mean()) >= 1.0 - LIGHT_LINES
 
 
+def _dark_on_light(page: np.ndarray) -> np.ndarray:
+    """The page with a picture of light lines on a dark ground (:func:`light_on_dark`)
+    turned dark on light; the picture judged within the page's white margins (the web
+    page's pad puts a picture of another shape on white, centred)."""
+    marked = page < 250
+    rows = np.flatnonzero(marked.any(axis=1))
+    if rows.size == 0:
+        return page
+    cols = np.flatnonzero(marked.any(axis=0))
+    box = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
+    if not light_on_dark(page[box]):
+        return page
+    out = np.full_like(page, 255)
+    out[box] = 255 - page[box]
+    return out
+
+
 def _page_ink(page: np.ndarray) -> np.ndarray:
     """The ink of a page (grey ``uint8``): :func:`_ink_of` its :func:`flatten_paper`.
 
@@ -1031,8 +1048,7 @@ def normalise_drawing(
         s = WORK_SIDE / max(a.shape)
         shape = (max(MIN_SIDE, round(a.shape[1] * s)), max(MIN_SIDE, round(a.shape[0] * s)))
         a = np.asarray(Image.fromarray(a).resize(shape, Image.Resampling.BOX))
-    if light_on_dark(a):
-        a = 255 - a
+    a = _dark_on_light(a)
     # a ground line drawn from edge to edge looks like ruling, whose removal keeps what
     # crosses it and leaves the line's crests: it goes as a ground line first
     page = _page_ink(a)

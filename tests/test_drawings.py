@@ -224,6 +224,12 @@ def test_light_lines_on_a_dark_page_read_as_the_same_drawing(sketches) -> None:
     assert iou > 0.9
     # the page itself read, not its border: a dark drawing on white is read as before
     assert not light_on_dark(img) and light_on_dark(255 - img) and light_on_dark(board)
+    # the board's photo put on a wider white page, as the web page's pad shows a picture
+    # of another shape: read within its margins
+    pad, plain = np.full((256, 400), 255, np.uint8), np.full((256, 400), 255, np.uint8)
+    pad[:, 72:328], plain[:, 72:328] = board, img
+    got, want = prepare_input(pad) < 128, prepare_input(plain) < 128
+    assert (got & want).sum() / (got | want).sum() > 0.9
 
 
 def _drawn(seed: int, style: str, index: int) -> np.ndarray:
