@@ -381,6 +381,14 @@ def flatten_paper(img: np.ndarray) -> np.ndarray:
 
 GRAIN_SIGMAS = 4.0  # ink is darker than the paper by this many of its grain's deviations
 GRAIN_EDGE_SIGMAS = 2.0  # ... in places, and everywhere by this many (a stroke's edges)
+# a second, lighter pen (see _second_pen): PEN_SHARE of the marks lighter than Otsu's split
+# within PEN_LEVELS grey levels of one level, at least PEN_PIXELS of them, its lines no
+# wider than PEN_WIDTH of the page's longer side
+PEN_SHARE = 0.5
+PEN_LEVELS = 2
+PEN_PIXELS = 50
+PEN_WIDTH = 0.02
+PEN_APART = 3
 
 
 def _paper_grain(counts: np.ndarray, split: float) -> tuple[float, float]:
@@ -435,7 +443,51 @@ def _ink_of(flat: np.ndarray) -> np.ndarray:
         seeded[np.unique(lab[sure & ink])] = True
         seeded[0] = False
         ink = seeded[lab]
-    return _without_dust(ink)
+    return _without_dust(ink | _second_pen(levels, dark & sure & ~ink, ink))
+
+
+def _second_pen(levels: np.ndarray, light: np.ndarray, ink: np.ndarray) -> np.ndarray:
+    """The lines of a second, lighter pen among the marks Otsu's split left out
+    (``light``, ``levels`` the page's grey levels) beside the ``ink``: a yellow-green
+    crown over a brown trunk, two greys in a paint program.  A pen lays one level: at
+    least ``PEN_SHARE`` of those marks' pixels within ``PEN_LEVELS`` of one level (a
+    blurred upscale's or a photo's shading spreads over many).  Only its lines, no wider
+    than ``PEN_WIDTH`` of the page's longer side (a crown coloured in is the drawing's
+    fill, not its outline), and most of each line more than ``PEN_APART`` pixels from the
+    ink (a stroke's smoothed edge, however even its level, hugs its stroke); not a lined
+    page's rules (``RULED_ROW``)."""
+    from scipy import ndimage
+
+    n = int(light.sum())
+    if n < PEN_PIXELS:
+        return np.zeros_like(light)
+    counts = np.bincount(levels[light], minlength=256)
+    window = np.convolve(counts, np.ones(2 * PEN_LEVELS + 1), mode="same")
+    peak = int(np.argmax(window))
+    if window[peak] < PEN_SHARE * n:
+        return np.zeros_like(light)
+    pen = light & (np.abs(levels.astype(np.int16) - peak) <= PEN_LEVELS)
+    lab, k = ndimage.label(pen, structure=np.ones((3, 3), bool))
+    if k == 0:
+        return pen
+    ids = np.arange(1, k + 1)
+    widest = np.asarray(ndimage.maximum(distance_to_background(pen), lab, ids))
+    apart = distance_to_background(~ink) > PEN_APART if ink.any() else np.ones_like(ink)
+    share = np.asarray(ndimage.mean(apart, lab, ids))
+    keep = (widest <= PEN_WIDTH * max(pen.shape) / 2) & (share >= 0.5)
+    # a lined page's rules and margin are printed in one level too (cut into pieces where
+    # the drawing crosses them): what lies in the rows or columns the level fills across
+    # the page stays paper
+    h, w = pen.shape
+
+    def across(counts: np.ndarray, side: int, part: float) -> np.ndarray:
+        # a rule a pixel or two thick, and tilted: its pixels over three rows (columns)
+        return np.convolve(counts, np.ones(3), mode="same") >= part * side
+
+    rows = across(pen.sum(axis=1), w, RULED_ROW)
+    ruled = rows[:, None] | across(pen.sum(axis=0), h, RULED_COLUMN)[None, :]
+    keep &= np.asarray(ndimage.mean(ruled, lab, ids)) < 0.5
+    return np.concatenate([[False], keep])[lab]
 
 
 def _without_dust(ink: np.ndarray) -> np.ndarray:

@@ -92,6 +92,36 @@ def test_a_flat_grey_pen_reads_like_black_ink(level: int) -> None:
         assert (grey != black).sum() <= 0.01 * black.sum(), name
 
 
+def _lollipop(crown: tuple[int, int, int], fill: tuple[int, int, int] | None = None) -> Image.Image:
+    """A child's lollipop tree in colour: a brown trunk under a round crown drawn with
+    ``crown``'s pen, coloured in with ``fill``."""
+    im = Image.new("RGB", (400, 400), "white")
+    d = ImageDraw.Draw(im)
+    d.line((200, 370, 200, 240), fill=(150, 100, 50), width=6)
+    d.ellipse((110, 70, 290, 250), fill=fill, outline=crown, width=4)
+    return im
+
+
+def test_a_second_lighter_pen_is_ink_too(monkeypatch) -> None:
+    """A yellow-green crown over a brown trunk: Otsu's split falls between the two pens,
+    and the lighter one's lines are the drawing too (not the trunk alone).  A crown
+    coloured in keeps its outline and leaves out its fill; a lined page's rules, one
+    level too, stay paper."""
+    import render.reader
+    from render.reader import read_sketch
+
+    black = prepare_input(read_sketch(_lollipop((0, 0, 0)))) < 128
+    light = prepare_input(read_sketch(_lollipop((120, 210, 80)))) < 128
+    assert (light & black).sum() / (light | black).sum() > 0.8
+    filled = prepare_input(read_sketch(_lollipop((40, 140, 40), fill=(140, 220, 90)))) < 128
+    assert filled.mean() < 2 * black.mean()  # lines, not a disc of ink
+    assert (filled & black).sum() / (filled | black).sum() > 0.6
+    lined = read_sketch(Path(__file__).resolve().parents[1] / "examples/hand/ballpoint.png")
+    now = prepare_input(lined)
+    monkeypatch.setattr(render.reader, "PEN_SHARE", 2.0)  # no second pen
+    assert np.array_equal(prepare_input(lined), now)
+
+
 def test_drawing_in_a_corner_gives_the_same_tree(sketches, pipeline) -> None:
     for name, img in sketches.items():
         page = in_corner(img)
