@@ -516,13 +516,17 @@ DARK_LEVEL = 96
 LIGHT_LEVEL = 160
 DARK_BORDER = 0.9
 LIGHT_LINES = 0.3
+LIGHT_FILL = 0.5  # the light marks cover at most this share of the box they span ...
+LIGHT_REACH = 0.1  # ... and the longest reaches this share of the page's longer side
 
 
 def light_on_dark(page: np.ndarray) -> bool:
     """Whether a grey ``uint8`` page is light lines drawn on a dark ground (its border
-    dark, a small share of it light, the rest dark): read inverted, the lines are ink on
-    paper.  A dark page without light lines (an unlit photo) and a dark fill on light
-    paper (whose border is light) are not, and stay refused by :func:`flatten_paper`."""
+    dark, a small share of it light, in marks that leave most of their box dark and of
+    which one runs on, the rest dark):
+    read inverted, the lines are ink on paper.  A dark page without light lines (an
+    unlit photo, a night photo's lights and lit windows) and a dark fill on light paper
+    (whose border is light) are not, and stay refused by :func:`flatten_paper`."""
     a = np.asarray(page)
     edge = max(1, min(a.shape) // 50)
     border = np.concatenate(
@@ -530,8 +534,22 @@ def light_on_dark(page: np.ndarray) -> bool:
     )
     if float((border < DARK_LEVEL).mean()) < DARK_BORDER:
         return False
-    light = float((a > LIGHT_LEVEL).mean())
-    return MIN_INK <= light <= LIGHT_LINES and float((a < DARK_LEVEL).mean()) >= 1.0 - LIGHT_LINES
+    light = a > LIGHT_LEVEL
+    share = float(light.mean())
+    if not (MIN_INK <= share <= LIGHT_LINES and float((a < DARK_LEVEL).mean()) >= 1 - LIGHT_LINES):
+        return False
+    # drawn lines: leaving most of the box they span dark (a lit window in a night photo
+    # fills its box) and running on (street lights and stars are dots); such a photo
+    # stays refused as too dark
+    from scipy import ndimage
+
+    ys, xs = np.flatnonzero(light.any(axis=1)), np.flatnonzero(light.any(axis=0))
+    if light.sum() > LIGHT_FILL * (ys[-1] + 1 - ys[0]) * (xs[-1] + 1 - xs[0]):
+        return False
+    side = max(a.shape)
+    lab, _ = ndimage.label(light, structure=np.ones((3, 3), bool))
+    reach = max(max(s.stop - s.start for s in box) for box in ndimage.find_objects(lab))
+    return reach >= LIGHT_REACH * side
 
 
 def _dark_on_light(page: np.ndarray) -> np.ndarray:

@@ -254,6 +254,15 @@ def test_light_lines_on_a_dark_page_read_as_the_same_drawing(sketches) -> None:
     assert iou > 0.9
     # the page itself read, not its border: a dark drawing on white is read as before
     assert not light_on_dark(img) and light_on_dark(255 - img) and light_on_dark(board)
+    # a night photo's lights (dots) and a lit window (an area) are no lines: too dark
+    night = np.clip(rng.normal(30, 8, (300, 300)), 0, 255).astype(np.uint8)
+    window = night.copy()
+    window[80:150, 110:200] = 220
+    for y, x in rng.integers(10, 290, (20, 2)):
+        night[y - 3 : y + 3, x - 3 : x + 3] = 230
+    with pytest.raises(SketchError, match="too dark"):
+        prepare_input(night)
+    assert not light_on_dark(window)
     # the board's photo put on a wider white page, as the web page's pad shows a picture
     # of another shape: read within its margins
     pad, plain = np.full((256, 400), 255, np.uint8), np.full((256, 400), 255, np.uint8)
