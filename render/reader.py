@@ -521,12 +521,12 @@ LIGHT_REACH = 0.1  # ... and the longest reaches this share of the page's longer
 
 
 def light_on_dark(page: np.ndarray) -> bool:
-    """Whether a grey ``uint8`` page is light lines drawn on a dark ground (its border
-    dark, a small share of it light, in marks that leave most of their box dark and of
-    which one runs on, the rest dark):
-    read inverted, the lines are ink on paper.  A dark page without light lines (an
-    unlit photo, a night photo's lights and lit windows) and a dark fill on light paper
-    (whose border is light) are not, and stay refused by :func:`flatten_paper`."""
+    """Whether a grey ``uint8`` page is light lines drawn on a dark ground: its border
+    dark, the rest mostly dark, a small share of it light, in marks that leave most of
+    their box dark and of which one runs on.  Read inverted, the lines are ink on paper.
+    A dark page without light lines (an unlit photo, a night photo's lights and lit
+    windows) and a dark fill on light paper (whose border is light) are not, and stay
+    refused by :func:`flatten_paper`."""
     a = np.asarray(page)
     edge = max(1, min(a.shape) // 50)
     border = np.concatenate(
