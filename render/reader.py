@@ -477,15 +477,8 @@ def _second_pen(levels: np.ndarray, light: np.ndarray, ink: np.ndarray) -> np.nd
     keep = (widest <= PEN_WIDTH * max(pen.shape) / 2) & (share >= 0.5)
     # a lined page's rules and margin are printed in one level too (cut into pieces where
     # the drawing crosses them): what lies in the rows or columns the level fills across
-    # the page stays paper
-    h, w = pen.shape
-
-    def across(counts: np.ndarray, side: int, part: float) -> np.ndarray:
-        # a rule a pixel or two thick, and tilted: its pixels over three rows (columns)
-        return np.convolve(counts, np.ones(3), mode="same") >= part * side
-
-    rows = across(pen.sum(axis=1), w, RULED_ROW)
-    ruled = rows[:, None] | across(pen.sum(axis=0), h, RULED_COLUMN)[None, :]
+    # the page (as :func:`_drop_ruled_lines` finds them) stays paper
+    ruled = _rows_across(pen, RULED_ROW)[:, None] | _rows_across(pen.T, RULED_COLUMN)[None, :]
     keep &= np.asarray(ndimage.mean(ruled, lab, ids)) < 0.5
     return np.concatenate([[False], keep])[lab]
 
@@ -940,6 +933,16 @@ RULED_THICK = 5  # rows (columns) a ruled line, tilt included, may cover at most
 RULED_EDGE = 0.02
 
 
+def _rows_across(a: np.ndarray, frac: float) -> np.ndarray:
+    """The rows of ``a`` (bool) whose ink, with the rows next to them, covers more than
+    ``frac`` of the width: a line tilted by a pixel or two over the page still covers
+    the row it is on."""
+    near = a.copy()
+    near[1:] |= a[:-1]
+    near[:-1] |= a[1:]
+    return near.mean(axis=1) > frac
+
+
 def _drop_ruled_lines(ink: np.ndarray) -> np.ndarray:
     """Ink without the ruled lines and margin of lined paper (long, thin, straight lines
     across the page, from edge to edge), keeping the drawing's strokes where they cross
@@ -949,11 +952,7 @@ def _drop_ruled_lines(ink: np.ndarray) -> np.ndarray:
     out = ink.copy()
     for axis, frac in ((0, RULED_ROW), (1, RULED_COLUMN)):
         a = out if axis == 0 else out.T  # a view: rows of ``a`` are the lines looked for
-        # a line tilted by a pixel or two over the page still covers the row it is on
-        near = a.copy()
-        near[1:] |= a[:-1]
-        near[:-1] |= a[1:]
-        flagged = near.mean(axis=1) > frac
+        flagged = _rows_across(a, frac)
         if not flagged.any():
             continue
         runs, _ = ndimage.label(flagged)
