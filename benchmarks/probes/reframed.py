@@ -9,10 +9,11 @@ one only), with their indices.  Sets: ``inside_route.py``'s (people's held-out t
 each folder, the paper's ten, the code-made doodle pairs' fronts and sides, the
 held-out-style drawings of the mesh-error figure); with ``--others N`` up to N held-out
 drawings of each other kind; hand-style tree doodles (``--doodles`` a species);
-``examples/hand``.
+``examples/hand``; with ``--all-people`` instead every drawing of people's three folders
+(both parts, every kind).
 
     .venv/bin/python benchmarks/probes/reframed.py --set render.reader.SINGLE_STROKES=0 \\
-        [--others 60] [--doodles 40]
+        [--others 60] [--doodles 40] [--all-people]
 """
 
 from __future__ import annotations
@@ -59,7 +60,21 @@ def main() -> None:
     ap.add_argument("--set", nargs="+", required=True, metavar="MODULE.NAME=VALUE")
     ap.add_argument("--others", type=int, default=0, help="other kinds' drawings per kind")
     ap.add_argument("--doodles", type=int, default=40, help="hand-style doodles per species")
+    ap.add_argument(
+        "--all-people",
+        action="store_true",
+        help="instead: every drawing of each of people's folders (both parts, every kind)",
+    )
     args = ap.parse_args()
+    if args.all_people:
+        from eval.people import SOURCES, people_drawings
+
+        sets = {
+            f"people {source}, every drawing": [d.image() for d in people_drawings(None, (source,))]
+            for source in SOURCES
+        }
+    else:
+        sets = drawing_sets(args.others, args.doodles)
 
     def framed(page: np.ndarray) -> np.ndarray | None:
         try:
@@ -67,10 +82,13 @@ def main() -> None:
         except SketchError:
             return None
 
-    for name, imgs in drawing_sets(args.others, args.doodles).items():
+    for name, imgs in sets.items():
         moved = []
         for i, img in enumerate(imgs):
-            page = load_sketch(img)
+            try:
+                page = load_sketch(img)
+            except SketchError:  # refused before any reading (a strip): the same either way
+                continue
             now = framed(page)
             restore = set_constants(args.set)
             try:
