@@ -19,18 +19,16 @@ from web_helpers import (
     JOB_TIMEOUT,
     PHONE,
     draw_with_mouse,
+    edit_count,
     guarded_context,
     make_tree,
     open_job,
     open_page,
     view_pixels,
+    wait_edit,
 )
 
 pytestmark = pytest.mark.slow
-
-
-def _edits(page: Any) -> int:
-    return int(page.get_attribute("body", "data-edits") or 0)
 
 
 def _height(page: Any) -> float:
@@ -68,25 +66,23 @@ def test_sliders_variant_and_the_edited_download(
         s.value = String(h); s.dispatchEvent(new Event('input')); }""",
         round(h0 * 1.5, 1),
     )
-    page.wait_for_function("Number(document.body.dataset.edits || 0) >= 1", timeout=30_000)
-    page.wait_for_selector("body[data-model=loaded]")
+    wait_edit(page, 0)
     assert _height(page) == pytest.approx(h0 * 1.5, rel=0.03)
     # crown width from the keyboard
-    n = _edits(page)
+    n = edit_count(page)
     page.focus("#c-crown_width")
     for _ in range(8):
         page.keyboard.press("ArrowRight")
-    page.wait_for_function(f"Number(document.body.dataset.edits) > {n}", timeout=30_000)
+    wait_edit(page, n)
     assert page.input_value("#c-crown_width") == "1.4"
     # bare branches, then another variant
-    n = _edits(page)
+    n = edit_count(page)
     page.uncheck("#c-leafy")
-    page.wait_for_function(f"Number(document.body.dataset.edits) > {n}", timeout=30_000)
+    wait_edit(page, n)
     seed = page.input_value("#c-seed")
-    n = _edits(page)
+    n = edit_count(page)
     page.click("#variant")
-    page.wait_for_function(f"Number(document.body.dataset.edits) > {n}", timeout=30_000)
-    page.wait_for_selector("body[data-model=loaded]")
+    wait_edit(page, n)
     assert page.input_value("#c-seed") != seed
     after = view_pixels(page)
     assert np.abs(after - before).sum(axis=2).__gt__(40).mean() > 0.01, "the tree did not change"
@@ -99,11 +95,9 @@ def test_sliders_variant_and_the_edited_download(
     params = json.loads(Path(dl.value.path()).read_text())
     assert params["leaves"] == 0 and str(params["seed"]) == page.input_value("#c-seed")
     # reset: the drawing's tree again
-    n = _edits(page)
+    n = edit_count(page)
     page.click("#reset-controls")
-    page.wait_for_function(f"Number(document.body.dataset.edits) > {n}", timeout=30_000)
-    # the edit counts as soon as its tree arrives; the height is read once it is loaded
-    page.wait_for_selector("body[data-model=loaded]")
+    wait_edit(page, n)
     assert page.inner_text("#view-note") == ""
     assert _height(page) == pytest.approx(h0, rel=0.01)
 

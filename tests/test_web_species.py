@@ -19,12 +19,14 @@ import numpy as np
 import pytest
 from web_helpers import (
     DESKTOP,
+    edit_count,
     PHONE,
     guarded_context,
     make_tree,
     open_job,
     open_page,
     view_pixels,
+    wait_edit,
 )
 
 from weberpenn import species
@@ -150,9 +152,9 @@ def test_candidates_switch_the_tree_the_controls_and_the_downloads(
     assert len(glb) != job_glb
 
     # the controls now shape the candidate's tree
-    edits = int(page.get_attribute("body", "data-edits") or 0)
+    edits = edit_count(page)
     page.uncheck("#c-leafy")
-    page.wait_for_function(f"Number(document.body.dataset.edits || 0) > {edits}", timeout=30_000)
+    wait_edit(page, edits)
     with page.expect_download() as dl:
         page.click("#dl-json")
     edited = json.loads(Path(dl.value.path()).read_text())
@@ -197,13 +199,13 @@ def test_a_slider_past_the_generators_limits_stops_at_the_most_it_grows(
 ) -> None:
     page = context.new_page()
     open_job(page, server, finished_job(species="fir"), READY)
-    n = int(page.get_attribute("body", "data-edits") or 0)
+    n = edit_count(page)
     # three times the branches of a fir: more leaves than the generator grows
     page.evaluate(
         """() => { const s = document.getElementById('c-branch_count');
         s.value = s.max; s.dispatchEvent(new Event('input')); }"""
     )
-    page.wait_for_function(f"Number(document.body.dataset.edits || 0) > {n}", timeout=30_000)
+    wait_edit(page, n)
     status = page.inner_text("#edit-status")
     assert "Refused" not in status and "branch count held at" in status, status
     held = float(page.input_value("#c-branch_count"))

@@ -26,11 +26,13 @@ from web_helpers import (
     JOB_TIMEOUT,
     PHONE,
     draw_with_mouse,
+    edit_count,
     guarded_context,
     open_job,
     painted,
     palm_service,
     view_pixels,
+    wait_edit,
 )
 
 pytestmark = pytest.mark.slow
@@ -49,15 +51,6 @@ def jobs(finished_job: Any) -> dict[str, str]:
 def page(browser: Any, server: str) -> Iterator[Any]:
     with guarded_context(browser, server, console=True, **DESKTOP) as ctx:
         yield ctx.new_page()
-
-
-def _edits(page: Any) -> int:
-    return int(page.get_attribute("body", "data-edits") or 0)
-
-
-def _wait_edit(page: Any, n: int) -> None:
-    page.wait_for_function(f"Number(document.body.dataset.edits || 0) > {n}", timeout=30_000)
-    page.wait_for_selector("body[data-model=loaded]")
 
 
 def _slide(page: Any, name: str, value: float | str) -> None:
@@ -143,12 +136,12 @@ def test_a_reload_and_the_link_keep_the_drawing_the_edits_and_the_settings(
     page.fill("#height", "12")
     page.uncheck("#refine")
     page.select_option("#species-pick", "fir")
-    n = _edits(page)
+    n = edit_count(page)
     _slide(page, "crown_width", 1.4)
-    _wait_edit(page, n)
-    n = _edits(page)
+    wait_edit(page, n)
+    n = edit_count(page)
     page.click("#variant")
-    _wait_edit(page, n)
+    wait_edit(page, n)
     kept = _state(page)
     assert kept["crown_width"] == "1.4" and kept["budget"] == "7"
     page.reload()
@@ -176,9 +169,9 @@ def test_a_reload_and_the_link_keep_the_drawing_the_edits_and_the_settings(
         other.wait_for_function(f"({INK})() > 500")
         assert other.inner_text("#view-note") == "edited"
         # its drawing came from the server: the tree can be drawn from another side here
-        n = _edits(other)
+        n = edit_count(other)
         other.click("#reset-controls")
-        _wait_edit(other, n)
+        wait_edit(other, n)
         other.wait_for_function("!document.getElementById('draw-side').disabled")
         assert "crown_width" not in other.url and "seed" not in other.url
 
@@ -218,9 +211,9 @@ def test_a_reload_keeps_the_candidate_species_on_show(page: Any, server: str, jo
     page.click("#candidates .candidate >> nth=1")
     page.wait_for_function(f"Number(document.body.dataset.loads) > {n}", timeout=30_000)
     page.wait_for_selector(READY)
-    n = _edits(page)
+    n = edit_count(page)
     _slide(page, "crown_width", 1.3)
-    _wait_edit(page, n)
+    wait_edit(page, n)
     assert "cand=1" in page.url
     page.reload()
     page.wait_for_selector(READY, timeout=30_000)
@@ -237,6 +230,31 @@ def test_a_reload_keeps_the_candidate_species_on_show(page: Any, server: str, jo
     assert page.get_attribute("body", "data-loads") == "2"
 
 
+def test_an_edit_is_done_when_the_tree_shown_is_the_controls_last_position(
+    page: Any, server: str, jobs: dict
+) -> None:
+    open_job(page, server, jobs["palm"])
+    n = edit_count(page)
+    page.focus("#c-crown_width")
+    # keys further apart than the page's 60 ms wait: the first sends its request, the
+    # others wait behind it, and the first's tree raises the count before the last comes
+    for _ in range(4):
+        page.keyboard.press("ArrowRight")
+        page.wait_for_timeout(90)
+    wait_edit(page, n)
+    last = page.input_value("#c-crown_width")
+    assert f"e.crown_width={last}" in page.url
+    assert page.inner_text("#view-note") == "edited"
+    # back to the tree's own value: nothing edited once that tree is shown
+    n = edit_count(page)
+    for _ in range(4):
+        page.keyboard.press("ArrowLeft")
+        page.wait_for_timeout(90)
+    wait_edit(page, n)
+    assert "e.crown_width" not in page.url
+    assert page.inner_text("#view-note") == ""
+
+
 def test_ctrl_z_undoes_what_was_changed_last_the_pad_or_the_tree(
     page: Any, server: str, jobs: dict
 ) -> None:
@@ -251,17 +269,17 @@ def test_ctrl_z_undoes_what_was_changed_last_the_pad_or_the_tree(
     page.mouse.up()
     ink = page.evaluate(INK)
     width = page.input_value("#c-crown_width")
-    n = _edits(page)
+    n = edit_count(page)
     page.focus("#c-crown_width")
     for _ in range(3):
         page.keyboard.press("ArrowRight")
-    _wait_edit(page, n)
+    wait_edit(page, n)
     wider = page.input_value("#c-crown_width")
     assert wider != width
     # the slider still has the focus: Ctrl+Z undoes the edit, not a stroke
-    n = _edits(page)
+    n = edit_count(page)
     page.keyboard.press("Control+z")
-    _wait_edit(page, n)
+    wait_edit(page, n)
     assert page.input_value("#c-crown_width") == width
     assert page.evaluate(INK) == ink
     assert page.inner_text("#view-note") == ""
@@ -272,14 +290,14 @@ def test_ctrl_z_undoes_what_was_changed_last_the_pad_or_the_tree(
     page.keyboard.press("Control+Shift+z")
     assert page.evaluate(INK) == pytest.approx(ink, rel=0.05)
     assert page.input_value("#c-crown_width") == width
-    n = _edits(page)
+    n = edit_count(page)
     page.keyboard.press("Control+Shift+z")
-    _wait_edit(page, n)
+    wait_edit(page, n)
     assert page.input_value("#c-crown_width") == wider
     # the edit panel's own buttons undo the tree only
-    n = _edits(page)
+    n = edit_count(page)
     page.click("#edit-undo")
-    _wait_edit(page, n)
+    wait_edit(page, n)
     assert page.input_value("#c-crown_width") == width
     assert page.evaluate(INK) == pytest.approx(ink, rel=0.05)
 
@@ -336,10 +354,10 @@ def test_obj_and_the_light_glb(page: Any, server: str, jobs: dict, tmp_path: Pat
 def test_an_edited_tree_is_framed_again(page: Any, server: str, jobs: dict) -> None:
     open_job(page, server, jobs["palm"])
     for name, value in (("crown_width", "max"), ("height", "min")):
-        n = _edits(page)
+        n = edit_count(page)
         value = page.get_attribute(f"#c-{name}", value)
         _slide(page, name, value)
-        _wait_edit(page, n)
+        wait_edit(page, n)
         painted(page)
         edited = view_pixels(page)
         page.click("#reset-view")

@@ -120,6 +120,23 @@ def make_tree(page: Any, budget: int = 2) -> None:
     page.wait_for_selector("body[data-model=loaded]", timeout=30_000)
 
 
+def edit_count(page: Any) -> int:
+    """How many edited trees the page has shown (``data-edits``)."""
+    return int(page.get_attribute("body", "data-edits") or 0)
+
+
+def wait_edit(page: Any, n: int) -> None:
+    """Wait until more than ``n`` edited trees were shown and the one shown is the
+    controls' last position: keys pressed in a row can send two requests, and the first's
+    tree alone raises the count."""
+    page.wait_for_function(
+        f"Number(document.body.dataset.edits || 0) > {n}"
+        " && document.body.dataset.editQueue === 'idle'",
+        timeout=30_000,
+    )
+    page.wait_for_selector("body[data-model=loaded]", timeout=30_000)
+
+
 def painted(page: Any) -> None:
     """Wait until the browser has drawn two more frames: what a change of the page's
     layout sets off (the 3D view resized, drawn again) has been painted by then."""

@@ -904,11 +904,18 @@ function changedControls() {
 function scheduleEdit() {
   if (!edit || !edit.initial) return;
   clearTimeout(editTimer);
-  editTimer = setTimeout(runEdit, 60);
+  document.body.dataset.editQueue = "busy";
+  editTimer = setTimeout(() => { editTimer = null; runEdit(); }, 60);
+}
+// "idle" once the tree shown is the controls' last position: nothing waits on the timer,
+// nothing is in flight, nothing is to follow (a script or test waits on it, not on a count
+// that an earlier position's tree can raise)
+function markEditQueue() {
+  if (editTimer === null && !(edit && (edit.busy || edit.again))) document.body.dataset.editQueue = "idle";
 }
 async function runEdit() {
   const mine = edit;
-  if (!mine) return;
+  if (!mine) { markEditQueue(); return; }
   if (mine.busy) { mine.again = true; return; }
   mine.busy = true;
   const t0 = performance.now();
@@ -946,7 +953,7 @@ async function runEdit() {
     }
   } finally {
     mine.busy = false;
-    if (mine.again && edit === mine) { mine.again = false; runEdit(); }
+    if (mine.again && edit === mine) { mine.again = false; runEdit(); } else markEditQueue();
   }
 }
 
