@@ -19,8 +19,8 @@ import numpy as np
 import pytest
 from web_helpers import (
     DESKTOP,
-    edit_count,
     PHONE,
+    edit_count,
     guarded_context,
     make_tree,
     open_job,
