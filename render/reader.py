@@ -906,6 +906,56 @@ def _touching(ink: np.ndarray, seed: np.ndarray) -> np.ndarray:
     return hit[lab]
 
 
+# A caption: a word or a name written under or over the drawing ("my tree", "Anna, 7"),
+# across blank rows from it.  It is a short row of separate marks as tall as each other
+# (letters), none of which a tree's own parts make: a pot in pieces has two sides tall, a
+# broken ground line's dashes are flat, a crown drawn apart from its trunk is one mark or
+# taller than a caption.  Kept, it is read as the tree's roots or crown and the tree is
+# framed small over it
+CAPTION_HEIGHT = 0.2  # of the ink's height, at most
+CAPTION_GAP = 0.02  # of the ink's height: the blank rows between it and the drawing, at least
+CAPTION_MARKS = 3  # separate marks (8-connected) at least ...
+CAPTION_MARK = 0.4  # ... each at least this share of the caption's height tall
+CAPTION_STROKES = 4.0  # its height in stroke widths, at least (a dashed line's is about one)
+CAPTION_ROW = 2.0  # its width over its height, at least
+
+
+def _drop_captions(ink: np.ndarray) -> np.ndarray:
+    """``ink`` without a caption under or over the drawing (see ``CAPTION_HEIGHT``).  Most
+    pages (and every candidate's sketch) have no blank rows between their marks: one
+    look at the rows then."""
+    rows = np.flatnonzero(ink.any(axis=1))
+    if rows.size < 2:
+        return ink
+    height = int(rows[-1] + 1 - rows[0])
+    breaks = np.flatnonzero(np.diff(rows) > max(2.0, CAPTION_GAP * height))
+    if breaks.size == 0:
+        return ink
+    out = ink
+    under = (int(rows[breaks[-1] + 1]), int(rows[-1] + 1))
+    over = (int(rows[0]), int(rows[breaks[0]] + 1))
+    for lo, hi in (under, over):
+        if hi - lo <= CAPTION_HEIGHT * height and _is_caption(ink[lo:hi]):
+            out = out.copy() if out is ink else out
+            out[lo:hi] = False
+    return out
+
+
+def _is_caption(block: np.ndarray) -> bool:
+    """Whether the rows ``block`` (ink in its first and last) hold a caption."""
+    from scipy import ndimage
+
+    h = block.shape[0]
+    cols = np.flatnonzero(block.any(axis=0))
+    if cols[-1] + 1 - cols[0] < CAPTION_ROW * h or h < CAPTION_STROKES * stroke_width(block):
+        return False
+    lab, n = ndimage.label(block, structure=np.ones((3, 3), bool))
+    if n < CAPTION_MARKS:
+        return False
+    tall = [sl[0].stop - sl[0].start >= CAPTION_MARK * h for sl in ndimage.find_objects(lab)]
+    return sum(tall) >= CAPTION_MARKS
+
+
 def tree_ink(ink: np.ndarray) -> np.ndarray:
     """The tree's ink alone, so a drawing is framed on the tree and not on everything on
     the page: without stray marks, a sun, a cloud or grass beside the tree, and a ground
@@ -1120,7 +1170,8 @@ def normalise_drawing(
     a = _dark_on_light(a)
     # a ground line drawn from edge to edge looks like ruling, whose removal keeps what
     # crosses it and leaves the line's crests: it goes as a ground line first
-    page = _page_ink(a)
+    # a caption under the drawing would also hide a ground line (ink below it)
+    page = _drop_captions(_page_ink(a))
     grounded = _drop_ground(page)
     ground_free = grounded if np.array_equal(grounded, page) else None
     ink = _tree_ink(drop_specks(_drop_ruled_lines(grounded)), ground_free)

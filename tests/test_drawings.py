@@ -122,6 +122,67 @@ def test_a_second_lighter_pen_is_ink_too(monkeypatch) -> None:
     assert np.array_equal(prepare_input(lined), now)
 
 
+def _captioned(img: Image.Image, under: str, over: str = "") -> Image.Image:
+    """``img`` on a taller white page with ``under`` written below it (and ``over`` above)."""
+    from PIL import ImageFont
+
+    w, h = img.size
+    font = ImageFont.load_default(size=max(12, h // 14))
+    page = Image.new("RGB", (w, h + h // 3), "white")
+    page.paste(img.convert("RGB"), (0, h // 6))
+    draw = ImageDraw.Draw(page)
+    draw.text((w // 3, h + h // 6 + 6), under, fill=(20, 20, 20), font=font)
+    if over:
+        draw.text((w // 4, 2), over, fill=(20, 20, 20), font=font)
+    return page
+
+
+def _within_a_pixel(a: np.ndarray, b: np.ndarray) -> float:
+    """The share of either picture's ink within a pixel of the other's (the lesser)."""
+    from scipy import ndimage
+
+    ia, ib = a < 128, b < 128
+    return min(
+        (ia & ndimage.binary_dilation(ib)).sum() / ia.sum(),
+        (ib & ndimage.binary_dilation(ia)).sum() / ib.sum(),
+    )
+
+
+def test_a_caption_under_or_over_the_drawing_is_not_the_tree(monkeypatch) -> None:
+    """Words written under or over a drawing ("My tree", a title) are not the tree's roots
+    or crown: it is framed as without them.  A pot drawn in pieces under a tree, apart
+    from its trunk, stays the tree's."""
+    import render.reader
+    from render.reader import read_sketch
+
+    oak = Image.open(Path(__file__).resolve().parents[1] / "examples/hand/oak.png")
+    alone = prepare_input(read_sketch(_captioned(oak, "")))  # the same page, nothing written
+    for under, over in (("My tree", ""), ("Anna 7", "TREE")):
+        # the words move the page's ink level a little: a line may move by a pixel
+        page = prepare_input(read_sketch(_captioned(oak, under, over)))
+        assert _within_a_pixel(page, alone) > 0.95, (under, over)
+    # a tree over a pot drawn as four strokes, none touching the trunk
+    img = Image.new("L", (400, 400), 255)
+    d = ImageDraw.Draw(img)
+    d.ellipse((110, 30, 290, 190), outline=0, width=4)
+    d.line((190, 190, 190, 300), fill=0, width=4)
+    d.line((210, 190, 210, 300), fill=0, width=4)
+    for stroke in (
+        (130, 315, 270, 315),
+        (130, 322, 150, 370),
+        (270, 322, 250, 370),
+        (155, 376, 245, 376),
+    ):
+        d.line(stroke, fill=0, width=4)
+    now = prepare_input(read_sketch(img))
+    monkeypatch.setattr(render.reader, "CAPTION_MARKS", 10**9)  # no captions read
+    assert np.array_equal(prepare_input(read_sketch(img)), now)
+    monkeypatch.undo()
+    # the pot in pieces is no caption, written under it a name is
+    named = prepare_input(read_sketch(_captioned(img, "Anna")))
+    assert _within_a_pixel(named, prepare_input(read_sketch(_captioned(img, "")))) > 0.95
+
+
 def test_drawing_in_a_corner_gives_the_same_tree(sketches, pipeline) -> None:
     for name, img in sketches.items():
         page = in_corner(img)
