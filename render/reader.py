@@ -906,6 +906,55 @@ def _touching(ink: np.ndarray, seed: np.ndarray) -> np.ndarray:
     return hit[lab]
 
 
+# A frame drawn round the drawing (a border, a card's edge): marks that lie wholly within
+# FRAME_BAND of the ink's bounding box and run along FRAME_COVER of each of its four
+# sides, round ink apart from them.  Kept, the frame is read as the tree's outline and the
+# tree is framed small inside it
+FRAME_BAND = 0.03  # of the box's longer side (at least 3 px): how far from its edge
+FRAME_COVER = 0.8  # of each side's length the frame's marks run along, at least
+
+
+def _drop_frame(ink: np.ndarray) -> np.ndarray:
+    """``ink`` without a frame drawn round the drawing (see ``FRAME_BAND``).  A tree's
+    sketch runs along at most two sides of its box: four slices of the ink say so."""
+    from scipy import ndimage
+
+    ys, xs = np.flatnonzero(ink.any(axis=1)), np.flatnonzero(ink.any(axis=0))
+    if ys.size < 3 or xs.size < 3:
+        return ink
+    top, bottom, left, right = int(ys[0]), int(ys[-1]) + 1, int(xs[0]), int(xs[-1]) + 1
+    t = max(3, int(round(FRAME_BAND * max(bottom - top, right - left))))
+    if bottom - top <= 4 * t or right - left <= 4 * t:
+        return ink
+    box = ink[top:bottom, left:right]
+
+    def runs_along(marks: np.ndarray) -> bool:
+        sides = (
+            marks[:t].any(axis=0),
+            marks[-t:].any(axis=0),
+            marks[:, :t].any(axis=1),
+            marks[:, -t:].any(axis=1),
+        )
+        return all(side.mean() >= FRAME_COVER for side in sides)
+
+    if not runs_along(box):
+        return ink
+    ring = np.ones(box.shape, bool)
+    ring[t:-t, t:-t] = False
+    lab, n = ndimage.label(box, structure=np.ones((3, 3), bool))
+    # the marks with no pixel off the ring
+    off = np.zeros(n + 1, bool)
+    off[lab[box & ~ring]] = True
+    piece = ~off
+    piece[0] = False
+    frame = piece[lab]
+    if not (box & ~frame).any() or not runs_along(frame):
+        return ink
+    out = ink.copy()
+    out[top:bottom, left:right] &= ~frame
+    return out
+
+
 # A caption: a word or a name written under or over the drawing ("my tree", "Anna, 7"),
 # across blank rows from it.  It is a short row of separate marks as tall as each other
 # (letters), none of which a tree's own parts make: a pot in pieces has two sides tall, a
@@ -1170,8 +1219,9 @@ def normalise_drawing(
     a = _dark_on_light(a)
     # a ground line drawn from edge to edge looks like ruling, whose removal keeps what
     # crosses it and leaves the line's crests: it goes as a ground line first
-    # a caption under the drawing would also hide a ground line (ink below it)
-    page = _drop_captions(_page_ink(a))
+    # a frame round the drawing, then a caption under it, would also hide a ground line
+    # (ink below it)
+    page = _drop_captions(_drop_frame(_page_ink(a)))
     grounded = _drop_ground(page)
     ground_free = grounded if np.array_equal(grounded, page) else None
     ink = _tree_ink(drop_specks(_drop_ruled_lines(grounded)), ground_free)

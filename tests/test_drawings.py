@@ -183,6 +183,41 @@ def test_a_caption_under_or_over_the_drawing_is_not_the_tree(monkeypatch) -> Non
     assert _within_a_pixel(named, prepare_input(read_sketch(_captioned(img, "")))) > 0.95
 
 
+def test_a_frame_drawn_round_the_drawing_is_not_the_tree(monkeypatch) -> None:
+    """A border drawn round the drawing by hand (four wobbly strokes, gaps at the
+    corners) is not the tree's outline: the tree is framed as without it."""
+    import render.reader
+    from render.reader import read_sketch
+
+    oak = Image.open(Path(__file__).resolve().parents[1] / "examples/hand/oak.png")
+    w, h = oak.size
+    page = Image.new("RGB", (w * 5 // 4, h * 5 // 4), "white")
+    page.paste(oak.convert("RGB"), (w // 8, h // 8))
+    alone = prepare_input(read_sketch(page))
+    d = ImageDraw.Draw(page)
+    rng = np.random.default_rng(1)
+    a, b, c, e = (
+        (28, 26),
+        (page.width - 24, 30),
+        (page.width - 22, page.height - 26),
+        (26, page.height - 24),
+    )
+    for p, q in ((a, b), (b, c), (c, e), (e, a)):
+        shrink = 0.04  # each stroke stops short of the corners
+        p2 = (p[0] + (q[0] - p[0]) * shrink, p[1] + (q[1] - p[1]) * shrink)
+        q2 = (q[0] + (p[0] - q[0]) * shrink, q[1] + (p[1] - q[1]) * shrink)
+        pts = [
+            (p2[0] + (q2[0] - p2[0]) * k / 20 + rng.normal(0, 1.5),
+             p2[1] + (q2[1] - p2[1]) * k / 20 + rng.normal(0, 1.5))
+            for k in range(21)
+        ]  # fmt: skip
+        d.line(pts, fill=(0, 0, 0), width=3)
+    framed = prepare_input(read_sketch(page))
+    assert _within_a_pixel(framed, alone) > 0.95
+    monkeypatch.setattr(render.reader, "FRAME_COVER", 2.0)  # no frame read
+    assert _within_a_pixel(prepare_input(read_sketch(page)), alone) < 0.5
+
+
 def test_drawing_in_a_corner_gives_the_same_tree(sketches, pipeline) -> None:
     for name, img in sketches.items():
         page = in_corner(img)
