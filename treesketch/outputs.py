@@ -96,7 +96,7 @@ def compare_image(result: Any, size: int = 256) -> np.ndarray:
     """Side by side: input sketch | first estimate's sketch | refined sketch, with the
     drawing's outline (red) over the tree's (blue) | colour render (RGB uint8, captioned);
     one row per view when the tree was drawn from several sides."""
-    from PIL import Image, ImageDraw
+    from PIL import Image, ImageDraw, ImageFont
 
     from render.sketch import SketchRenderer
 
@@ -140,7 +140,10 @@ def compare_image(result: Any, size: int = 256) -> np.ndarray:
                 (f"{result.species}, yaw {yaw:.0f}", Image.fromarray(colour).convert("RGB")),
             ]
         )
-    cap = 18
+    # captions in a scalable font, legible in a picture viewer at its size (PIL's bitmap
+    # default ran words together)
+    font = ImageFont.load_default(size=max(11, round(size / 20)))
+    cap = round(font.size * 1.6)
     height = size + cap
     out = Image.new("RGB", (size * len(rows[0]), height * len(rows)), (255, 255, 255))
     draw = ImageDraw.Draw(out)
@@ -148,7 +151,7 @@ def compare_image(result: Any, size: int = 256) -> np.ndarray:
         top = r * height
         for i, (title, im) in enumerate(panels):
             out.paste(im, (i * size, top + cap))
-            draw.text((i * size + 4, top + 3), title, fill=(0, 0, 0))
+            draw.text((i * size + 4, top + 3), title, fill=(0, 0, 0), font=font)
             if i:
                 draw.line([(i * size, top), (i * size, top + height)], fill=(180, 180, 180))
         if r:
