@@ -51,6 +51,7 @@ __all__ = [
     "image_format",
     "ink_mask",
     "light_on_dark",
+    "line_spread",
     "read_sketch",
     "tree_ink",
     "crown_axis",
@@ -593,6 +594,21 @@ def stroke_width(ink: np.ndarray) -> float:
         return 1.0
     inside = distance_to_background(ink)
     return max(1.0, 2.0 * float(np.median(inside[skeletonize(ink)])))
+
+
+def line_spread(ink: np.ndarray) -> float:
+    """How far the ink spreads across its longest axis, over its reach along it: about
+    0.005 for a straight line drawn by hand (a stick with a dot on it as well), at least
+    0.08 for people's drawings of trees (``treesketch.pipeline.LINE_SPREAD``); 1 for
+    fewer than two ink pixels."""
+    ys, xs = np.nonzero(ink)
+    if ys.size < 2:
+        return 1.0
+    pts = np.stack([ys, xs], axis=1).astype(np.float64)
+    pts -= pts.mean(axis=0)
+    values, vectors = np.linalg.eigh(pts.T @ pts / len(pts))
+    along = pts @ vectors[:, 1]
+    return float(np.sqrt(max(values[0], 0.0)) / (along.max() - along.min() + 1.0))
 
 
 def drop_specks(ink: np.ndarray) -> np.ndarray:

@@ -16,7 +16,7 @@ from refine.objective import SearchSpace
 from refine.shape import shape_distance
 from render.reader import FRAME_BOTTOM, SketchError, light_on_dark, normalise_drawing
 from treesketch import Pipeline, RefineSettings
-from treesketch.pipeline import prepare_input
+from treesketch.pipeline import load_sketch, prepare_input
 from weberpenn import build_mesh, grow, species
 
 
@@ -408,11 +408,38 @@ def _house() -> np.ndarray:
 
 
 HAND = Path(__file__).resolve().parents[1] / "examples" / "hand"
+
+
+def _line(dot: bool = False) -> np.ndarray:
+    """One slightly wobbly upright stroke (with a dot on its top)."""
+    im = Image.new("L", (400, 400), 255)
+    d = ImageDraw.Draw(im)
+    d.line([(200, 370), (203, 260), (198, 150), (201, 90)], fill=0, width=4)
+    if dot:
+        d.ellipse((192, 72, 210, 90), fill=0)
+    return np.asarray(im)
+
+
 NOT_TREES = {
     "noise": lambda: ((np.random.default_rng(0).random((256, 256)) > 0.6) * 255).astype(np.uint8),
     "face": _face,
     "house": _house,
+    "one line": _line,
+    "a stick with a dot": lambda: _line(dot=True),
 }
+
+
+def test_one_straight_line_is_told_from_every_drawn_tree() -> None:
+    """``render.reader.line_spread``: a line (with a dot on it) spreads across its axis a
+    small share of its reach; every drawing of ``examples/hand`` (a lollipop's stick
+    under its crown, a palm's single-line trunk) spreads far more."""
+    from render.reader import line_spread
+    from treesketch.pipeline import LINE_SPREAD
+
+    for img in (_line(), _line(dot=True)):
+        assert line_spread(prepare_input(img) < 128) < LINE_SPREAD / 2
+    for path in sorted(HAND.glob("*.png")):
+        assert line_spread(prepare_input(load_sketch(path)) < 128) > 2 * LINE_SPREAD, path.name
 
 
 @pytest.fixture(scope="module")

@@ -27,7 +27,7 @@ import numpy as np
 from refine.objective import framed
 from refine.search import Cancelled, RefineResult, RefineSettings
 from refine.shape import ShapeTarget, line_distance
-from render.reader import SketchError
+from render.reader import SketchError, line_spread
 from weberpenn import TreeMesh, TreeParams, build_mesh, grow
 from weberpenn import species as wp_species
 
@@ -103,6 +103,15 @@ LOW_CONFIDENCE_INK = 0.06
 # probability the drawing is asked "is this a tree?".  The distances cannot tell a quick
 # doodle of a tree from a house (RESULTS.md, "Is it a tree?")
 TREE_PROBABILITY_LIMIT = 0.5
+# one straight line (a stick, a stick with a dot on it, a line across the page) shows no
+# crown, and the network reads a lone upright line as a fir's trunk (P(tree) 0.997): a
+# drawing whose ink spreads across its longest axis no more than this share of its reach
+# (``render.reader.line_spread``; a hand-drawn line about 0.005, the thinnest of people's
+# 648 held-out trees 0.079) is asked "is this a tree?" whatever the estimator says, and
+# is a tree as often as people's held-out drawings that thin are (LINE_TREES: 1 of 11,
+# a single stroke labelled a tree; `benchmarks/probes/one_line.py`)
+LINE_SPREAD = 0.03
+LINE_TREES = 1 / 11
 MAX_HEIGHT = 200.0  # metres: taller than any tree that grows
 
 
@@ -238,11 +247,22 @@ def tree_likeness(loss: float, ink: float, limit: float) -> tuple[float, str | N
 
 
 def tree_judgement(
-    tree_probability: float | None, loss: float, ink: float, limit: float
+    tree_probability: float | None,
+    loss: float,
+    ink: float,
+    limit: float,
+    one_line: bool = False,
 ) -> tuple[float, str | None]:
     """How much the drawing looks like a tree (0..1) and the warning when it may not be
     one: the estimator's probability when it gives one (warned below
-    :data:`TREE_PROBABILITY_LIMIT`), else the distances' :func:`tree_likeness`."""
+    :data:`TREE_PROBABILITY_LIMIT`), else the distances' :func:`tree_likeness`; a drawing
+    of ``one_line`` (:data:`LINE_SPREAD`) is warned, at most :data:`LINE_TREES`."""
+    if one_line:
+        p = LINE_TREES if tree_probability is None else min(LINE_TREES, tree_probability)
+        return float(max(0.0, p)), (
+            "low confidence: this is one straight line, not a drawing of a tree (draw its "
+            "crown too); is this a sketch of a tree?"
+        )
     if tree_probability is None:
         return tree_likeness(loss, ink, limit)
     p = float(min(1.0, max(0.0, tree_probability)))
@@ -311,7 +331,10 @@ def judge_views(
     ink = float(np.mean([drawing_line_distance(d.shape, v.sketch_after) for d, v in pairs]))
     limit = LOW_CONFIDENCE_LOSS if embedded else LOW_CONFIDENCE_LOSS_SHAPE
     p = first.estimate.tree_probability
-    tree_like, warning = tree_judgement(p, drawn.loss_after, ink, limit)
+    one_line = all(line_spread(img < 128) <= LINE_SPREAD for img in read.images)
+    tree_like, warning = tree_judgement(p, drawn.loss_after, ink, limit, one_line)
+    if one_line and p is not None:
+        p = tree_like
     return Judgement(ink, tree_like, warning, p)
 
 

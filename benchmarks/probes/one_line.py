@@ -1,0 +1,54 @@
+"""Probe: how thin are people's drawings? (``treesketch.pipeline.LINE_SPREAD``)
+
+Reads the held part of people's drawings (``eval.people``, authors never fitted on) as the
+pipeline does and measures each one's ``render.reader.line_spread`` (the ink's spread
+across its longest axis over its reach; a straight line drawn by hand about 0.005).
+Prints, per source and kind, how many are at or under ``--limit``, the thinnest trees,
+and the share of trees among the drawings that thin (the probability a drawing of one
+line is a tree: ``treesketch.pipeline.LINE_TREES``).
+
+    .venv/bin/python benchmarks/probes/one_line.py [--limit 0.03] [--per-kind 400]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections import Counter
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
+
+
+def main() -> None:
+    from eval.people import SOURCES, people_drawings
+    from render.reader import SketchError, line_spread
+    from treesketch.pipeline import LINE_SPREAD, load_sketch, prepare_input
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--limit", type=float, default=LINE_SPREAD)
+    ap.add_argument("--per-kind", type=int, default=400)
+    args = ap.parse_args()
+    rows = []
+    for d in people_drawings(part="held", sources=SOURCES, per_kind=args.per_kind):
+        try:
+            img = prepare_input(load_sketch(d.image()))
+        except SketchError:
+            continue
+        rows.append((d.source, d.kind, d.key, line_spread(img < 128)))
+    under = Counter((s, k) for s, k, _, v in rows if v <= args.limit)
+    total = Counter((s, k) for s, k, _, _ in rows)
+    print(f"{len(rows)} held-out drawings; at or under {args.limit}:")
+    for (s, k), n in sorted(total.items()):
+        if under[(s, k)]:
+            print(f"- {s}/{k}: {under[(s, k)]} of {n}")
+    trees = sorted((v, f"{s}/{key}") for s, k, key, v in rows if k == "tree")
+    print("thinnest trees:", ", ".join(f"{name} {v:.3f}" for v, name in trees[:5]))
+    thin = [k for _, k, _, v in rows if v <= args.limit]
+    n_trees = sum(k == "tree" for k in thin)
+    print(f"trees among the drawings that thin: {n_trees} of {len(thin)}")
+
+
+if __name__ == "__main__":
+    main()
