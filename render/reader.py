@@ -955,14 +955,10 @@ def _drop_frame(ink: np.ndarray) -> np.ndarray:
 
     if not runs_along(box):
         return ink
-    ring = np.ones(box.shape, bool)
-    ring[t:-t, t:-t] = False
     lab, n = ndimage.label(box, structure=np.ones((3, 3), bool))
-    # the marks with no pixel off the ring
-    off = np.zeros(n + 1, bool)
-    off[lab[box & ~ring]] = True
-    piece = ~off
-    piece[0] = False
+    # the marks with no pixel inside the band round the box's edges
+    piece = np.ones(n + 1, bool)
+    piece[lab[t:-t, t:-t]] = False  # label 0 too: the paper is no mark
     frame = piece[lab]
     if not (box & ~frame).any() or not runs_along(frame):
         return ink
@@ -1233,11 +1229,11 @@ def normalise_drawing(
         shape = (max(MIN_SIDE, round(a.shape[1] * s)), max(MIN_SIDE, round(a.shape[0] * s)))
         a = np.asarray(Image.fromarray(a).resize(shape, Image.Resampling.BOX))
     a = _dark_on_light(a)
+    # a frame round the drawing, then a caption under it, would hide a ground line (ink
+    # below it)
+    page = _drop_captions(_drop_frame(_page_ink(a)))
     # a ground line drawn from edge to edge looks like ruling, whose removal keeps what
     # crosses it and leaves the line's crests: it goes as a ground line first
-    # a frame round the drawing, then a caption under it, would also hide a ground line
-    # (ink below it)
-    page = _drop_captions(_drop_frame(_page_ink(a)))
     grounded = _drop_ground(page)
     ground_free = grounded if np.array_equal(grounded, page) else None
     ink = _tree_ink(drop_specks(_drop_ruled_lines(grounded)), ground_free)

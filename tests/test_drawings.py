@@ -7,17 +7,21 @@ not a tree but not a plain outline drawing of one."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 from PIL import Image, ImageDraw
 
+from eval.pages import bordered, captioned, within_a_pixel
 from refine.objective import SearchSpace
 from refine.shape import shape_distance
 from render.reader import FRAME_BOTTOM, SketchError, light_on_dark, normalise_drawing
 from treesketch import Pipeline, RefineSettings
 from treesketch.pipeline import load_sketch, prepare_input
 from weberpenn import build_mesh, grow, species
+
+HAND = Path(__file__).resolve().parents[1] / "examples" / "hand"
 
 
 @pytest.fixture(scope="module")
@@ -116,36 +120,17 @@ def test_a_second_lighter_pen_is_ink_too(monkeypatch) -> None:
     filled = prepare_input(read_sketch(_lollipop((40, 140, 40), fill=(140, 220, 90)))) < 128
     assert filled.mean() < 2 * black.mean()  # lines, not a disc of ink
     assert (filled & black).sum() / (filled | black).sum() > 0.6
-    lined = read_sketch(Path(__file__).resolve().parents[1] / "examples/hand/ballpoint.png")
+    lined = read_sketch(HAND / "ballpoint.png")
     now = prepare_input(lined)
     monkeypatch.setattr(render.reader, "PEN_SHARE", 2.0)  # no second pen
     assert np.array_equal(prepare_input(lined), now)
 
 
-def _captioned(img: Image.Image, under: str, over: str = "") -> Image.Image:
-    """``img`` on a taller white page with ``under`` written below it (and ``over`` above)."""
-    from PIL import ImageFont
+def _ink_read(page: Any) -> np.ndarray:
+    """The ink of ``page`` as the pipeline reads and frames it."""
+    from render.reader import ink_mask, read_sketch
 
-    w, h = img.size
-    font = ImageFont.load_default(size=max(12, h // 14))
-    page = Image.new("RGB", (w, h + h // 3), "white")
-    page.paste(img.convert("RGB"), (0, h // 6))
-    draw = ImageDraw.Draw(page)
-    draw.text((w // 3, h + h // 6 + 6), under, fill=(20, 20, 20), font=font)
-    if over:
-        draw.text((w // 4, 2), over, fill=(20, 20, 20), font=font)
-    return page
-
-
-def _within_a_pixel(a: np.ndarray, b: np.ndarray) -> float:
-    """The share of either picture's ink within a pixel of the other's (the lesser)."""
-    from scipy import ndimage
-
-    ia, ib = a < 128, b < 128
-    return min(
-        (ia & ndimage.binary_dilation(ib)).sum() / ia.sum(),
-        (ib & ndimage.binary_dilation(ia)).sum() / ib.sum(),
-    )
+    return ink_mask(prepare_input(read_sketch(page)))
 
 
 def test_a_caption_under_or_over_the_drawing_is_not_the_tree(monkeypatch) -> None:
@@ -153,14 +138,12 @@ def test_a_caption_under_or_over_the_drawing_is_not_the_tree(monkeypatch) -> Non
     or crown: it is framed as without them.  A pot drawn in pieces under a tree, apart
     from its trunk, stays the tree's."""
     import render.reader
-    from render.reader import read_sketch
 
-    oak = Image.open(Path(__file__).resolve().parents[1] / "examples/hand/oak.png")
-    alone = prepare_input(read_sketch(_captioned(oak, "")))  # the same page, nothing written
+    oak = Image.open(HAND / "oak.png")
+    alone = _ink_read(captioned(oak, ""))  # the same page, nothing written
     for under, over in (("My tree", ""), ("Anna 7", "TREE")):
         # the words move the page's ink level a little: a line may move by a pixel
-        page = prepare_input(read_sketch(_captioned(oak, under, over)))
-        assert _within_a_pixel(page, alone) > 0.95, (under, over)
+        assert within_a_pixel(_ink_read(captioned(oak, under, over)), alone) > 0.95, under
     # a tree over a pot drawn as four strokes, none touching the trunk
     img = Image.new("L", (400, 400), 255)
     d = ImageDraw.Draw(img)
@@ -174,48 +157,24 @@ def test_a_caption_under_or_over_the_drawing_is_not_the_tree(monkeypatch) -> Non
         (155, 376, 245, 376),
     ):
         d.line(stroke, fill=0, width=4)
-    now = prepare_input(read_sketch(img))
+    now = _ink_read(img)
     monkeypatch.setattr(render.reader, "CAPTION_MARKS", 10**9)  # no captions read
-    assert np.array_equal(prepare_input(read_sketch(img)), now)
+    assert np.array_equal(_ink_read(img), now)
     monkeypatch.undo()
     # the pot in pieces is no caption, written under it a name is
-    named = prepare_input(read_sketch(_captioned(img, "Anna")))
-    assert _within_a_pixel(named, prepare_input(read_sketch(_captioned(img, "")))) > 0.95
+    assert within_a_pixel(_ink_read(captioned(img, "Anna")), _ink_read(captioned(img, ""))) > 0.95
 
 
 def test_a_frame_drawn_round_the_drawing_is_not_the_tree(monkeypatch) -> None:
     """A border drawn round the drawing by hand (four wobbly strokes, gaps at the
     corners) is not the tree's outline: the tree is framed as without it."""
     import render.reader
-    from render.reader import read_sketch
 
-    oak = Image.open(Path(__file__).resolve().parents[1] / "examples/hand/oak.png")
-    w, h = oak.size
-    page = Image.new("RGB", (w * 5 // 4, h * 5 // 4), "white")
-    page.paste(oak.convert("RGB"), (w // 8, h // 8))
-    alone = prepare_input(read_sketch(page))
-    d = ImageDraw.Draw(page)
-    rng = np.random.default_rng(1)
-    a, b, c, e = (
-        (28, 26),
-        (page.width - 24, 30),
-        (page.width - 22, page.height - 26),
-        (26, page.height - 24),
-    )
-    for p, q in ((a, b), (b, c), (c, e), (e, a)):
-        shrink = 0.04  # each stroke stops short of the corners
-        p2 = (p[0] + (q[0] - p[0]) * shrink, p[1] + (q[1] - p[1]) * shrink)
-        q2 = (q[0] + (p[0] - q[0]) * shrink, q[1] + (p[1] - q[1]) * shrink)
-        pts = [
-            (p2[0] + (q2[0] - p2[0]) * k / 20 + rng.normal(0, 1.5),
-             p2[1] + (q2[1] - p2[1]) * k / 20 + rng.normal(0, 1.5))
-            for k in range(21)
-        ]  # fmt: skip
-        d.line(pts, fill=(0, 0, 0), width=3)
-    framed = prepare_input(read_sketch(page))
-    assert _within_a_pixel(framed, alone) > 0.95
+    oak = Image.open(HAND / "oak.png")
+    alone = _ink_read(bordered(oak, frame=False))
+    assert within_a_pixel(_ink_read(bordered(oak)), alone) > 0.95
     monkeypatch.setattr(render.reader, "FRAME_COVER", 2.0)  # no frame read
-    assert _within_a_pixel(prepare_input(read_sketch(page)), alone) < 0.5
+    assert within_a_pixel(_ink_read(bordered(oak)), alone) < 0.5
 
 
 def test_drawing_in_a_corner_gives_the_same_tree(sketches, pipeline) -> None:
@@ -407,9 +366,6 @@ def _house() -> np.ndarray:
     return np.asarray(im)
 
 
-HAND = Path(__file__).resolve().parents[1] / "examples" / "hand"
-
-
 def _line(dot: bool = False) -> np.ndarray:
     """One slightly wobbly upright stroke (with a dot on its top)."""
     im = Image.new("L", (400, 400), 255)
@@ -437,9 +393,9 @@ def test_one_straight_line_is_told_from_every_drawn_tree() -> None:
     from treesketch.pipeline import LINE_SPREAD
 
     for img in (_line(), _line(dot=True)):
-        assert line_spread(prepare_input(img) < 128) < LINE_SPREAD / 2
+        assert line_spread(_ink_read(img)) < LINE_SPREAD / 2
     for path in sorted(HAND.glob("*.png")):
-        assert line_spread(prepare_input(load_sketch(path)) < 128) > 2 * LINE_SPREAD, path.name
+        assert line_spread(_ink_read(load_sketch(path))) > 2 * LINE_SPREAD, path.name
 
 
 @pytest.fixture(scope="module")

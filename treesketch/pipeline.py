@@ -27,7 +27,7 @@ import numpy as np
 from refine.objective import framed
 from refine.search import Cancelled, RefineResult, RefineSettings
 from refine.shape import ShapeTarget, line_distance
-from render.reader import SketchError, line_spread
+from render.reader import SketchError, ink_mask, line_spread
 from weberpenn import TreeMesh, TreeParams, build_mesh, grow
 from weberpenn import species as wp_species
 
@@ -331,7 +331,7 @@ def judge_views(
     ink = float(np.mean([drawing_line_distance(d.shape, v.sketch_after) for d, v in pairs]))
     limit = LOW_CONFIDENCE_LOSS if embedded else LOW_CONFIDENCE_LOSS_SHAPE
     p = first.estimate.tree_probability
-    one_line = all(line_spread(img < 128) <= LINE_SPREAD for img in read.images)
+    one_line = all(line_spread(ink_mask(img)) <= LINE_SPREAD for img in read.images)
     tree_like, warning = tree_judgement(p, drawn.loss_after, ink, limit, one_line)
     if one_line and p is not None:
         p = tree_like

@@ -23,7 +23,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
 
 def main() -> None:
     from eval.people import SOURCES, people_drawings
-    from render.reader import SketchError, line_spread
+    from render.reader import SketchError, ink_mask, line_spread
     from treesketch.pipeline import LINE_SPREAD, load_sketch, prepare_input
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -36,7 +36,7 @@ def main() -> None:
             img = prepare_input(load_sketch(d.image()))
         except SketchError:
             continue
-        rows.append((d.source, d.kind, d.key, line_spread(img < 128)))
+        rows.append((d.source, d.kind, d.key, line_spread(ink_mask(img))))
     under = Counter((s, k) for s, k, _, v in rows if v <= args.limit)
     total = Counter((s, k) for s, k, _, _ in rows)
     print(f"{len(rows)} held-out drawings; at or under {args.limit}:")

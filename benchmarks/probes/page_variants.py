@@ -22,19 +22,14 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
-from PIL import Image, ImageDraw, ImageFilter, ImageFont
+from PIL import Image, ImageDraw, ImageFilter
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
 
+from eval.pages import bordered, captioned, within_a_pixel  # noqa: E402
+
 Pair = tuple[Image.Image, Image.Image]  # (the page without the change, with it)
-
-
-def _taller(im: Image.Image) -> Image.Image:
-    w, h = im.size
-    page = Image.new("RGB", (w, h + h // 3), "white")
-    page.paste(im, (0, h // 6))
-    return page
 
 
 def _base(im: Image.Image) -> tuple[int, float]:
@@ -53,45 +48,16 @@ def grid(im: Image.Image) -> Pair:
     return im, Image.fromarray(a)
 
 
-def _written(im: Image.Image, under: str, over: str) -> Pair:
-    plain, page = _taller(im), _taller(im)
-    w, h = im.size
-    font = ImageFont.load_default(size=max(12, h // 14))
-    d = ImageDraw.Draw(page)
-    d.text((w // 3, h + h // 6 + 6), under, fill=(20, 20, 20), font=font)
-    if over:
-        d.text((w // 4, 2), over, fill=(20, 20, 20), font=font)
-    return plain, page
-
-
 def caption(im: Image.Image) -> Pair:
-    return _written(im, "My tree", "")
+    return captioned(im, ""), captioned(im, "My tree")
 
 
 def title(im: Image.Image) -> Pair:
-    return _written(im, "Anna 7", "TREE")
+    return captioned(im, ""), captioned(im, "Anna 7", "TREE")
 
 
 def border(im: Image.Image) -> Pair:
-    w, h = im.size
-    plain = Image.new("RGB", (w * 5 // 4, h * 5 // 4), "white")
-    plain.paste(im, (w // 8, h // 8))
-    page = plain.copy()
-    d = ImageDraw.Draw(page)
-    rng = np.random.default_rng(1)
-    W, H = page.size
-    corners = [(28, 26), (W - 24, 30), (W - 22, H - 26), (26, H - 24)]
-    for p, q in zip(corners, corners[1:] + corners[:1], strict=True):
-        s = 0.04  # each stroke stops short of the corners
-        p2 = (p[0] + (q[0] - p[0]) * s, p[1] + (q[1] - p[1]) * s)
-        q2 = (q[0] + (p[0] - q[0]) * s, q[1] + (p[1] - q[1]) * s)
-        pts = [
-            (p2[0] + (q2[0] - p2[0]) * k / 20 + rng.normal(0, 1.5),
-             p2[1] + (q2[1] - p2[1]) * k / 20 + rng.normal(0, 1.5))
-            for k in range(21)
-        ]  # fmt: skip
-        d.line(pts, fill=(0, 0, 0), width=3)
-    return plain, page
+    return bordered(im, frame=False), bordered(im)
 
 
 def jpeg(im: Image.Image) -> Pair:
@@ -158,33 +124,17 @@ VARIANTS: dict[str, Callable[[Image.Image], Pair]] = {
 }
 
 
-def within_a_pixel(a: np.ndarray, b: np.ndarray) -> float:
-    """The share of either picture's ink within a pixel of the other's (the lesser)."""
-    from scipy import ndimage
-
-    ia, ib = a < 128, b < 128
-    return float(
-        min(
-            (ia & ndimage.binary_dilation(ib)).sum() / max(1, ia.sum()),
-            (ib & ndimage.binary_dilation(ia)).sum() / max(1, ib.sum()),
-        )
-    )
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--drawings", default="", help="names in examples/hand (default: all)")
     ap.add_argument("--set", nargs="*", default=[], help="MODULE.NAME=VALUE to change first")
     args = ap.parse_args()
-    import importlib
+    from outline_replay import set_constants
 
-    from render.reader import SketchError, read_sketch
+    from render.reader import SketchError, ink_mask, read_sketch
     from treesketch.steps import prepare_input
 
-    for item in args.set:
-        target, value = item.split("=", 1)
-        mod, name = target.rsplit(".", 1)
-        setattr(importlib.import_module(mod), name, float(value))
+    set_constants(args.set)
     hand = ROOT / "examples" / "hand"
     names = (
         args.drawings.split(",") if args.drawings else sorted(p.stem for p in hand.glob("*.png"))
@@ -192,7 +142,7 @@ def main() -> None:
 
     def read(page: Image.Image) -> np.ndarray | None:
         try:
-            return prepare_input(read_sketch(page))
+            return ink_mask(prepare_input(read_sketch(page)))
         except SketchError:
             return None
 
