@@ -4,8 +4,9 @@ Reads the held part of people's drawings (``eval.people``, authors never fitted 
 pipeline does and measures each one's ``render.reader.line_spread`` (the ink's spread
 across its longest axis over its reach; a straight line drawn by hand about 0.005).
 Prints, per source and kind, how many are at or under ``--limit``, the thinnest trees,
-and the share of trees among the drawings that thin (the probability a drawing of one
-line is a tree: ``treesketch.pipeline.LINE_TREES``).
+the share of trees among the drawings that thin (the probability a drawing of one line is
+a tree: ``treesketch.pipeline.LINE_TREES``), and which of them the network's detector had
+left unwarned (what the rule adds to ``bench_species.py people``'s figures).
 
     .venv/bin/python benchmarks/probes/one_line.py [--limit 0.03] [--per-kind 400]
 """
@@ -31,23 +32,36 @@ def main() -> None:
     ap.add_argument("--per-kind", type=int, default=400)
     args = ap.parse_args()
     rows = []
-    for d in people_drawings(part="held", sources=SOURCES, per_kind=args.per_kind):
+    drawings = people_drawings(part="held", sources=SOURCES, per_kind=args.per_kind)
+    for i, d in enumerate(drawings):
         try:
             img = prepare_input(load_sketch(d.image()))
         except SketchError:
             continue
-        rows.append((d.source, d.kind, d.key, line_spread(ink_mask(img))))
-    under = Counter((s, k) for s, k, _, v in rows if v <= args.limit)
-    total = Counter((s, k) for s, k, _, _ in rows)
+        rows.append((d.source, d.kind, d.key, line_spread(ink_mask(img)), i))
+    under = Counter((s, k) for s, k, _, v, _ in rows if v <= args.limit)
+    total = Counter((s, k) for s, k, _, _, _ in rows)
     print(f"{len(rows)} held-out drawings; at or under {args.limit}:")
     for (s, k), n in sorted(total.items()):
         if under[(s, k)]:
             print(f"- {s}/{k}: {under[(s, k)]} of {n}")
-    trees = sorted((v, f"{s}/{key}") for s, k, key, v in rows if k == "tree")
+    trees = sorted((v, f"{s}/{key}") for s, k, key, v, _ in rows if k == "tree")
     print("thinnest trees:", ", ".join(f"{name} {v:.3f}" for v, name in trees[:5]))
-    thin = [k for _, k, _, v in rows if v <= args.limit]
+    thin = [k for _, k, _, v, _ in rows if v <= args.limit]
+    thin_at = {i for *_, v, i in rows if v <= args.limit}
     n_trees = sum(k == "tree" for k in thin)
     print(f"trees among the drawings that thin: {n_trees} of {len(thin)}")
+    # what the rule adds to the detector's warning (``bench_species.py people`` measures
+    # the detector alone): the thin drawings it had left unwarned
+    from treesketch import Pipeline
+    from treesketch.pipeline import TREE_PROBABILITY_LIMIT
+
+    pipeline = Pipeline()
+    for i in sorted(thin_at):
+        d = drawings[i]
+        p = pipeline.estimate(load_sketch(d.image())).tree_probability
+        said = "unwarned before" if p is not None and p >= TREE_PROBABILITY_LIMIT else "warned"
+        print(f"- {d.source}/{d.kind} {d.key}: detector P(tree) {p:.3f}, {said}")
 
 
 if __name__ == "__main__":
