@@ -119,9 +119,6 @@ def test_networks_part_what_one_hyperplane_cannot() -> None:
     assert ((p >= 0) & (p <= 1)).all()
     assert np.mean(p[y] >= 0.5) > 0.85 and np.mean(p[~y] < 0.5) > 0.85
     assert nets.hidden_weight is not None and nets.hidden_weight.shape == (2, 4, 16)
-    # the same seeds, the same detector
-    again = TreeDetector.fit(*_ring(0), held_out=_ring(1), hidden=16, members=2, l2=1e-3)
-    assert np.allclose(again.probabilities(x), p)
 
 
 def test_networks_round_trip_through_a_checkpoint(tmp_path) -> None:
@@ -131,6 +128,9 @@ def test_networks_round_trip_through_a_checkpoint(tmp_path) -> None:
     x, y = _data(0, 120)
     x = np.hstack([x, np.random.default_rng(1).normal(size=(120, 1275))])
     nets = TreeDetector.fit(x, y, hidden=8, members=2, l2=1e-3)
+    # the same seeds, the same detector
+    refit = TreeDetector.fit(x, y, hidden=8, members=2, l2=1e-3)
+    assert np.allclose(refit.probabilities(x), nets.probabilities(x))
     again = TreeDetector.from_dict(nets.to_dict())
     assert np.allclose(again.probabilities(x), nets.probabilities(x), atol=1e-5)
     loaded = load_checkpoint(DEFAULT_CHECKPOINT)
