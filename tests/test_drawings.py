@@ -376,12 +376,29 @@ def _line(dot: bool = False) -> np.ndarray:
     return np.asarray(im)
 
 
+def _strokes(*lines: list[tuple[int, int]]) -> np.ndarray:
+    """Straight strokes of a pen 4 px wide on a 400 px page."""
+    im = Image.new("L", (400, 400), 255)
+    d = ImageDraw.Draw(im)
+    for line in lines:
+        d.line(line, fill=0, width=4)
+    return np.asarray(im)
+
+
+TWO_LINES = {
+    "a cross": lambda: _strokes([(200, 370), (201, 60)], [(110, 150), (290, 152)]),
+    "an X": lambda: _strokes([(80, 80), (320, 320)], [(320, 80), (80, 320)]),
+    "a T": lambda: _strokes([(200, 370), (201, 80)], [(90, 80), (310, 82)]),
+    "a V": lambda: _strokes([(100, 80), (200, 350)], [(200, 350), (300, 80)]),
+}
+
 NOT_TREES = {
     "noise": lambda: ((np.random.default_rng(0).random((256, 256)) > 0.6) * 255).astype(np.uint8),
     "face": _face,
     "house": _house,
     "one line": _line,
     "a stick with a dot": lambda: _line(dot=True),
+    **TWO_LINES,
 }
 
 
@@ -396,6 +413,21 @@ def test_one_straight_line_is_told_from_every_drawn_tree() -> None:
         assert line_spread(_ink_read(img)) < LINE_SPREAD / 2
     for path in sorted(HAND.glob("*.png")):
         assert line_spread(_ink_read(load_sketch(path))) > 2 * LINE_SPREAD, path.name
+
+
+def test_two_straight_lines_are_told_from_every_drawn_tree() -> None:
+    """``render.reader.straight_share``: a cross, an X, a T or a V drawn with two strokes
+    lies wholly on its two strongest straight lines; a stick tree of three strokes (a
+    trunk forking in two) and every drawing of ``examples/hand`` do not."""
+    from render.reader import straight_share
+    from treesketch.pipeline import STRAIGHT_SHARE
+
+    for name, make in TWO_LINES.items():
+        assert straight_share(_ink_read(make())) > (1 + STRAIGHT_SHARE) / 2, name
+    fork = _strokes([(200, 370), (200, 200)], [(200, 200), (130, 90)], [(200, 200), (270, 90)])
+    assert straight_share(_ink_read(fork)) < STRAIGHT_SHARE - 0.1
+    for path in sorted(HAND.glob("*.png")):
+        assert straight_share(_ink_read(load_sketch(path))) < STRAIGHT_SHARE / 2, path.name
 
 
 @pytest.fixture(scope="module")

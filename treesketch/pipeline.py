@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -27,7 +27,7 @@ import numpy as np
 from refine.objective import framed
 from refine.search import Cancelled, RefineResult, RefineSettings
 from refine.shape import ShapeTarget, line_distance
-from render.reader import SketchError, ink_mask, line_spread
+from render.reader import SketchError, ink_mask, line_spread, straight_share
 from weberpenn import TreeMesh, TreeParams, build_mesh, grow
 from weberpenn import species as wp_species
 
@@ -80,6 +80,7 @@ __all__ = [
     "prepare_input",
     "rescale_height",
     "result_confidence",
+    "straight_lines",
     "tree_judgement",
     "tree_likeness",
     "tree_line_distance",
@@ -112,6 +113,15 @@ TREE_PROBABILITY_LIMIT = 0.5
 # a single stroke labelled a tree; `benchmarks/probes/one_line.py`)
 LINE_SPREAD = 0.03
 LINE_TREES = 1 / 11
+# two straight strokes (a cross, a plus, an X, a T, a V) show no crown either, and the
+# network reads a cross as a palm or a pine at P(tree) 0.99: a drawing whose ink's centre
+# line lies this much within reach of its two strongest straight lines
+# (``render.reader.straight_share``; people's held-out trees at most 0.78 but for one
+# single stroke, `examples/hand` at most 0.44) is asked too, and is a tree as often as
+# people's held-out drawings of at most two straight lines are (STRAIGHT_TREES: 1 of 7,
+# that single stroke; `benchmarks/probes/two_lines.py`)
+STRAIGHT_SHARE = 0.95
+STRAIGHT_TREES = 1 / 7
 MAX_HEIGHT = 200.0  # metres: taller than any tree that grows
 
 
@@ -246,22 +256,37 @@ def tree_likeness(loss: float, ink: float, limit: float) -> tuple[float, str | N
     )
 
 
+def straight_lines(images: Sequence[np.ndarray]) -> int:
+    """1 when every drawing (prepared, paper light) is one straight line
+    (:data:`LINE_SPREAD`), 2 when every one is at most two (:data:`STRAIGHT_SHARE`: a
+    cross, a plus, an X, a T, a V), else 0."""
+    inks = [ink_mask(img) for img in images]
+    if all(line_spread(ink) <= LINE_SPREAD for ink in inks):
+        return 1
+    if all(straight_share(ink) >= STRAIGHT_SHARE for ink in inks):
+        return 2
+    return 0
+
+
 def tree_judgement(
     tree_probability: float | None,
     loss: float,
     ink: float,
     limit: float,
-    one_line: bool = False,
+    lines: int = 0,
 ) -> tuple[float, str | None]:
     """How much the drawing looks like a tree (0..1) and the warning when it may not be
     one: the estimator's probability when it gives one (warned below
     :data:`TREE_PROBABILITY_LIMIT`), else the distances' :func:`tree_likeness`; a drawing
-    of ``one_line`` (:data:`LINE_SPREAD`) is warned, at most :data:`LINE_TREES`."""
-    if one_line:
-        p = LINE_TREES if tree_probability is None else min(LINE_TREES, tree_probability)
+    of one or two straight ``lines`` (:func:`straight_lines`) is warned, at most
+    :data:`LINE_TREES` or :data:`STRAIGHT_TREES`."""
+    if lines:
+        cap = LINE_TREES if lines == 1 else STRAIGHT_TREES
+        p = cap if tree_probability is None else min(cap, tree_probability)
+        what = "one straight line" if lines == 1 else "two straight lines"
         return float(max(0.0, p)), (
-            "low confidence: this is one straight line, not a drawing of a tree (draw its "
-            "crown too); is this a sketch of a tree?"
+            f"low confidence: this is {what}, not a drawing of a tree (draw its crown "
+            f"too); is this a sketch of a tree?"
         )
     if tree_probability is None:
         return tree_likeness(loss, ink, limit)
@@ -331,9 +356,9 @@ def judge_views(
     ink = float(np.mean([drawing_line_distance(d.shape, v.sketch_after) for d, v in pairs]))
     limit = LOW_CONFIDENCE_LOSS if embedded else LOW_CONFIDENCE_LOSS_SHAPE
     p = first.estimate.tree_probability
-    one_line = all(line_spread(ink_mask(img)) <= LINE_SPREAD for img in read.images)
-    tree_like, warning = tree_judgement(p, drawn.loss_after, ink, limit, one_line)
-    if one_line and p is not None:
+    lines = straight_lines(read.images)
+    tree_like, warning = tree_judgement(p, drawn.loss_after, ink, limit, lines)
+    if lines and p is not None:
         p = tree_like
     return Judgement(ink, tree_like, warning, p)
 
