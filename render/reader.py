@@ -614,9 +614,10 @@ def line_spread(ink: np.ndarray) -> float:
 def straight_share(ink: np.ndarray, lines: int = 2) -> float:
     """The share of the ink's centre line (its skeleton) within reach of its ``lines``
     strongest straight lines (Hough peaks; within 2 % of the ink's reach and a pixel):
-    1 for a cross, a plus, an X, a T or a V drawn with two strokes, about 0.1-0.45 for
-    people's drawings of trees (``treesketch.pipeline.STRAIGHT_SHARE``); 1 for fewer than
-    two ink pixels."""
+    1 for a cross, a plus, an X, a T or a V drawn with two strokes; at most 0.78 for
+    people's held-out drawings of trees but for one single stroke, 0.13-0.44 for
+    ``examples/hand`` (``treesketch.pipeline.STRAIGHT_SHARE``); 1 for fewer than two ink
+    pixels."""
     from skimage.morphology import skeletonize
     from skimage.transform import hough_line, hough_line_peaks
 
