@@ -16,29 +16,57 @@ from __future__ import annotations
 import argparse
 import sys
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
 
 
-def main() -> None:
+def held_inks(per_kind: int) -> tuple[list, list]:
+    """People's held-out drawings (``eval.people``) and, for each the pipeline reads, its
+    (index, ink as the pipeline reads and frames it)."""
     from eval.people import SOURCES, people_drawings
-    from render.reader import SketchError, ink_mask, line_spread
-    from treesketch.pipeline import LINE_SPREAD, load_sketch, prepare_input
+    from render.reader import SketchError, ink_mask
+    from treesketch.pipeline import load_sketch, prepare_input
+
+    drawings = people_drawings(part="held", sources=SOURCES, per_kind=per_kind)
+    inks = []
+    for i, d in enumerate(drawings):
+        try:
+            inks.append((i, ink_mask(prepare_input(load_sketch(d.image())))))
+        except SketchError:
+            continue
+    return drawings, inks
+
+
+def detector_says(drawings: list, indices: list[int], label: Callable[[int], str]) -> None:
+    """What the network's detector says of each of ``drawings[indices]`` (what a rule adds
+    to ``bench_species.py people``, which measures the detector alone)."""
+    from treesketch import Pipeline
+    from treesketch.pipeline import TREE_PROBABILITY_LIMIT, load_sketch
+
+    pipeline = Pipeline()
+    for i in sorted(indices):
+        d = drawings[i]
+        p = pipeline.estimate(load_sketch(d.image())).tree_probability
+        said = "unwarned before" if p is not None and p >= TREE_PROBABILITY_LIMIT else "warned"
+        print(f"- {d.source}/{d.kind} {d.key}{label(i)}: detector P(tree) {p:.3f}, {said}")
+
+
+def main() -> None:
+    from render.reader import line_spread
+    from treesketch.pipeline import LINE_SPREAD
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--limit", type=float, default=LINE_SPREAD)
     ap.add_argument("--per-kind", type=int, default=400)
     args = ap.parse_args()
+    drawings, inks = held_inks(args.per_kind)
     rows = []
-    drawings = people_drawings(part="held", sources=SOURCES, per_kind=args.per_kind)
-    for i, d in enumerate(drawings):
-        try:
-            img = prepare_input(load_sketch(d.image()))
-        except SketchError:
-            continue
-        rows.append((d.source, d.kind, d.key, line_spread(ink_mask(img)), i))
+    for i, ink in inks:
+        d = drawings[i]
+        rows.append((d.source, d.kind, d.key, line_spread(ink), i))
     under = Counter((s, k) for s, k, _, v, _ in rows if v <= args.limit)
     total = Counter((s, k) for s, k, _, _, _ in rows)
     print(f"{len(rows)} held-out drawings; at or under {args.limit}:")
@@ -48,20 +76,10 @@ def main() -> None:
     trees = sorted((v, f"{s}/{key}") for s, k, key, v, _ in rows if k == "tree")
     print("thinnest trees:", ", ".join(f"{name} {v:.3f}" for v, name in trees[:5]))
     thin = [k for _, k, _, v, _ in rows if v <= args.limit]
-    thin_at = {i for *_, v, i in rows if v <= args.limit}
     n_trees = sum(k == "tree" for k in thin)
     print(f"trees among the drawings that thin: {n_trees} of {len(thin)}")
-    # what the rule adds to the detector's warning (``bench_species.py people`` measures
-    # the detector alone): the thin drawings it had left unwarned
-    from treesketch import Pipeline
-    from treesketch.pipeline import TREE_PROBABILITY_LIMIT
-
-    pipeline = Pipeline()
-    for i in sorted(thin_at):
-        d = drawings[i]
-        p = pipeline.estimate(load_sketch(d.image())).tree_probability
-        said = "unwarned before" if p is not None and p >= TREE_PROBABILITY_LIMIT else "warned"
-        print(f"- {d.source}/{d.kind} {d.key}: detector P(tree) {p:.3f}, {said}")
+    # the thin drawings the detector had left unwarned: what the rule adds
+    detector_says(drawings, [i for *_, v, i in rows if v <= args.limit], lambda i: "")
 
 
 if __name__ == "__main__":

@@ -20,13 +20,14 @@ from collections import Counter
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
+sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks"), str(ROOT / "benchmarks" / "probes")]
 
 
 def main() -> None:
-    from eval.people import SOURCES, people_drawings
-    from render.reader import SketchError, ink_mask, line_spread, straight_share
-    from treesketch.pipeline import LINE_SPREAD, STRAIGHT_SHARE, load_sketch, prepare_input
+    from one_line import detector_says, held_inks
+
+    from render.reader import line_spread, straight_share
+    from treesketch.pipeline import LINE_SPREAD, STRAIGHT_SHARE
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--limit", type=float, default=STRAIGHT_SHARE)
@@ -36,15 +37,11 @@ def main() -> None:
     )
     args = ap.parse_args()
     _doodles(args.doodles)
+    drawings, inks = held_inks(args.per_kind)
     rows = []
     thin: dict[int, bool] = {}
-    drawings = people_drawings(part="held", sources=SOURCES, per_kind=args.per_kind)
-    for i, d in enumerate(drawings):
-        try:
-            img = prepare_input(load_sketch(d.image()))
-        except SketchError:
-            continue
-        ink = ink_mask(img)
+    for i, ink in inks:
+        d = drawings[i]
         rows.append((d.source, d.kind, d.key, straight_share(ink), i))
         # the one-line rule (LINE_SPREAD) comes first: say which these are
         thin[i] = line_spread(ink) <= LINE_SPREAD
@@ -59,16 +56,11 @@ def main() -> None:
     straight = [k for _, k, _, v, _ in rows if v >= args.limit]
     n_trees = sum(k == "tree" for k in straight)
     print(f"trees among the drawings that straight: {n_trees} of {len(straight)}")
-    from treesketch import Pipeline
-    from treesketch.pipeline import TREE_PROBABILITY_LIMIT
-
-    pipeline = Pipeline()
-    for i in sorted(i for *_, v, i in rows if v >= args.limit):
-        d = drawings[i]
-        p = pipeline.estimate(load_sketch(d.image())).tree_probability
-        said = "unwarned before" if p is not None and p >= TREE_PROBABILITY_LIMIT else "warned"
-        line = "one line" if thin[i] else "two lines"
-        print(f"- {d.source}/{d.kind} {d.key} ({line}): detector P(tree) {p:.3f}, {said}")
+    detector_says(
+        drawings,
+        [i for *_, v, i in rows if v >= args.limit],
+        lambda i: " (one line)" if thin[i] else " (two lines)",
+    )
 
 
 def _doodles(per_species: int) -> None:
