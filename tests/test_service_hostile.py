@@ -191,7 +191,7 @@ def test_the_page_keeps_the_token_out_of_every_url(tmp_path: Path) -> None:
     """The page opened as /#token=...: it trades the token for the cookie, drops it from
     the address bar, and no request it makes (the job, the event stream, the pictures, the
     GLB, a download link) carries it."""
-    from web_helpers import CHROMIUM, CHROMIUM_ARGS, draw_with_mouse
+    from web_helpers import CHROMIUM, CHROMIUM_ARGS, draw_with_mouse, picture_loaded
 
     playwright = pytest.importorskip("playwright.sync_api")
     secret = "page-t0ken-xyz"
@@ -210,7 +210,7 @@ def test_the_page_keeps_the_token_out_of_every_url(tmp_path: Path) -> None:
             page.click("#submit")
             page.wait_for_selector("body[data-state=done]", timeout=180_000)
             page.wait_for_selector("body[data-model=loaded]", timeout=30_000)
-            assert page.evaluate("document.querySelector('#after').naturalWidth") > 0
+            assert picture_loaded(page, "#after") > 0
             links = page.evaluate("[...document.querySelectorAll('a[href]')].map(a => a.href)")
             cookies = page.context.cookies()
             address = page.evaluate("location.href")

@@ -10,7 +10,15 @@ from typing import Any
 
 import numpy as np
 import pytest
-from web_helpers import INK, PHONE, draw_with_mouse, guarded_context, open_page, view_pixels
+from web_helpers import (
+    INK,
+    PHONE,
+    draw_with_mouse,
+    guarded_context,
+    open_page,
+    picture_loaded,
+    view_pixels,
+)
 
 pytestmark = pytest.mark.slow
 
@@ -43,7 +51,7 @@ def test_draw_submit_view_and_download(page: Any, tmp_path: Path) -> None:
     assert np.ptp(ys) > np.ptp(xs), "the palm should stand (taller than wide), not lie"
 
     for img in ("#before", "#after"):
-        assert page.evaluate(f"document.querySelector('{img}').naturalWidth") > 0
+        assert picture_loaded(page, img) > 0, img
 
     with page.expect_download() as dl:
         page.click("#dl-glb")

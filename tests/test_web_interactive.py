@@ -24,6 +24,7 @@ from web_helpers import (
     make_tree,
     open_job,
     open_page,
+    picture_loaded,
     view_pixels,
     wait_edit,
 )
@@ -42,7 +43,7 @@ def test_the_first_tree_is_shown_before_the_refinement_ends(page: Any) -> None:
     page.wait_for_selector("body[data-preview]", timeout=JOB_TIMEOUT)
     page.wait_for_selector("body[data-model=loaded]", timeout=30_000)
     assert page.get_attribute("body", "data-state") == "running"
-    assert page.evaluate("document.getElementById('before').naturalWidth") > 0
+    assert picture_loaded(page, "#before") > 0
     assert _height(page) > 0
     text = page.inner_text("#status")
     if text.startswith("Refining"):  # "n of N trees": never past the plan

@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from web_helpers import PHONE, guarded_context, make_tree, open_page
+from web_helpers import PHONE, guarded_context, make_tree, open_page, picture_loaded
 
 pytestmark = pytest.mark.slow
 
@@ -69,7 +69,7 @@ def test_a_picture_that_cannot_load_is_left_out(browser: Any, server: str) -> No
         assert page.get_attribute("body", "data-outlines") is None
         # the rest of the result is there
         assert page.inner_text("#species").lower() == "palm"
-        assert page.evaluate("document.getElementById('after').naturalWidth") > 0
+        assert picture_loaded(page, "#after") > 0
         assert "disabled" not in (page.get_attribute("#dl-glb", "class") or "")
 
 

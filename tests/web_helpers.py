@@ -143,6 +143,19 @@ def painted(page: Any) -> None:
     page.evaluate("() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)))")
 
 
+def picture_loaded(page: Any, selector: str, timeout: int = 30_000) -> int:
+    """Wait until the <img> at ``selector`` has finished loading and return its natural
+    width: the page sets ``src`` when the job is done, and the browser fetches the picture
+    after that, so reading ``naturalWidth`` at once races the fetch. A picture that failed
+    to load (complete, width 0) fails at once rather than waiting out the timeout."""
+    done = page.wait_for_function(
+        f"(() => {{ const im = document.querySelector({selector!r});"
+        " return im && im.getAttribute('src') && im.complete ? im.naturalWidth + 1 : 0; })()",
+        timeout=timeout,
+    )
+    return int(done.json_value()) - 1
+
+
 def view_pixels(page: Any) -> Any:
     """The 3D view's canvas as an (h, w, 3) int array."""
     import numpy as np
