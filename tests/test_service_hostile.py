@@ -15,6 +15,7 @@ import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import httpx
 import pytest
@@ -187,21 +188,18 @@ def test_the_bearer_scheme_in_any_case(tmp_path: Path) -> None:
             assert httpx.get(url + "/status", headers=h).status_code == 401, wrong
 
 
-def test_the_page_keeps_the_token_out_of_every_url(tmp_path: Path) -> None:
+def test_the_page_keeps_the_token_out_of_every_url(tmp_path: Path, browser: Any) -> None:
     """The page opened as /#token=...: it trades the token for the cookie, drops it from
     the address bar, and no request it makes (the job, the event stream, the pictures, the
-    GLB, a download link) carries it."""
-    from web_helpers import CHROMIUM, CHROMIUM_ARGS, draw_with_mouse, picture_loaded
+    GLB, a download link) carries it.  ``browser`` is the test process's one Playwright
+    (conftest): a second sync Playwright in the same process refuses to start."""
+    from web_helpers import draw_with_mouse, picture_loaded
 
-    playwright = pytest.importorskip("playwright.sync_api")
     secret = "page-t0ken-xyz"
-    with (
-        serve(create_app(config(tmp_path, token=secret))) as url,
-        playwright.sync_playwright() as p,
-    ):
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+    with serve(create_app(config(tmp_path, token=secret))) as url:
+        ctx = browser.new_context(viewport={"width": 1200, "height": 900})
         try:
-            page = browser.new_page(viewport={"width": 1200, "height": 900})
+            page = ctx.new_page()
             urls: list[str] = []
             page.on("request", lambda r: urls.append(r.url))
             page.goto(f"{url}/#token={secret}")
@@ -212,10 +210,10 @@ def test_the_page_keeps_the_token_out_of_every_url(tmp_path: Path) -> None:
             page.wait_for_selector("body[data-model=loaded]", timeout=30_000)
             assert picture_loaded(page, "#after") > 0
             links = page.evaluate("[...document.querySelectorAll('a[href]')].map(a => a.href)")
-            cookies = page.context.cookies()
+            cookies = ctx.cookies()
             address = page.evaluate("location.href")
         finally:
-            browser.close()
+            ctx.close()
     requested = [u for u in urls if u.startswith(url)]
     assert any("/tree.glb" in u for u in requested), requested
     assert any("/events" in u for u in requested), requested
