@@ -200,11 +200,11 @@ def seen_envelope(sketch: np.ndarray, size: int) -> np.ndarray:
     """A tree's sketch's envelope as the search compares it at ``size`` px
     (``refine.shape.ShapeTarget.envelope`` of the framed sketch), without the shape
     features the distance needs."""
-    from .objective import framed
+    from .objective import framed_sketch
     from .prepare import prepare_sketch
     from .shape import prepared_envelope
 
-    return prepared_envelope(prepare_sketch(framed(sketch, size), size))
+    return prepared_envelope(prepare_sketch(framed_sketch(sketch, size, specks=True), size))
 
 
 def _render_profile(params: TreeParams, species: str, size: int, yaw: float) -> Profile | None:

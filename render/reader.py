@@ -48,6 +48,8 @@ __all__ = [
     "FormatError",
     "SketchError",
     "check_ink",
+    "drop_specks",
+    "frame_ink",
     "image_format",
     "ink_mask",
     "light_on_dark",
@@ -1265,13 +1267,23 @@ def normalise_drawing(
     grounded = _drop_ground(page)
     ground_free = grounded if np.array_equal(grounded, page) else None
     ink = _tree_ink(drop_specks(_drop_ruled_lines(grounded)), ground_free)
+    return frame_ink(ink, size, over_crown)
+
+
+def frame_ink(ink: np.ndarray, size: int = DRAWING_SIDE, over_crown: bool = False) -> np.ndarray:
+    """A page's tree ink (bool, as :func:`normalise_drawing` leaves it once the page is
+    cleaned) -> ``(size, size)`` uint8 framed as the renderer frames a tree: the framing
+    half of :func:`normalise_drawing`.  A sketch the renderer drew has no page to clean
+    (no paper, frame, caption, ground line, ruling or marks beside the tree):
+    ``refine.objective.framed_sketch`` frames its ink here directly.  Refuses blank and
+    all-ink pages."""
+    from PIL import Image
+
     frac = float(ink.mean())
     if frac < MIN_INK:
         raise SketchError("the sketch is blank: draw a tree (dark lines on a light page)")
     if frac > MAX_INK:
         raise SketchError(f"the page is almost all ink ({frac:.0%}): draw lines, not a fill")
-    clean = np.where(ink, 0.0, 1.0)
-
     top, bottom, left, right, axis = _axis_and_box(ink, over_crown)
     h = bottom - top + 1
     half = max(axis - left, right + 1 - axis, 0.5)
@@ -1279,11 +1291,11 @@ def normalise_drawing(
     if abs(scale - 1.0) < 0.02:  # already framed: move it, do not resample it
         scale = 1.0
     # the page, scaled, with the trunk base at (size/2, FRAME_BOTTOM * size)
-    out_w = max(1, int(round(a.shape[1] * scale)))
-    out_h = max(1, int(round(a.shape[0] * scale)))
+    out_w = max(1, int(round(ink.shape[1] * scale)))
+    out_h = max(1, int(round(ink.shape[0] * scale)))
     x0 = int(round(size / 2 - axis * scale))
     y0 = int(round(FRAME_BOTTOM * size - (bottom + 1) * scale))
-    pic = Image.fromarray(np.round(clean * 255).astype(np.uint8))
+    pic = Image.fromarray(np.where(ink, 0, 255).astype(np.uint8))
     if scale != 1.0:
         resample = Image.Resampling.BOX if scale < 1 else Image.Resampling.BILINEAR
         pic = pic.resize((out_w, out_h), resample)

@@ -121,3 +121,35 @@ def test_framed_pools_each_two_by_two_block_to_its_darkest_pixel() -> None:
     assert out.dtype == np.uint8 and out.shape == (128, 128)
     assert np.array_equal(out, big.reshape(128, 2, 128, 2).min(axis=(1, 3)))
     assert (out < 128).sum() >= (big < 128).sum() / 4  # no line lost to the pooling
+
+
+@pytest.mark.parametrize("name", ["palm", "fir", "oak", "willow", "bonsai"])
+def test_a_tree_sketch_frames_as_a_drawing_without_the_page_cleaning(name: str) -> None:
+    """A candidate's sketch (the refinement's fast one) framed by ``framed_sketch`` is
+    ``framed``'s picture, pixel for pixel, and with its specks kept its envelope still is:
+    the reader's cleaning of a page finds nothing to clean on a tree the renderer drew.
+    Trees grown from the species' own shape and from a custom one, as the polish grows."""
+    from refine.objective import framed_sketch
+    from refine.prepare import prepare_sketch
+    from refine.shape import prepared_envelope
+    from refine.start import cheap_sketches, seen_envelope
+
+    p = species.sample(name, 4)
+    trees = [p, p.replace(shape=8, customShape=[0.3, 1.0, 0.6, 0.4], baseSize=0.35)]
+    for tree in trees:
+        for sk in cheap_sketches(tree, name, 128, [20.0, 200.0]):
+            assert np.array_equal(framed_sketch(sk, 128), framed(sk, 128))
+            kept = framed_sketch(sk, 128, specks=True)
+            full = prepared_envelope(prepare_sketch(framed(sk, 128), 128))
+            assert np.array_equal(prepared_envelope(prepare_sketch(kept, 128)), full)
+            assert np.array_equal(seen_envelope(sk, 128), full)
+
+
+def test_a_blank_tree_sketch_is_refused_as_a_blank_drawing_is() -> None:
+    from refine.objective import framed_sketch
+    from render.reader import SketchError
+
+    blank = np.full((256, 256), 255, np.uint8)
+    for specks in (False, True):
+        with pytest.raises(SketchError, match="blank"):
+            framed_sketch(blank, 128, specks=specks)

@@ -123,6 +123,8 @@ def replay(runs: list[Path], assignments: list[str]) -> None:
     full = search.OUTLINE_TREES
     set_constants(assignments)
     rows = []
+    times: list[float] = []
+    kept = 0
     for run in runs:
         records = json.loads(run.read_text())["records"]
         sketches = np.load(run.with_suffix(".npz"))
@@ -151,6 +153,8 @@ def replay(runs: list[Path], assignments: list[str]) -> None:
             same = new.params == call["out"].params and new.yaw == call["out"].yaw
             now = was if same else _overlaps(new, drawn)
             rows.append((was, now))
+            times.append(seconds)
+            kept += same
             print(
                 f"{rec['name']:>26} run {np.round(was, 3)} replayed {np.round(now, 3)} "
                 f"{seconds:.1f} s, {new.outline_evaluations} trees",
@@ -165,6 +169,10 @@ def replay(runs: list[Path], assignments: list[str]) -> None:
             f"mean {a.mean():.4f} -> {b.mean():.4f}, up {(b > a + 0.005).sum()}, "
             f"down {(b < a - 0.005).sum()} (by more than 0.005)"
         )
+    print(
+        f"the step: median {np.median(times):.2f} s, total {sum(times):.1f} s; "
+        f"the run's own tree again {kept} of {len(rows)}"
+    )
 
 
 def main() -> int:
