@@ -380,21 +380,24 @@ class SearchSpace:
 
     def to_params(self, x: Sequence[float]) -> TreeParams:
         x = np.clip(np.asarray(x, dtype=np.float64), 0.0, 1.0)
-        values = self.base.to_dict()
+        changes: dict[str, Any] = {}
         for u, t in zip(self.dims, x, strict=False):
             v: Any = u.lo + float(t) * (u.hi - u.lo)
-            here = values[u.key] if u.index is None else values[u.key][u.index]
+            now = changes.get(u.key, self.base[u.key])
+            here = now if u.index is None else now[u.index]
             if abs(float(here) - v) <= 1e-6 * (u.hi - u.lo):
                 continue  # the base's own value: keep it exactly (no round-trip error)
             if SPECS[u.key].kind == "int":
                 v = round(v)
             if u.index is None:
-                values[u.key] = v
+                changes[u.key] = v
             else:
-                vec = list(values[u.key])
+                vec = list(now)
                 vec[u.index] = v
-                values[u.key] = vec
-        return species.project(self.species, TreeParams(values), search=True, keep=self.keep)
+                changes[u.key] = vec
+        return species.project(
+            self.species, self.base.replace(**changes), search=True, keep=self.keep
+        )
 
     def yaw(self, x: Sequence[float]) -> float:
         if not self.search_yaw:

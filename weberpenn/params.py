@@ -19,7 +19,7 @@ import json
 import math
 import os
 import re
-from collections.abc import Iterator, Mapping
+from collections.abc import Collection, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -361,17 +361,27 @@ class TreeParams(Mapping[str, Any]):
         return f"TreeParams(levels={self.levels}, scale={self.scale}, leaves={self.leaves}, ...)"
 
     def replace(self, **changes: Any) -> TreeParams:
-        """A new TreeParams with some keys changed (validated)."""
+        """A new TreeParams with some keys changed (validated: the changed keys one by
+        one, then the whole tree's limits; the others are this one's, valid already)."""
         values = dict(self._values)
         values.update(changes)
-        return TreeParams(values)
+        new = object.__new__(TreeParams)
+        object.__setattr__(new, "_values", _validate_dict(values, self._values, changes))
+        return new
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready plain dict (lists for per-level keys), keys in table order."""
         return {k: list(v) if isinstance(v, tuple) else v for k, v in self._values.items()}
 
 
-def _validate_dict(values: Mapping[str, Any]) -> dict[str, Any]:
+def _validate_dict(
+    values: Mapping[str, Any],
+    valid: Mapping[str, Any] | None = None,
+    changed: Collection[str] = (),
+) -> dict[str, Any]:
+    """``values`` checked and coerced; ``valid``: a dictionary this one checked before,
+    whose values stand for ``values``' own but for the ``changed`` keys (a search's
+    candidates change a few of the 70 keys, and each is checked many times a second)."""
     if not isinstance(values, Mapping):
         raise ParamError(f"a parameter dictionary must be a mapping, got {type(values).__name__}")
     unknown = sorted(set(values) - set(KEYS))
@@ -383,7 +393,10 @@ def _validate_dict(values: Mapping[str, Any]) -> dict[str, Any]:
     missing = [k for k in KEYS if k not in values]
     if missing:
         raise ParamError(f"missing parameter(s): {', '.join(map(repr, missing))}")
-    out = {k: _coerce(k, values[k]) for k in KEYS}
+    if valid is None:
+        out = {k: _coerce(k, values[k]) for k in KEYS}
+    else:
+        out = {k: _coerce(k, values[k]) if k in changed else valid[k] for k in KEYS}
     if out["scale"] + out["scaleV"] <= 0:
         raise ParamError(
             f"parameter 'scaleV': scale + scaleV must be positive (the tree's size), got "

@@ -142,7 +142,13 @@ def reference_files(name: str) -> tuple[str, ...]:
 
 def base(name: str) -> TreeParams:
     """The species' base dictionary (its first published ground truth, seed 0)."""
-    return TreeParams(_data()[canonical(name)]["base"])
+    return _base(canonical(name))
+
+
+@cache
+def _base(name: str) -> TreeParams:
+    """Validated once: a TreeParams never changes, and the search asks for it per tree."""
+    return TreeParams(_data()[name]["base"])
 
 
 def _to_unfixed(row: dict[str, Any]) -> Unfixed:
@@ -270,7 +276,8 @@ def project(
     given values too, clipped into their ranges (what the refinement moves); the keys in
     ``keep`` (e.g. :data:`DRAWN_KEYS`) keep the given values whatever the species'.
     """
-    values = base(name).to_dict()
+    start = base(name)
+    values = start.to_dict()
     src = params.to_dict()
     for u in unfixed(name):
         v = _get(src, u.key, u.index)
@@ -290,4 +297,5 @@ def project(
     for key in keep:  # a start fitted to a drawing: its outline wins
         values[key] = src[key]
     values["seed"] = params["seed"]
-    return TreeParams(values)
+    first = start.to_dict()
+    return start.replace(**{k: v for k, v in values.items() if v != first[k]})

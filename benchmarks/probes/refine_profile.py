@@ -5,7 +5,7 @@ from ``--from`` (``bench_drawings.py --part follow``'s cases; one run first, unp
 load the network and compile the rasteriser) and prints the seconds per drawing and the
 functions by cumulative time.
 
-    .venv/bin/python benchmarks/probes/refine_profile.py --people 6 --from 20 --top 45
+    .venv/bin/python benchmarks/probes/refine_profile.py --people 6 --from 20 --top 45 [--sort tottime]
     .venv/bin/python benchmarks/probes/refine_profile.py --people 6 --from 20 --repeats
 """
 
@@ -51,6 +51,7 @@ def main() -> None:
     ap.add_argument("--people", type=int, default=6)
     ap.add_argument("--from", dest="start", type=int, default=20)
     ap.add_argument("--top", type=int, default=45)
+    ap.add_argument("--sort", default="cumulative", choices=["cumulative", "tottime"])
     ap.add_argument(
         "--repeats",
         action="store_true",
@@ -74,7 +75,7 @@ def main() -> None:
         pipe.run(img)
     profile.disable()
     print(f"{(time.perf_counter() - t) / len(cases):.2f} s per drawing (profiled)")
-    pstats.Stats(profile).sort_stats("cumulative").print_stats(args.top)
+    pstats.Stats(profile).sort_stats(args.sort).print_stats(args.top)
 
 
 if __name__ == "__main__":
