@@ -327,3 +327,32 @@ def test_huge_integers_are_refused_plainly(key, tmp_path) -> None:
     f.write_text(json.dumps({**default_params().to_dict(), key: value}))
     with pytest.raises(ParamError, match=key):
         load_params(f)
+
+
+def test_replace_checks_the_changed_keys_and_the_whole_tree_as_a_new_dictionary_would() -> None:
+    """``replace`` checks only the keys it changes and then the tree's limits: it gives
+    what a whole new dictionary gives, and refuses what that refuses, with the same words."""
+    from weberpenn.params import TreeParams
+
+    p = default_params()
+    for changes in (
+        {"levels": 2, "baseSize": 0.25},
+        {"customShape": [0.2, 1, 0.5, 0.4], "shape": 8.0},  # coerced: floats, an enum name
+        {"scale": 3, "seed": 7},
+    ):
+        q = p.replace(**changes)
+        assert q == TreeParams({**p.to_dict(), **changes})
+        assert dict(q) == dict(TreeParams({**p.to_dict(), **changes}))
+    assert p.replace(shape=8.0)["shape"] == "8"
+    for bad in (
+        {"baseSize": 1.5},
+        {"nosuch": 1},
+        {"levels": "two"},
+        {"scale": 0.001, "scaleV": -0.001},  # each in range, together no size
+        {"branches": [1, 200, 200, 200], "levels": 4},  # each in range, too many stems
+    ):
+        with pytest.raises(ParamError) as replaced:
+            p.replace(**bad)
+        with pytest.raises(ParamError) as whole:
+            TreeParams({**p.to_dict(), **bad})
+        assert str(replaced.value) == str(whole.value), bad
