@@ -204,6 +204,8 @@ def framed_sketch(sketch: np.ndarray, size: int, specks: bool = False) -> np.nda
     the specks kept too (a quarter of the time); a few framings differ by a speck, no
     envelope did (``refine.start.seen_envelope``; RESULTS.md, "Candidates framed without
     the page's cleaning")."""
+    if np.ndim(sketch) != 2:
+        raise ValueError(f"a tree's sketch is a 2-D grey picture, got shape {np.shape(sketch)}")
     ink = ink_mask(sketch)
     return _pooled(frame_ink(ink if specks else drop_specks(ink), 2 * size, over_crown=True))
 

@@ -153,3 +153,5 @@ def test_a_blank_tree_sketch_is_refused_as_a_blank_drawing_is() -> None:
     for specks in (False, True):
         with pytest.raises(SketchError, match="blank"):
             framed_sketch(blank, 128, specks=specks)
+    with pytest.raises(ValueError, match="2-D"):
+        framed_sketch(np.zeros((256, 256, 3), np.uint8), 128)
