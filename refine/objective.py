@@ -195,19 +195,17 @@ def framed(img: Any, size: int) -> np.ndarray:
     return _pooled(normalise_drawing(a, 2 * size, over_crown=True))
 
 
-def framed_sketch(sketch: np.ndarray, size: int, specks: bool = False) -> np.ndarray:
+def framed_sketch(sketch: np.ndarray, size: int) -> np.ndarray:
     """A sketch the renderer drew (uint8, a candidate tree's) framed as :func:`framed`
     frames a drawing, without the reader's cleaning of a page: a tree's sketch has no
     paper, frame, caption, ground line, ruling or marks beside the tree, so its ink less
     its specks is what the cleaning leaves, framed the same (the same picture, pixel for
-    pixel, for 264 of 264 candidates of the eleven species, in half the time).  ``specks``:
-    the specks kept too (a quarter of the time); a few framings differ by a speck, no
-    envelope did (``refine.start.seen_envelope``; RESULTS.md, "Candidates framed without
-    the page's cleaning")."""
+    pixel, for 264 of 264 candidates of the eleven species, in half the time; the specks
+    go, as a willow's stray leaf clumps above its crown would frame it smaller: RESULTS.md,
+    "Candidates framed without the page's cleaning")."""
     if np.ndim(sketch) != 2:
         raise ValueError(f"a tree's sketch is a 2-D grey picture, got shape {np.shape(sketch)}")
-    ink = ink_mask(sketch)
-    return _pooled(frame_ink(ink if specks else drop_specks(ink), 2 * size, over_crown=True))
+    return _pooled(frame_ink(drop_specks(ink_mask(sketch)), 2 * size, over_crown=True))
 
 
 def _pooled(big: np.ndarray) -> np.ndarray:

@@ -567,6 +567,9 @@ def outline_searched(
         )
         if seen is not None:
             tree, sketches = sized(polished, seen)
+    # the step's sketches were drawn for their envelopes (``outline=True``); the search's
+    # distance reads the whole sketch, so the kept tree is drawn as the search draws it
+    sketches = cheap_sketches(tree, result.species, drawing.size, [yaw for _, yaw in wants])
     targets = [d.target for d in drawings]
     losses = tuple(run.obj.loss_of_sketch(s, t) for s, t in zip(sketches, targets, strict=True))
     loss = float(np.mean(losses))

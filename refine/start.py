@@ -33,7 +33,7 @@ import numpy as np
 
 from weberpenn import TreeParams, grow
 from weberpenn.params import SPECS
-from weberpenn.species import DRAWN_KEYS
+from weberpenn.species import DRAWN_KEYS, outline_stem_cut
 
 from .envelope import envelope_of_ink, mask_iou
 
@@ -171,24 +171,30 @@ def same_size(p: TreeParams, height: float) -> TreeParams:
 
 
 def _sketcher(
-    params: TreeParams, species: str, size: int
+    params: TreeParams, species: str, size: int, outline: bool = False
 ) -> Callable[[Sequence[float]], list[np.ndarray]]:
     """The tree grown and meshed once: yaws -> its fast sketches at each, to be compared
-    at ``size`` px (drawn at ``refine.objective.draw_side(size)``)."""
+    at ``size`` px (drawn at ``refine.objective.draw_side(size)``).  ``outline``: sketches
+    only their envelopes are read from (:func:`seen_envelope`), meshed without the stems
+    under the species' ``outline_stem_cut`` (where the foliage draws the outline, the
+    thin stems inside it cost an oak's outline about half its mesh and picture and
+    change no envelope: RESULTS.md, "Candidates framed without the page's cleaning")."""
     from render.sketch import SketchRenderer, sketch_mesh
 
     from .objective import draw_side
 
-    r = SketchRenderer(sketch_mesh(grow(params), size, species), engine="raster")
+    cut = outline_stem_cut(species) if outline else None
+    r = SketchRenderer(sketch_mesh(grow(params), size, species, cut=cut), engine="raster")
     return lambda yaws: [r.sketch(yaw % 360.0, draw_side(size)) for yaw in yaws]
 
 
 def cheap_sketches(
-    params: TreeParams, species: str, size: int, yaws: Sequence[float]
+    params: TreeParams, species: str, size: int, yaws: Sequence[float], outline: bool = False
 ) -> list[np.ndarray]:
     """The tree's fast sketches (the search's own) at each of ``yaws``, to be compared at
-    ``size`` px (drawn at ``refine.objective.draw_side(size)``)."""
-    return _sketcher(params, species, size)(yaws)
+    ``size`` px (drawn at ``refine.objective.draw_side(size)``); ``outline``: for their
+    envelopes only (see :func:`_sketcher`)."""
+    return _sketcher(params, species, size, outline)(yaws)
 
 
 def cheap_sketch(params: TreeParams, species: str, size: int, yaw: float) -> np.ndarray:
@@ -204,7 +210,7 @@ def seen_envelope(sketch: np.ndarray, size: int) -> np.ndarray:
     from .prepare import prepare_sketch
     from .shape import prepared_envelope
 
-    return prepared_envelope(prepare_sketch(framed_sketch(sketch, size, specks=True), size))
+    return prepared_envelope(prepare_sketch(framed_sketch(sketch, size), size))
 
 
 def _render_profile(params: TreeParams, species: str, size: int, yaw: float) -> Profile | None:
@@ -381,8 +387,9 @@ def polish(
     nearest ``wants`` (each a drawing's framed envelope and the yaw it is seen from): nlopt
     COBYLA on one minus the mean envelope overlap, at most ``evals`` (default
     ``POLISH_EVALS``) trees, while ``going()`` (the caller's time and cancel) says so.
-    Returns the tree and its cheap sketch at each view, or ``p`` and None when it found
-    no nearer outline or ``p``'s mean overlap is already ``below`` or more.
+    Returns the tree and its outline sketch at each view (``cheap_sketches(...,
+    outline=True)``: for envelopes only), or ``p`` and None when it found no nearer
+    outline or ``p``'s mean overlap is already ``below`` or more.
 
     Only a tree grown from the custom shape (``shape`` 8) has these values to search;
     ``refit`` turns any other into one (:func:`fit_start`), whose outline is then searched
@@ -402,7 +409,7 @@ def polish(
         """One minus ``q``'s mean overlap with the drawn outlines, and its sketches."""
         if going is not None and not going():
             raise nlopt.ForcedStop
-        sketches = cheap_sketches(q, species, size, [yaw for _, yaw in wants])
+        sketches = cheap_sketches(q, species, size, [yaw for _, yaw in wants], outline=True)
         return 1.0 - views_overlap(wants, sketches, size), sketches
 
     try:
@@ -485,7 +492,7 @@ def reseed(
 ) -> tuple[TreeParams, float, list[np.ndarray]] | None:
     """The tree among ``p`` and ``seeds`` others differing only in their seed, and
     the turn of ``RESEED_TURNS``, whose outlines overlap the drawn ones (``wants``, as
-    :func:`polish` takes them) most: (tree, turn in degrees, its cheap sketches), or None
+    :func:`polish` takes them) most: (tree, turn in degrees, its outline sketches), or None
     when none is nearer than ``p`` at its own view, or ``p``'s overlap is already
     ``below`` or more, or ``going()`` stopped it first (each seed and turn one tree)."""
 
@@ -494,7 +501,7 @@ def reseed(
 
     if not wants or (going is not None and not going()):
         return None
-    own = _sketcher(p, species, size)  # grown once: its start and its other turns
+    own = _sketcher(p, species, size, outline=True)  # grown once: its start and other turns
     start = overlap(own([yaw for _, yaw in wants]))
     if below is not None and start >= below:
         return None
@@ -511,7 +518,7 @@ def reseed(
             turns.append(turn)
         if turns:
             yaws = [yaw + turn for turn in turns for _, yaw in wants]
-            sketches = (own if k == 0 else _sketcher(q, species, size))(yaws)
+            sketches = (own if k == 0 else _sketcher(q, species, size, outline=True))(yaws)
             for i, turn in enumerate(turns):
                 seen = sketches[i * len(wants) : (i + 1) * len(wants)]
                 v = overlap(seen)

@@ -169,7 +169,11 @@ def sample_width(framing: Framing, size: int, config: EdgeConfig | None = None) 
 
 
 def sketch_mesh(
-    skeleton: Any, size: int, species: str | None = None, config: EdgeConfig | None = None
+    skeleton: Any,
+    size: int,
+    species: str | None = None,
+    config: EdgeConfig | None = None,
+    cut: float | None = None,
 ) -> Any:
     """The lightest TreeMesh of a grown ``skeleton`` that draws the same ``size`` px
     sketch: its stems thinner than half a :func:`sample_width` are left out
@@ -179,7 +183,8 @@ def sketch_mesh(
 
     The sample width comes from a framing of the skeleton's control points and leaf
     positions, which lie inside the full mesh, so it is never wider than the full
-    tree's own: the cut errs on the side of keeping stems.
+    tree's own: the cut errs on the side of keeping stems.  ``cut``: another share of
+    the sample width to cut at (``refine.start``'s outlines cut more).
     """
     from weberpenn import build_mesh
     from weberpenn import species as wp_species
@@ -188,7 +193,8 @@ def sketch_mesh(
     framing = Framing.from_parts([skeleton.points, skeleton.leaf_positions])
     width = sample_width(framing, size, config)
     # a species whose sub-pixel twigs darken its silhouette together keeps more of them
-    cut = 0.5 if species is None else wp_species.sketch_stem_cut(species)
+    if cut is None:
+        cut = 0.5 if species is None else wp_species.sketch_stem_cut(species)
     return build_mesh(drop_thin_stems(skeleton, cut * width), species=species)
 
 

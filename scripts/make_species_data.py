@@ -82,6 +82,13 @@ PEOPLE_SPECIES: dict[str, dict] = {
 #: 4-12 % of its pixels (tests/test_render_raster.py); these keep them.
 SKETCH_STEM_CUT = {"oak": 0.25, "winter": 0.1, "willow": 0.05}
 
+#: Stems the outline step's sketches (``refine.start``: their envelopes alone are read)
+#: leave out, as a fraction of the sample width: where the foliage draws the crown's
+#: outline, the thin stems inside it change no envelope (people's 143 held-out drawings'
+#: outline steps replayed: the same trees for these three; a birch's sparse leaves and a
+#: willow's curtain leave twigs on the outline, and they changed four of ten there).
+OUTLINE_STEM_CUT = {"oak": 2.0, "maple": 2.0, "cherry": 2.0}
+
 #: Species whose foliage people draw as single strokes (fronds, hanging twigs).
 FOLIAGE_STROKES = ("palm", "willow")
 
@@ -252,6 +259,8 @@ def main(src: str, presets: str) -> None:
         out["species"][name]["foliage_strokes"] = True
     for name, cut in SKETCH_STEM_CUT.items():
         out["species"][name]["sketch_stem_cut"] = cut
+    for name, cut in OUTLINE_STEM_CUT.items():
+        out["species"][name]["outline_stem_cut"] = cut
     out["_source"] += "; the species people draw from Blender 3.4's Sapling presets (numbers only)"
     dst = Path(__file__).resolve().parent.parent / "weberpenn" / "species_data.json"
     dst.write_text(json.dumps(out, indent=1) + "\n")

@@ -581,3 +581,23 @@ def test_the_outline_step_keeps_the_searched_trees_size(monkeypatch) -> None:
     grown = searched.replace(length=[float(v) for v in res.params["length"]])
     assert grown_height(grown) > 1.2 * grown_height(searched)  # the reach alone grows it
     assert abs(grown_height(res.params) - grown_height(searched)) <= 1e-3 * grown_height(searched)
+
+
+@pytest.mark.parametrize("name", ["oak", "maple", "cherry", "birch", "willow"])
+def test_an_outline_sketch_has_the_envelope_of_the_search_sketch(name: str) -> None:
+    """The outline step's sketches (``outline=True``: the species' thinnest stems left
+    out where its foliage draws the outline) have the search's sketches' envelopes, from
+    the species' own shape and a custom one; a birch's or a willow's twigs reach its
+    outline, and its sketches stay whole."""
+    from refine.start import cheap_sketches, seen_envelope
+
+    cut = species.outline_stem_cut(name) > species.sketch_stem_cut(name)
+    assert cut == (name in ("oak", "maple", "cherry"))
+    p = species.sample(name, 5)
+    for tree in (p, p.replace(shape=8, customShape=[0.3, 1.0, 0.6, 0.4], baseSize=0.35)):
+        yaws = [15.0, 140.0, 260.0]
+        whole = cheap_sketches(tree, name, SIZE, yaws)
+        outline = cheap_sketches(tree, name, SIZE, yaws, outline=True)
+        for a, b in zip(whole, outline, strict=True):
+            assert np.array_equal(seen_envelope(a, SIZE), seen_envelope(b, SIZE))
+            assert np.array_equal(a, b) != cut

@@ -8,8 +8,8 @@ fast sketches (``refine.start.cheap_sketch``) of ``--seeds`` trees of each speci
 four views, and times the candidates' framing as the search does it
 (``refine.objective.framed``, median of ``--repeats`` rounds).  The candidates, and the
 same trees grown from a custom shape (as the outline step's polish grows them), are
-framed by ``framed_sketch`` too, less specks and with them kept: how many pictures are
-``framed``'s and how many envelopes (``refine.start.seen_envelope``'s) are, and each's time.  ``--save`` writes every
+framed by ``framed_sketch`` too: how many pictures are ``framed``'s and how many envelopes
+(``refine.start.seen_envelope``'s) are, and each's time.  ``--save`` writes every
 framed picture; ``--compare`` checks them against a saved file, picture for picture.
 Run the other commit's code from its worktree with this file:
 
@@ -102,16 +102,15 @@ def main() -> None:
 
 
 def compare_candidates(sketches: list[np.ndarray], repeats: int) -> None:
-    """``framed_sketch`` (less specks, specks kept) against ``framed``: the same pictures,
-    the same envelopes, and the median time of ``repeats`` rounds."""
+    """``framed_sketch`` against ``framed``: the same pictures, the same envelopes, and
+    the median time of ``repeats`` rounds."""
 
     def envelope(picture: np.ndarray) -> np.ndarray:
         return prepared_envelope(prepare_sketch(picture, 128))
 
     ways = {
         "framed": lambda s: framed(s, 128),
-        "less specks": lambda s: framed_sketch(s, 128),
-        "specks kept": lambda s: framed_sketch(s, 128, specks=True),
+        "framed_sketch": lambda s: framed_sketch(s, 128),
     }
     same = {name: [0, 0] for name in ways}
     for s in sketches:
