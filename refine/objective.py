@@ -202,7 +202,8 @@ def framed_sketch(sketch: np.ndarray, size: int) -> np.ndarray:
     its specks is what the cleaning leaves, framed the same (the same picture, pixel for
     pixel, for 264 of 264 candidates of the eleven species, in half the time; the specks
     go, as a willow's stray leaf clumps above its crown would frame it smaller: RESULTS.md,
-    "Candidates framed without the page's cleaning")."""
+    "Candidates framed without the page's cleaning; the outline step's trees meshed
+    lighter")."""
     if np.ndim(sketch) != 2:
         raise ValueError(f"a tree's sketch is a 2-D grey picture, got shape {np.shape(sketch)}")
     return _pooled(frame_ink(drop_specks(ink_mask(sketch)), 2 * size, over_crown=True))

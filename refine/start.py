@@ -178,7 +178,8 @@ def _sketcher(
     only their envelopes are read from (:func:`seen_envelope`), meshed without the stems
     under the species' ``outline_stem_cut`` (where the foliage draws the outline, the
     thin stems inside it cost an oak's outline about half its mesh and picture and
-    change no envelope: RESULTS.md, "Candidates framed without the page's cleaning")."""
+    change almost no envelope: RESULTS.md, "Candidates framed without the page's
+    cleaning; the outline step's trees meshed lighter")."""
     from render.sketch import SketchRenderer, sketch_mesh
 
     from .objective import draw_side
