@@ -177,9 +177,9 @@ def _sketcher(
     at ``size`` px (drawn at ``refine.objective.draw_side(size)``).  ``outline``: sketches
     only their envelopes are read from (:func:`seen_envelope`), meshed without the stems
     under the species' ``outline_stem_cut`` (where the foliage draws the outline, the
-    thin stems inside it cost an oak's outline about half its mesh and picture and
-    change almost no envelope: RESULTS.md, "Candidates framed without the page's
-    cleaning; the outline step's trees meshed lighter")."""
+    thin stems inside it change almost no envelope and cost time: RESULTS.md,
+    "Candidates framed without the page's cleaning; the outline step's trees meshed
+    lighter")."""
     from render.sketch import SketchRenderer, sketch_mesh
 
     from .objective import draw_side

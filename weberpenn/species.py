@@ -128,8 +128,7 @@ def outline_stem_cut(name: str) -> float:
     """Stems thinner than this fraction of a sketch's sample width may be left out of the
     mesh of a sketch read for its envelope alone (``refine.start``'s outline step): more
     than :func:`sketch_stem_cut` where the foliage draws the crown's outline."""
-    data = _data()[canonical(name)]
-    return float(data.get("outline_stem_cut", data.get("sketch_stem_cut", 0.5)))
+    return float(_data()[canonical(name)].get("outline_stem_cut", sketch_stem_cut(name)))
 
 
 def source(name: str) -> str:
