@@ -788,6 +788,13 @@ GROUND_TUFT = 0.12  # of the drawing's height: a tuft of grass on the line is no
 # (the trunk below a pine's lowest whorl or a crown's flat base, the body of a bonsai's pot
 # below its rim; roots drawn below the ground keep the line too)
 GROUND_BELOW = 0.05
+# ... unless the line sticks out of the whole tree and runs on well past the ink below it,
+# on one side at least, by this share of that ink's width: roots drawn under the ground, a
+# trunk's foot drawn in front of a horizon, are narrower than the ground they stand on; a
+# pot's rim overhangs its body by a lip only
+GROUND_PAST_BELOW = 0.3
+GROUND_ROOTS = 0.3  # of the drawing's height: roots below the line reach no further
+GROUND_ROOTS_SPREAD = 1.5  # of the trunk's width on the line: roots spread at least so wide
 
 
 def _level_runs(ink: np.ndarray, tilt: int, length: float) -> np.ndarray:
@@ -809,31 +816,57 @@ def _level_runs(ink: np.ndarray, tilt: int, length: float) -> np.ndarray:
     return out
 
 
-def _is_ground(ink: np.ndarray, box: tuple[slice, slice], tilt: int) -> bool:
-    """Whether a level run with bounding box ``box`` is a ground line under the tree:
-    thin, in the lower half of the drawing, at its foot (next to nothing below it) and
-    sticking out beyond what stands on it or beyond its foot (see ``GROUND_FOOT``)."""
+def _ground_span(ink: np.ndarray, box: tuple[slice, slice], tilt: int) -> slice | None:
+    """Where a level run with bounding box ``box`` is a ground line under the tree (thin,
+    in the lower half of the drawing, at its foot and sticking out beyond what stands on
+    it or beyond its foot, see ``GROUND_FOOT``), the columns outside which it goes; None
+    when it is none.  Next to nothing below it: every column; the tree's roots or foot
+    going on below it (``GROUND_PAST_BELOW``): the columns outside theirs."""
     ys = np.flatnonzero(ink.any(axis=1))
     top, height = int(ys[0]), int(ys[-1] - ys[0] + 1)
     (t, b), (left, right) = (box[0].start, box[0].stop), (box[1].start, box[1].stop)
     if (t + b) / 2 < top + height / 2 or b - t > LINE_ASPECT * (right - left):
-        return False
+        return None
     standing = _standing(ink[: max(0, t - int(round(GROUND_GRASS * height)))], height)
     if standing is None:  # nothing stands on it
-        return False
+        return None
     foot_rows = max(1, int(round(GROUND_FOOT * height)))
     foot = np.flatnonzero(standing[-foot_rows:].any(axis=0))
     cols = np.flatnonzero(standing.any(axis=0))
+    if not (
+        _sticks_out(left, right, cols, GROUND_OUT, tilt)
+        or (foot.size and _sticks_out(left, right, foot, GROUND_FOOT_OUT, tilt))
+    ):
+        return None
     # under the tree, not under the line's own ends (a mound's sides go down there)
-    below = np.flatnonzero(ink[b + tilt :, cols[0] : cols[-1] + 1].any(axis=1))
-    if below.size and below[-1] + 1 > GROUND_BELOW * height:  # a trunk, a pot goes on
-        return False
-    for span, share in ((cols, GROUND_OUT), (foot, GROUND_FOOT_OUT)):
-        if span.size:
-            out = max(share * (span[-1] + 1 - span[0]), 4 * tilt)
-            if left < span[0] - out or right > span[-1] + 1 + out:
-                return True
-    return False
+    under = ink[b + tilt :, cols[0] : cols[-1] + 1]
+    below = np.flatnonzero(under.any(axis=1))
+    if not below.size or below[-1] + 1 <= GROUND_BELOW * height:
+        return slice(0, 0)
+    # a trunk, a pot goes on.  Roots or a foot drawn past a ground line are short, and
+    # the line sticks out of the whole tree (a crown's or a tier's base with the trunk
+    # below it sticks out of its foot only); a pot's rim overhangs its body by a lip (its
+    # sides go down from the rim's ends, under no crown when the tree leans out of it)
+    if below[-1] + 1 > GROUND_ROOTS * height:
+        return None
+    # ... and spread wider than the trunk stands on the line (a fir's trunk below its
+    # lowest tier goes on as it came)
+    stem = np.flatnonzero(standing[-max(2 * tilt, 1) :].any(axis=0))
+    spread = np.flatnonzero(under.any(axis=0))
+    if stem.size and spread[-1] + 1 - spread[0] < GROUND_ROOTS_SPREAD * (stem[-1] + 1 - stem[0]):
+        return None
+    lo, hi = min(left, int(cols[0])), max(right, int(cols[-1]) + 1)
+    wide = lo + np.flatnonzero(ink[b + tilt :, lo:hi].any(axis=0))
+    if not _sticks_out(left, right, wide, GROUND_PAST_BELOW, tilt):
+        return None
+    return slice(int(wide[0]), int(wide[-1]) + 1)
+
+
+def _sticks_out(left: int, right: int, span: np.ndarray, share: float, tilt: int) -> bool:
+    """Whether a line from column ``left`` to ``right`` (exclusive) runs past the columns
+    ``span`` on one side by ``share`` of their width (``4 * tilt`` at least)."""
+    out = max(share * (span[-1] + 1 - span[0]), 4 * tilt)
+    return bool(left < span[0] - out or right > span[-1] + 1 + out)
 
 
 def _standing(above: np.ndarray, height: int) -> np.ndarray | None:
@@ -883,9 +916,15 @@ def _without_ground(ink: np.ndarray, tilt: int) -> np.ndarray:
     # from the top down, each judged against what is left above it: the lower edge of a
     # patch of ground sticks out of the tree once the patch's upper edge is gone
     for k, box in sorted(boxes, key=lambda kb: kb[1][0].start):
-        if _is_ground(out, box, tilt):
-            out &= ~_ground_pixels(ink, lab == k, box, tilt)
-            out &= ~_ground_ends(out, ink & ~out, box[0].start, GROUND_TUFT * height, tilt)
+        kept = _ground_span(out, box, tilt)
+        if kept is None:
+            continue
+        gone = _ground_pixels(ink, lab == k, box, tilt)
+        gone[:, kept] = False
+        out &= ~gone
+        ends = _ground_ends(out, ink & ~out, box[0].start, GROUND_TUFT * height, tilt)
+        ends[:, kept] = False
+        out &= ~ends
     return out
 
 

@@ -377,6 +377,34 @@ def test_a_ground_line_no_wider_than_the_crown_is_dropped() -> None:
     assert np.array_equal(kept[: foot - 8], ink[: foot - 8])
 
 
+@pytest.mark.parametrize("name, seed", [("maple", 3), ("oak", 2)])
+def test_roots_drawn_under_the_ground_stay_and_the_ground_goes(name: str, seed: int) -> None:
+    """Roots drawn below a ground line that runs on well past them: the line goes outside
+    the roots (before, the ink below it kept the whole line, read as the tree's base),
+    the roots and the tree above stay."""
+    page = _on_page(tree_doodle(name, seed), 512, (128, 60))
+    ink = ink_mask(page)
+    foot = int(np.flatnonzero(ink.any(axis=1))[-1])
+    stem = np.flatnonzero(ink[foot - 2 : foot + 1].any(axis=0))
+    mid, half = (stem[0] + stem[-1]) / 2, max(6.0, (stem[-1] - stem[0]) / 2)
+
+    def roots_and_ground(d: ImageDraw.ImageDraw) -> None:
+        for dx in (-1.6, -0.6, 0.6, 1.6):  # four roots fanning out and down
+            d.line((mid + 0.5 * dx * half, foot, mid + 1.5 * dx * half, foot + 60), 0, 3)
+        d.line((mid - 200, foot + 4, mid + 200, foot + 4), fill=0, width=3)
+
+    drawn = ink_mask(_drawn(page, roots_and_ground))
+    kept = tree_ink(drawn)
+    spread = np.flatnonzero(drawn[foot + 10 :].any(axis=0))
+    line_rows = slice(foot + 2, foot + 7)
+    outside = np.ones(drawn.shape[1], bool)
+    outside[spread[0] : spread[-1] + 1] = False
+    assert drawn[line_rows][:, outside].sum() > 250  # the line was drawn there
+    assert not kept[line_rows][:, outside].any()
+    assert np.array_equal(kept[foot + 10 :], drawn[foot + 10 :])  # the roots
+    assert np.array_equal(kept[: foot - 8], ink[: foot - 8])  # the tree
+
+
 def _mushroom(ground: bool) -> np.ndarray:
     """A crown over a wide trunk drawn closed at its foot (the trunk 0.4 of the crown's
     width), with a ground line 0.8 of the crown's width under it or without."""

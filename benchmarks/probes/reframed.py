@@ -13,7 +13,7 @@ drawings of each other kind; hand-style tree doodles (``--doodles`` a species);
 (both parts, every kind).
 
     .venv/bin/python benchmarks/probes/reframed.py --set render.reader.SINGLE_STROKES=0 \\
-        [--others 60] [--doodles 40] [--all-people]
+        [--others 60] [--doodles 40] [--all-people] [--pictures DIR]
 """
 
 from __future__ import annotations
@@ -50,6 +50,22 @@ def drawing_sets(others: int, doodles: int) -> dict[str, list[Any]]:
     return sets
 
 
+def _picture(path: Path, page: np.ndarray, then: np.ndarray | None, now: np.ndarray | None) -> None:
+    """The page (fitted into the network's size) beside its two framings (grey: refused)."""
+    from PIL import Image
+
+    side = 256
+    row = Image.new("L", (3 * side + 8, side), 128)
+    im = Image.fromarray(page)
+    im.thumbnail((side, side))
+    row.paste(im, (0, 0))
+    for k, pic in enumerate((then, now), start=1):
+        if pic is not None:
+            row.paste(Image.fromarray(pic).resize((side, side)), (k * (side + 4), 0))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    row.save(path)
+
+
 def main() -> None:
     from outline_replay import set_constants
 
@@ -64,6 +80,12 @@ def main() -> None:
         "--all-people",
         action="store_true",
         help="instead: every drawing of each of people's folders (both parts, every kind)",
+    )
+    ap.add_argument(
+        "--pictures",
+        type=Path,
+        default=None,
+        help="write each drawing framed otherwise here: the page, framed with --set and as is",
     )
     args = ap.parse_args()
     if args.all_people:
@@ -99,6 +121,8 @@ def main() -> None:
                 now is not None and not np.array_equal(now, then)
             ):
                 moved.append(i)
+                if args.pictures is not None:
+                    _picture(args.pictures / f"{name}-{i}.png", page, then, now)
         print(f"{name}: {len(imgs)} drawings, {len(moved)} framed otherwise {moved}", flush=True)
 
 
