@@ -59,7 +59,7 @@ def capture(run: Path, bench_args: list[str]) -> int:
         done = real_step(result, drawing, views, run_, t0, trees, below)
         state["n"] += 1
         call = dict(case=state["case"], result=result, drawing=drawing, views=views)
-        call |= dict(trees=trees, below=below, out=done)
+        call |= dict(trees=trees, below=below, out=done, full=search.OUTLINE_TREES)
         (out / f"{state['n']:05d}.pkl").write_bytes(pickle.dumps(call))
         return done
 
@@ -120,7 +120,6 @@ def set_constants(assignments: list[str]) -> Callable[[], None]:
 def replay(runs: list[Path], assignments: list[str]) -> None:
     import refine.search as search
 
-    full = search.OUTLINE_TREES
     set_constants(assignments)
     rows = []
     times: list[float] = []
@@ -128,8 +127,11 @@ def replay(runs: list[Path], assignments: list[str]) -> None:
     for run in runs:
         records = json.loads(run.read_text())["records"]
         sketches = np.load(run.with_suffix(".npz"))
-        for path in sorted(_calls_dir(run).glob("*.pkl")):
-            call = pickle.loads(path.read_bytes())
+        calls = [pickle.loads(p.read_bytes()) for p in sorted(_calls_dir(run).glob("*.pkl"))]
+        # the whole step's trees when captured (runs captured before it was kept: the
+        # most any of their calls had)
+        then = max((c.get("full", c["trees"]) for c in calls), default=0)
+        for call in calls:
             rec = records[call["case"]] if call["case"] < len(records) else None
             if rec is None or call["result"].species != rec["species"]:
                 continue
@@ -141,7 +143,7 @@ def replay(runs: list[Path], assignments: list[str]) -> None:
                 obj=_Distance([drawing, *(v.drawing for v in views)]),
             )
             # a call given the whole step's trees gets the whole step's as ``--set`` makes it
-            trees = search.OUTLINE_TREES if call["trees"] >= full else call["trees"]
+            trees = search.OUTLINE_TREES if call["trees"] >= then else call["trees"]
             t = time.perf_counter()
             new = search.outline_searched(
                 call["result"], drawing, views, stub, t, trees, call["below"]
