@@ -816,16 +816,21 @@ def _level_runs(ink: np.ndarray, tilt: int, length: float) -> np.ndarray:
     return out
 
 
-def _ground_span(ink: np.ndarray, box: tuple[slice, slice], tilt: int) -> slice | None:
+def _ground_span(
+    ink: np.ndarray, box: tuple[slice, slice], tilt: int, tall: float | None = None
+) -> slice | None:
     """Where a level run with bounding box ``box`` is a ground line under the tree (thin,
     in the lower half of the drawing, at its foot and sticking out beyond what stands on
     it or beyond its foot, see ``GROUND_FOOT``), the columns outside which it goes; None
     when it is none.  Next to nothing below it: every column; the tree's roots or foot
-    going on below it (``GROUND_PAST_BELOW``): the columns outside theirs."""
+    going on below it (``GROUND_PAST_BELOW``): the columns outside theirs.  ``tall``:
+    the tallest it may be, a share of the drawing's height (by default a line's
+    ``LINE_ASPECT`` of its width)."""
     ys = np.flatnonzero(ink.any(axis=1))
     top, height = int(ys[0]), int(ys[-1] - ys[0] + 1)
     (t, b), (left, right) = (box[0].start, box[0].stop), (box[1].start, box[1].stop)
-    if (t + b) / 2 < top + height / 2 or b - t > LINE_ASPECT * (right - left):
+    thin = b - t <= (LINE_ASPECT * (right - left) if tall is None else tall * height)
+    if (t + b) / 2 < top + height / 2 or not thin:
         return None
     standing = _standing(ink[: max(0, t - int(round(GROUND_GRASS * height)))], height)
     if standing is None:  # nothing stands on it
@@ -925,6 +930,63 @@ def _without_ground(ink: np.ndarray, tilt: int) -> np.ndarray:
         ends = _ground_ends(out, ink & ~out, box[0].start, GROUND_TUFT * height, tilt)
         ends[:, kept] = False
         out &= ~ends
+    return _without_grass(out, height, tilt)
+
+
+# Grass drawn as one zigzag line along the ground ("VVVV" under the tree): no level run at
+# a hand's wobble, but one when its ink is widened by its teeth's height; judged as a
+# ground line is (under the tree, sticking out of it, next to nothing below), and told
+# from a crown's or a tier's wavy edge by the strokes crossing its middle: a tooth crosses
+# it twice, a level line runs along it
+GRASS_BAND = 0.2  # of the drawing's height: the teeth are no taller
+GRASS_CROSSINGS = 6  # strokes across the band's middle, at least
+GRASS_TALLEST = 1.5  # of GRASS_BAND: the tallest teeth among them (the band's middle bridged)
+GRASS_WIDE = 0.85  # of the width of what stands on it: the grass is no narrower
+
+
+def _without_grass(ink: np.ndarray, height: int, tilt: int) -> np.ndarray:
+    """``ink`` without grass drawn as a zigzag line under the tree (see ``GRASS_BAND``;
+    ``height`` the drawing's, ``tilt`` a hand's wobble as for a ground line); a trunk
+    standing in it keeps its foot down to the teeth's tops."""
+    from scipy import ndimage
+
+    reach = max(2, int(round(GRASS_BAND * height / 2)))
+    level = _level_runs(ink, reach, max(8.0, GROUND_RUN * ink.shape[1]))
+    if not level.any():
+        return ink
+    lab, _ = ndimage.label(level, structure=np.ones((3, 3), bool))
+    out = ink
+    for k, box in enumerate(ndimage.find_objects(lab), start=1):
+        if box is None:
+            continue
+        rows = np.flatnonzero(ink[box].any(axis=1)) + box[0].start
+        if rows.size == 0:
+            continue
+        middle = ink[(rows[0] + rows[-1]) // 2 - 1 : (rows[0] + rows[-1]) // 2 + 2, box[1]]
+        if max(len(_runs(r)) for r in middle) < GRASS_CROSSINGS:
+            continue
+        # judged on the teeth's own rows (the run's box is widened by ``reach``): those
+        # that cross three strokes or more (a trunk standing in the grass, two)
+        near = slice(max(0, box[0].start - reach), box[0].stop + reach)
+        crossed = np.array([len(_runs(row)) for row in ink[near, box[1]]])
+        teeth = near.start + np.flatnonzero(crossed >= 3)
+        if teeth.size == 0:
+            continue
+        # grass runs along the ground as wide as the crown at least; a trunk's foot
+        # flaring into roots or curls is narrower
+        standing = _standing(out[: max(0, teeth[0] - reach)], height)
+        if standing is None:
+            continue
+        cols = np.flatnonzero(standing.any(axis=0))
+        if box[1].stop - box[1].start < GRASS_WIDE * (cols[-1] + 1 - cols[0]):
+            continue
+        band = (slice(teeth[0], teeth[-1] + 1), box[1])
+        kept = _ground_span(out, band, tilt, GRASS_TALLEST * GRASS_BAND)
+        if kept is None:
+            continue
+        gone = _ground_pixels(ink, lab == k, box, reach)
+        gone[:, kept] = False
+        out = out & ~gone
     return out
 
 

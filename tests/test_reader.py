@@ -361,6 +361,33 @@ def test_grass_along_the_ground_goes_with_it(name: str, seed: int, rise: int, li
     assert np.abs(_box(framed) - _box(bare)).max() <= 8
 
 
+@pytest.mark.parametrize("name, seed", [("maple", 3), ("cherry", 1), ("poplar", 4)])
+@pytest.mark.parametrize("teeth", [0.16, 0.19])
+def test_grass_drawn_as_one_zigzag_line_is_not_framed(name: str, seed: int, teeth: float) -> None:
+    """Grass drawn as one zigzag line across the tree's foot ("VVVV", teeth a sixth to a fifth
+    of the tree's height): it goes, and the tree is framed about as without it, its foot
+    cut at the teeth's tops (before, the zigzag was no level line and stayed: the tree was
+    framed small over a band of grass as wide as the page)."""
+    page = _on_page(tree_doodle(name, seed), 512, (128, 60))
+    rows = np.flatnonzero((page < 128).any(axis=1))
+    foot, rise = int(rows[-1]), teeth * (rows[-1] - rows[0])
+    xs = np.arange(20.0, 492.0, 0.6 * rise)
+    ys = foot + 2 - rise * (np.arange(xs.size) % 2)
+    grass = _drawn(page, lambda d: d.line(list(zip(xs, ys, strict=True)), fill=0, width=3))
+    bare, framed = normalise_drawing(page), normalise_drawing(grass)
+    (t0, b0, l0, r0), (t1, b1, l1, r1) = _box(bare), _box(framed)
+    assert abs((b1 - t1) - (b0 - t0)) < 0.15 * (b0 - t0)
+    assert abs((r1 - l1) - (r0 - l0)) < 0.15 * (r0 - l0)
+
+    def foot_span(img: np.ndarray) -> int:
+        cols = np.flatnonzero((img[-26:] < 128).any(axis=0))
+        return int(np.ptp(cols)) if cols.size else 0
+
+    # no band of grass across (a tooth beside the trunk's foot may stay)
+    assert foot_span(framed) < max(2.5 * foot_span(bare), 0.4 * (r0 - l0))
+    assert (framed < 128).sum() < 1.15 * (bare < 128).sum()
+
+
 def test_a_ground_line_no_wider_than_the_crown_is_dropped() -> None:
     """People draw the ground under a tree no wider than its crown: a line under the
     trunk sticks out of the trunk's foot, whatever the crown above it, and goes."""
