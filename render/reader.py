@@ -788,10 +788,10 @@ GROUND_TUFT = 0.12  # of the drawing's height: a tuft of grass on the line is no
 # (the trunk below a pine's lowest whorl or a crown's flat base, the body of a bonsai's pot
 # below its rim; roots drawn below the ground keep the line too)
 GROUND_BELOW = 0.05
-# ... unless the line sticks out of the whole tree and runs on well past the ink below it,
-# on one side at least, by this share of that ink's width: roots drawn under the ground, a
-# trunk's foot drawn in front of a horizon, are narrower than the ground they stand on; a
-# pot's rim overhangs its body by a lip only
+# ... unless that ink is short (GROUND_ROOTS), spreads wider than the trunk on the line
+# (GROUND_ROOTS_SPREAD) and the line runs on past it, on one side at least, by this share
+# of its width: roots drawn under the ground, a trunk's foot drawn in front of a horizon,
+# are narrower than the ground they stand on; a pot's rim overhangs its body by a lip only
 GROUND_PAST_BELOW = 0.3
 GROUND_ROOTS = 0.3  # of the drawing's height: roots below the line reach no further
 GROUND_ROOTS_SPREAD = 1.5  # of the trunk's width on the line: roots spread at least so wide
@@ -848,10 +848,10 @@ def _ground_span(
     below = np.flatnonzero(under.any(axis=1))
     if not below.size or below[-1] + 1 <= GROUND_BELOW * height:
         return slice(0, 0)
-    # a trunk, a pot goes on.  Roots or a foot drawn past a ground line are short, and
-    # the line sticks out of the whole tree (a crown's or a tier's base with the trunk
-    # below it sticks out of its foot only); a pot's rim overhangs its body by a lip (its
-    # sides go down from the rim's ends, under no crown when the tree leans out of it)
+    # a trunk, a pot goes on.  Roots or a foot drawn past a ground line are short, a
+    # trunk under a crown's or a tier's base is often longer; a pot's rim overhangs its
+    # body by a lip (its sides go down from the rim's ends, under no crown when the tree
+    # leans out of it)
     if below[-1] + 1 > GROUND_ROOTS * height:
         return None
     # ... and spread wider than the trunk stands on the line (a fir's trunk below its
