@@ -962,8 +962,8 @@ def _without_grass(ink: np.ndarray, height: int, tilt: int) -> np.ndarray:
         rows = np.flatnonzero(ink[box].any(axis=1)) + box[0].start
         if rows.size == 0:
             continue
-        middle = ink[(rows[0] + rows[-1]) // 2 - 1 : (rows[0] + rows[-1]) // 2 + 2, box[1]]
-        if max(len(_runs(r)) for r in middle) < GRASS_CROSSINGS:
+        mid = (int(rows[0]) + int(rows[-1])) // 2
+        if max(len(_runs(r)) for r in ink[max(0, mid - 1) : mid + 2, box[1]]) < GRASS_CROSSINGS:
             continue
         # judged on the teeth's own rows (the run's box is widened by ``reach``): those
         # that cross three strokes or more (a trunk standing in the grass, two)
