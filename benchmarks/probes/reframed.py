@@ -13,7 +13,7 @@ drawings of each other kind; hand-style tree doodles (``--doodles`` a species);
 (both parts, every kind).
 
     .venv/bin/python benchmarks/probes/reframed.py --set render.reader.SINGLE_STROKES=0 \\
-        [--others 60] [--doodles 40] [--all-people] [--pictures DIR]
+        [--others 60] [--doodles 40] [--all-people | --fit-trees] [--pictures DIR]
 """
 
 from __future__ import annotations
@@ -82,13 +82,28 @@ def main() -> None:
         help="instead: every drawing of each of people's folders (both parts, every kind)",
     )
     ap.add_argument(
+        "--fit-trees",
+        action="store_true",
+        help="instead: the tree drawings of people's fit part (by other people than the "
+        "held-out figures' own, so a rule built on those is checked on drawings it never saw)",
+    )
+    ap.add_argument(
         "--pictures",
         type=Path,
         default=None,
         help="write each drawing framed otherwise here: the page, framed with --set and as is",
     )
     args = ap.parse_args()
-    if args.all_people:
+    if args.fit_trees:
+        from eval.people import SOURCES, people_drawings
+
+        sets = {
+            f"people {source}, fit part's trees": [
+                d.image() for d in people_drawings("fit", (source,), ("tree",))
+            ]
+            for source in SOURCES
+        }
+    elif args.all_people:
         from eval.people import SOURCES, people_drawings
 
         sets = {
