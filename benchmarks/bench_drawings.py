@@ -516,12 +516,13 @@ def follow_cases(args: argparse.Namespace) -> list[tuple[str, Any]]:
     cases = []
     if args.only in (None, "people"):
         source = getattr(args, "people_source", "strokes")
-        held = people_drawings("held", (source,), ("tree",))
+        part = getattr(args, "people_part", "held")
+        held = people_drawings(part, (source,), ("tree",))
         pick = getattr(args, "people_pick", None)
         first = args.people_from
         chosen = pick if pick is not None else range(first, min(len(held), first + args.people))
         if any(not 0 <= i < len(held) for i in chosen):
-            raise SystemExit(f"--people-pick: {source} holds {len(held)} held-out trees")
+            raise SystemExit(f"--people-pick: {source} holds {len(held)} {part} part trees")
         # a mouse224 key names its folder ("tree/12"): one name part per drawing
         cases += [
             (f"people/{i:02d}-{held[i].key.replace('/', '-')}", held[i].image()) for i in chosen
@@ -684,6 +685,13 @@ def main(argv: list[str] | None = None) -> int:
         help="follow: which of people's folders (strokes: the web page's drawings, the "
         "figures of issue 48; mouse224: one drawing app's; quickdraw28: Quick, Draw!'s "
         "28 px doodles; the last two never looked at while the refinement was built)",
+    )
+    ap.add_argument(
+        "--people-part",
+        choices=("held", "fit"),
+        default="held",
+        help="follow: people's held-out part (the figures) or the fit part (by other people; "
+        "to check a rule built looking at held-out drawings on drawings it never saw)",
     )
     ap.add_argument(
         "--only", choices=("people", "paper", "pairs"), default=None, help="follow: one set"
