@@ -48,3 +48,28 @@ def test_inside_ink_reads_a_drawn_outline_and_a_scribbled_crown() -> None:
         x, y = rng.uniform(80, 176, 2), rng.uniform(40, 130, 2)
         d.line([(x[0], y[0]), (x[1], y[1])], fill=0, width=3)
     assert inside_ink(outline) < LINES_INSIDE <= inside_ink(np.asarray(im))
+
+
+def test_people_cases_come_from_the_part_asked_for() -> None:
+    """``--people-part fit`` reads the fit part's trees (drawings the held-out figures
+    never use) under the same names; the default stays the held-out part."""
+    from argparse import Namespace
+
+    from benchmarks.bench_drawings import follow_cases
+    from eval.people import people_drawings
+
+    def names(part: str) -> list[str]:
+        args = Namespace(
+            only="people",
+            people_source="strokes",
+            people_part=part,
+            people_pick=[0, 1],
+            people_from=0,
+            people=2,
+        )
+        return [name for name, _ in follow_cases(args)]
+
+    for part in ("held", "fit"):
+        keys = [d.key.replace("/", "-") for d in people_drawings(part, ("strokes",), ("tree",))[:2]]
+        assert names(part) == [f"people/{i:02d}-{k}" for i, k in enumerate(keys)]
+    assert set(names("held")).isdisjoint(names("fit"))
