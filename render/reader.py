@@ -962,16 +962,15 @@ def _without_grass(ink: np.ndarray, height: int, tilt: int) -> np.ndarray:
         rows = np.flatnonzero(ink[box].any(axis=1)) + box[0].start
         if rows.size == 0:
             continue
-        mid = (int(rows[0]) + int(rows[-1])) // 2
-        if max(len(_runs(r)) for r in ink[max(0, mid - 1) : mid + 2, box[1]]) < GRASS_CROSSINGS:
+        # the strokes each row crosses, over the run's box and ``reach`` more each way
+        near = slice(max(0, box[0].start - reach), box[0].stop + reach)
+        crossed = np.array([len(_runs(row)) for row in ink[near, box[1]]])
+        mid = (int(rows[0]) + int(rows[-1])) // 2 - near.start
+        if crossed[max(0, mid - 1) : mid + 2].max() < GRASS_CROSSINGS:
             continue
         # judged on the teeth's own rows (the run's box is widened by ``reach``): those
         # that cross three strokes or more (a trunk standing in the grass, two)
-        near = slice(max(0, box[0].start - reach), box[0].stop + reach)
-        crossed = np.array([len(_runs(row)) for row in ink[near, box[1]]])
         teeth = near.start + np.flatnonzero(crossed >= 3)
-        if teeth.size == 0:
-            continue
         # grass runs along the ground as wide as the crown at least; a trunk's foot
         # flaring into roots or curls is narrower
         standing = _standing(out[: max(0, teeth[0] - reach)], height)
